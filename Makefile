@@ -1,0 +1,98 @@
+# pd -- peridynamics toolkit.  GNU make.
+#
+#   make            build programs and libpd
+#   make check      install missing Debian packages (as root), build, run all tests
+#   make demo       the seed impact example end to end (ParaView files + PNG)
+#   make bench      pd-run against LAMMPS on the seed impact
+#   make install PREFIX=/usr/local DESTDIR=
+#
+# The project's own flags are kept apart from CFLAGS, so a user's CFLAGS
+# (say -O0 -g) still works.
+
+PREFIX    ?= /usr/local
+BINDIR     = $(PREFIX)/bin
+LIBDIR     = $(PREFIX)/lib
+INCDIR     = $(PREFIX)/include
+MANDIR     = $(PREFIX)/share/man
+PCDIR      = $(LIBDIR)/pkgconfig
+SHAREDIR   = $(PREFIX)/share/pd
+
+CC        ?= cc
+CFLAGS    ?= -O3 -g
+PD_CFLAGS  = -std=c11 -D_POSIX_C_SOURCE=200809L -Wall -Wextra -fopenmp -Ilib \
+             $(shell pkg-config --cflags hdf5 gsl 2>/dev/null)
+PD_LIBS    = $(shell pkg-config --libs hdf5 gsl 2>/dev/null) -fopenmp -lm
+
+ifeq ($(SANITIZE),1)
+PD_CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer
+PD_LIBS   += -fsanitize=address,undefined
+endif
+
+PROGRAMS   = pd-lattice pd-bonds pd-run pd-damage pd-dump2vtk pd-crack-tip
+LIB_SRC    = $(wildcard lib/*.c)
+LIB_OBJ    = $(LIB_SRC:.c=.o)
+BIN        = $(addprefix bin/,$(PROGRAMS))
+UNIT_SRC   = $(wildcard tests/unit/*.c)
+UNIT_BIN   = $(UNIT_SRC:tests/unit/%.c=bin/test-%)
+
+.PHONY: all check test unit bats deps demo bench install uninstall clean
+
+all: $(BIN) lib/libpd.a
+
+lib/%.o: lib/%.c lib/pd.h $(wildcard lib/*.h)
+	$(CC) $(PD_CFLAGS) $(CFLAGS) -c -o $@ $<
+
+lib/libpd.a: $(LIB_OBJ)
+	rm -f $@
+	ar rcs $@ $^
+
+bin/%: cmd/%.c lib/libpd.a lib/pd.h
+	@mkdir -p bin
+	$(CC) $(PD_CFLAGS) $(CFLAGS) -o $@ $< lib/libpd.a $(PD_LIBS)
+
+bin/test-%: tests/unit/%.c lib/libpd.a lib/pd.h
+	@mkdir -p bin
+	$(CC) $(PD_CFLAGS) $(CFLAGS) -o $@ $< lib/libpd.a $(PD_LIBS)
+
+deps:
+	@sh share/install-deps.sh
+
+check: deps
+	$(MAKE) all $(UNIT_BIN)
+	$(MAKE) test
+
+test: unit bats
+
+unit: $(UNIT_BIN)
+	@for t in $(UNIT_BIN); do echo "$$t"; $$t || exit 1; done
+
+bats: all
+	bats --jobs 2 tests/ 2>/dev/null || bats tests/
+
+demo: deps
+	$(MAKE) all
+	$(MAKE) -C examples/lammps-impact demo
+
+bench: deps
+	$(MAKE) all
+	sh share/bench.sh
+
+install: all
+	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR) $(DESTDIR)$(PCDIR) \
+	    $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(MANDIR)/man5 $(DESTDIR)$(MANDIR)/man7
+	install -m 755 $(BIN) $(DESTDIR)$(BINDIR)
+	install -m 644 lib/libpd.a $(DESTDIR)$(LIBDIR)
+	install -m 644 lib/pd.h $(DESTDIR)$(INCDIR)
+	install -m 644 man/man1/*.1 $(DESTDIR)$(MANDIR)/man1
+	install -m 644 man/man5/*.5 $(DESTDIR)$(MANDIR)/man5
+	install -m 644 man/man7/*.7 $(DESTDIR)$(MANDIR)/man7
+	sed -e 's|@PREFIX@|$(PREFIX)|' share/pd.pc.in > $(DESTDIR)$(PCDIR)/pd.pc
+
+uninstall:
+	rm -f $(addprefix $(DESTDIR)$(BINDIR)/,$(PROGRAMS))
+	rm -f $(DESTDIR)$(LIBDIR)/libpd.a $(DESTDIR)$(INCDIR)/pd.h $(DESTDIR)$(PCDIR)/pd.pc
+	rm -f $(addprefix $(DESTDIR)$(MANDIR)/man1/,$(addsuffix .1,$(PROGRAMS)))
+	rm -f $(DESTDIR)$(MANDIR)/man5/pd-h5.5 $(DESTDIR)$(MANDIR)/man7/pd.7
+
+clean:
+	rm -rf bin lib/*.o lib/libpd.a

@@ -1,0 +1,179 @@
+/*
+ * pd-damage -- damage per particle for every frame of a run.
+ *
+ * phi_i = 1 - sum_{j intact} V_j / sum_{j in reference family} V_j
+ * (seed 000 eq. 10, as LAMMPS compute damage/atom), stored as the frame
+ * field `damage`, and a table on stdout per frame: step, time, broken bonds,
+ * mean and max damage, and the number of particles with damage > 0.3.
+ */
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pd.h"
+
+#define PROG "pd-damage"
+
+struct options {
+    const char *input;
+    const char *output;  /* NULL: update INPUT in place (through a copy) */
+    double threshold;
+    int no_write, debug;
+};
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "Usage: " PROG " [OPTION]... RUN.h5 [-o OUT.h5]\n"
+            "Damage per particle for every frame of a run (seed 000 eq. 10), stored as the\n"
+            "frame field 'damage', and a table on stdout.  Without -o, RUN.h5 is updated\n"
+            "(through a temporary copy renamed over it).\n"
+            "\n"
+            "Options:\n"
+            "  -o, --output FILE   write the run with damage to FILE ('-' for stdout)\n"
+            "  -n, --no-write      only print the table\n"
+            "  --threshold D       count particles with damage above D (default 0.3)\n"
+            "      --debug         print HDF5's own error stack\n"
+            "  -h, --help          show this help\n"
+            "  -V, --version       show the version\n");
+}
+
+static int usage_error(const char *msg, const char *arg)
+{
+    fprintf(stderr, PROG ": error: %s%s%s%s\n", msg, arg ? " '" : "", arg ? arg : "",
+            arg ? "'" : "");
+    fprintf(stderr, "Try '" PROG " --help' for more information.\n");
+    return 2;
+}
+
+static int parse_options(int argc, char **argv, struct options *o)
+{
+    enum { OPT_THRESHOLD = 256, OPT_DEBUG };
+    static const struct option longopts[] = {
+        {"output", required_argument, 0, 'o'},
+        {"no-write", no_argument, 0, 'n'},
+        {"threshold", required_argument, 0, OPT_THRESHOLD},
+        {"debug", no_argument, 0, OPT_DEBUG},
+        {"help", no_argument, 0, 'h'},
+        {"version", no_argument, 0, 'V'},
+        {0, 0, 0, 0}};
+    memset(o, 0, sizeof *o);
+    o->threshold = 0.3;
+    int c;
+    while ((c = getopt_long(argc, argv, "o:nhV", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'o':
+            o->output = optarg;
+            break;
+        case 'n':
+            o->no_write = 1;
+            break;
+        case OPT_THRESHOLD:
+            if (!pd_parse_double(optarg, &o->threshold) || o->threshold < 0 || o->threshold > 1)
+                return usage_error("--threshold must be a number in [0,1], not", optarg);
+            break;
+        case OPT_DEBUG:
+            o->debug = 1;
+            break;
+        case 'h':
+            usage(stdout);
+            exit(0);
+        case 'V':
+            printf(PROG " (pd) " PD_VERSION "\n");
+            exit(0);
+        default:
+            fprintf(stderr, "Try '" PROG " --help' for more information.\n");
+            return 2;
+        }
+    }
+    if (optind != argc - 1)
+        return usage_error(optind < argc ? "give exactly one RUN.h5" : "missing RUN.h5", NULL);
+    o->input = argv[optind];
+    if (o->no_write && o->output)
+        return usage_error("--no-write and -o exclude each other", NULL);
+    if (!o->no_write && !o->output && strcmp(o->input, "-") == 0)
+        o->output = "-";
+    if (o->output && strcmp(o->output, "-") == 0)
+        o->no_write = 0;
+    return 0;
+}
+
+static int fail(void)
+{
+    fprintf(stderr, PROG ": error: %s\n", pd_errmsg());
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    /* before getopt_long permutes argv */
+    char *cmdline = pd_join_argv(argc, argv);
+    struct options o;
+    int rc = parse_options(argc, argv, &o);
+    if (rc) {
+        free(cmdline);
+        return rc;
+    }
+    pd_h5_debug(o.debug);
+
+    pd_file *f = NULL;
+    pd_status s = o.no_write ? pd_file_open(o.input, &f)
+                             : pd_file_update(o.input, o.output ? o.output : o.input, &f);
+    if (s != PD_OK) {
+        free(cmdline);
+        return fail();
+    }
+    pd_particles *p = NULL;
+    pd_bonds *b = NULL;
+    int64_t nframes = 0;
+    char **names = NULL;
+    if ((s = pd_read_particles(f, &p)) == PD_OK && (s = pd_read_bonds(f, p, &b)) == PD_OK)
+        s = pd_list_frames(f, &nframes, &names);
+    double *damage = NULL;
+    uint64_t *intact = NULL;
+    if (s == PD_OK) {
+        damage = malloc((size_t)p->n * sizeof(double));
+        intact = malloc((size_t)(pd_bits_words(b->count) + 1) * sizeof(uint64_t));
+        if (damage == NULL || intact == NULL)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    /* a table goes to stdout unless stdout carries the file */
+    FILE *table = (o.output && strcmp(o.output, "-") == 0) ? stderr : stdout;
+    if (s == PD_OK)
+        fprintf(table, "# step time_s broken_bonds mean_damage max_damage n_damage_gt_%g\n",
+                o.threshold);
+    for (int64_t k = 0; k < nframes && s == PD_OK; k++) {
+        pd_frame_info fi;
+        if ((s = pd_read_frame_info(f, names[k], &fi)) != PD_OK ||
+            (s = pd_read_frame_state(f, names[k], b->count, intact)) != PD_OK)
+            break;
+        pd_damage(p, b, intact, damage);
+        double sum = 0, max = 0;
+        int64_t above = 0;
+        for (int64_t i = 0; i < p->n; i++) {
+            sum += damage[i];
+            max = damage[i] > max ? damage[i] : max;
+            above += damage[i] > o.threshold;
+        }
+        fprintf(table, "%lld %.9e %lld %.9f %.9f %lld\n", (long long)fi.step, fi.time,
+                (long long)(pd_bits_count_broken(intact, b->count) / 2), sum / (double)p->n, max,
+                (long long)above);
+        if (!o.no_write)
+            s = pd_write_frame_scalar(f, names[k], "damage", p->n, damage);
+    }
+    if (s == PD_OK && !o.no_write) {
+        s = pd_append_history(f, cmdline ? cmdline : PROG);
+    }
+    free(cmdline);
+    free(damage);
+    free(intact);
+    pd_frames_free_list(nframes, names);
+    pd_bonds_free(b);
+    pd_particles_free(p);
+    if (s == PD_OK)
+        s = pd_file_close(f);
+    else
+        pd_file_abort(f);
+    return s == PD_OK ? 0 : fail();
+}

@@ -1,0 +1,488 @@
+/*
+ * pd-run -- integrate the peridynamic equation of motion for the effects a
+ * scene declares.
+ *
+ * Velocity Verlet (seed 000 Algorithm 1) over the PMB bond force (seed 000
+ * eqs. 5-7), with, only when declared: bond failure by critical stretch
+ * (eqs. 8-9), short-range contact (eqs. 13-15) and a moving spherical
+ * indenter (LAMMPS fix indent).  The time step defaults to the stable step
+ * of seed 004 eq. 46 times a safety factor; a larger --dt is refused.
+ * Writes the model, the resolved scene (/scene) and frames (/frames).
+ */
+#include <getopt.h>
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "pd.h"
+
+#define PROG "pd-run"
+
+struct options {
+    pd_scene sc;
+    int has_c, has_k, has_dt, has_steps, force_dt, has_status;
+    int64_t status_every;
+    const char *input;
+    const char *output;
+    int quiet, timing, debug;
+};
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "Usage: " PROG " [OPTION]... --steps N INPUT [-o FILE]\n"
+            "Integrate a peridynamic model (pd-h5 with /bonds); INPUT '-' is stdin.\n"
+            "\n"
+            "Model:\n"
+            "  --model pmb           prototype microelastic brittle (default)\n"
+            "  --c C                 micromodulus, N/m^6\n"
+            "  --bulk-modulus K      bulk modulus, Pa (c = 18K/(pi delta^4))\n"
+            "Effects (each only when given):\n"
+            "  --failure S00,ALPHA   critical stretch s0 = S00 - ALPHA s_min\n"
+            "  --contact             short-range contact forces\n"
+            "  --contact-skin S      skin of the contact list, m (default spacing/2)\n"
+            "  --indenter sphere,X,Y,Z,R,K,VX,VY,VZ\n"
+            "                        moving spherical indenter, force density K (R-r)^2\n"
+            "Time:\n"
+            "  --steps N             number of steps\n"
+            "  --dt DT               time step, s (default: stable step x safety)\n"
+            "  --safety F            safety factor on the stable step (default 0.8)\n"
+            "  --force-dt            run a --dt above the stable step anyway\n"
+            "  --every N             a frame every N steps; 0 = only the last (default 0)\n"
+            "Other:\n"
+            "  --scene FILE          read options from FILE ('option value' lines);\n"
+            "                        the command line overrides it\n"
+            "  --threads N           OpenMP threads (default: all cores)\n"
+            "  --status N            a status line every N steps (default steps/10)\n"
+            "  --timing              print where the time went\n"
+            "  -o, --output FILE     output file, '-' for stdout (default '-')\n"
+            "  -q, --quiet           no log on stderr\n"
+            "      --debug           print HDF5's own error stack\n"
+            "  -h, --help            show this help\n"
+            "  -V, --version         show the version\n");
+}
+
+static int usage_error(const char *msg, const char *arg)
+{
+    fprintf(stderr, PROG ": error: %s%s%s%s\n", msg, arg ? " '" : "", arg ? arg : "",
+            arg ? "'" : "");
+    fprintf(stderr, "Try '" PROG " --help' for more information.\n");
+    return 2;
+}
+
+static int positive(const char *opt, const char *arg, double *out)
+{
+    if (!pd_parse_double(arg, out) || !(*out > 0)) {
+        char msg[128];
+        snprintf(msg, sizeof msg, "%s must be a positive number, not", opt);
+        return usage_error(msg, arg);
+    }
+    return 0;
+}
+
+/* argv with the scene file's options first, then the command line's (so the
+ * command line wins); the --scene option itself is dropped. */
+static int expand_scene(int argc, char **argv, int *nargc, char ***nargv)
+{
+    const char *scene = NULL;
+    for (int k = 1; k < argc; k++) {
+        if (strcmp(argv[k], "--") == 0)
+            break;
+        if (strcmp(argv[k], "--scene") == 0) {
+            if (k + 1 >= argc)
+                return usage_error("--scene needs a FILE", NULL);
+            scene = argv[k + 1];
+        } else if (strncmp(argv[k], "--scene=", 8) == 0)
+            scene = argv[k] + 8;
+    }
+    int sc = 0;
+    char **sv = NULL;
+    if (scene && pd_scene_args(scene, &sc, &sv) != PD_OK) {
+        fprintf(stderr, PROG ": error: %s\n", pd_errmsg());
+        return 2;
+    }
+    char **v = malloc((size_t)(argc + sc + 1) * sizeof *v);
+    if (v == NULL)
+        return 1;
+    int n = 0;
+    v[n++] = argv[0];
+    for (int k = 0; k < sc; k++)
+        v[n++] = sv[k];
+    free(sv);
+    for (int k = 1; k < argc; k++) {
+        if (strcmp(argv[k], "--scene") == 0) {
+            k++;
+            continue;
+        }
+        if (strncmp(argv[k], "--scene=", 8) == 0)
+            continue;
+        v[n++] = argv[k];
+    }
+    v[n] = NULL;
+    *nargc = n;
+    *nargv = v;
+    return 0;
+}
+
+static int parse_options(int argc, char **argv, struct options *o)
+{
+    enum { OPT_MODEL = 256, OPT_C, OPT_K, OPT_FAILURE, OPT_CONTACT, OPT_SKIN, OPT_INDENTER,
+           OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
+           OPT_TIMING, OPT_DEBUG };
+    static const struct option longopts[] = {
+        {"model", required_argument, 0, OPT_MODEL},
+        {"c", required_argument, 0, OPT_C},
+        {"bulk-modulus", required_argument, 0, OPT_K},
+        {"failure", required_argument, 0, OPT_FAILURE},
+        {"contact", no_argument, 0, OPT_CONTACT},
+        {"contact-skin", required_argument, 0, OPT_SKIN},
+        {"indenter", required_argument, 0, OPT_INDENTER},
+        {"steps", required_argument, 0, OPT_STEPS},
+        {"dt", required_argument, 0, OPT_DT},
+        {"safety", required_argument, 0, OPT_SAFETY},
+        {"force-dt", no_argument, 0, OPT_FORCE_DT},
+        {"every", required_argument, 0, OPT_EVERY},
+        {"threads", required_argument, 0, OPT_THREADS},
+        {"status", required_argument, 0, OPT_STATUS},
+        {"timing", no_argument, 0, OPT_TIMING},
+        {"output", required_argument, 0, 'o'},
+        {"quiet", no_argument, 0, 'q'},
+        {"debug", no_argument, 0, OPT_DEBUG},
+        {"help", no_argument, 0, 'h'},
+        {"version", no_argument, 0, 'V'},
+        {0, 0, 0, 0}};
+    memset(o, 0, sizeof *o);
+    o->output = "-";
+    o->sc.model = PD_MODEL_PMB;
+    o->sc.safety = 0.8;
+    int c, rc;
+    int64_t iv;
+    double ind[8];
+    while ((c = getopt_long(argc, argv, "o:qhV", longopts, NULL)) != -1) {
+        switch (c) {
+        case OPT_MODEL:
+            if (strcmp(optarg, "pmb") != 0)
+                return usage_error("unknown --model (this pd knows: pmb)", optarg);
+            break;
+        case OPT_C:
+            if ((rc = positive("--c", optarg, &o->sc.c)))
+                return rc;
+            o->has_c = 1;
+            break;
+        case OPT_K:
+            if ((rc = positive("--bulk-modulus", optarg, &o->sc.bulk_modulus)))
+                return rc;
+            o->has_k = 1;
+            break;
+        case OPT_FAILURE: {
+            double v[2];
+            if (!pd_parse_doubles(optarg, v, 2) || !(v[0] > 0) || !(v[1] >= 0))
+                return usage_error("--failure needs S00,ALPHA with S00 > 0 and ALPHA >= 0, not",
+                                   optarg);
+            o->sc.has_failure = 1;
+            o->sc.s00 = v[0];
+            o->sc.alpha = v[1];
+            break;
+        }
+        case OPT_CONTACT:
+            o->sc.has_contact = 1;
+            break;
+        case OPT_SKIN:
+            if ((rc = positive("--contact-skin", optarg, &o->sc.contact_skin)))
+                return rc;
+            break;
+        case OPT_INDENTER:
+            if (strncmp(optarg, "sphere,", 7) != 0 || !pd_parse_doubles(optarg + 7, ind, 8))
+                return usage_error("--indenter needs sphere,X,Y,Z,R,K,VX,VY,VZ, not", optarg);
+            if (!(ind[3] > 0) || !(ind[4] > 0))
+                return usage_error("--indenter radius R and stiffness K must be positive in",
+                                   optarg);
+            o->sc.has_indenter = 1;
+            for (int d = 0; d < 3; d++) {
+                o->sc.ind_center[d] = ind[d];
+                o->sc.ind_velocity[d] = ind[5 + d];
+            }
+            o->sc.ind_radius = ind[3];
+            o->sc.ind_k = ind[4];
+            break;
+        case OPT_STEPS:
+            if (!pd_parse_int64(optarg, &iv) || iv < 0)
+                return usage_error("--steps must be a non-negative integer, not", optarg);
+            o->sc.steps = iv;
+            o->has_steps = 1;
+            break;
+        case OPT_DT:
+            if ((rc = positive("--dt", optarg, &o->sc.dt)))
+                return rc;
+            o->has_dt = 1;
+            break;
+        case OPT_SAFETY:
+            if ((rc = positive("--safety", optarg, &o->sc.safety)))
+                return rc;
+            if (o->sc.safety > 1)
+                return usage_error("--safety must not exceed 1, not", optarg);
+            break;
+        case OPT_FORCE_DT:
+            o->force_dt = 1;
+            break;
+        case OPT_EVERY:
+            if (!pd_parse_int64(optarg, &iv) || iv < 0)
+                return usage_error("--every must be a non-negative integer, not", optarg);
+            o->sc.every = iv;
+            break;
+        case OPT_THREADS:
+            if (!pd_parse_int64(optarg, &iv) || iv < 1 || iv > 4096)
+                return usage_error("--threads must be a positive integer, not", optarg);
+            o->sc.threads = (int)iv;
+            break;
+        case OPT_STATUS:
+            if (!pd_parse_int64(optarg, &iv) || iv < 1)
+                return usage_error("--status must be a positive integer, not", optarg);
+            o->status_every = iv;
+            o->has_status = 1;
+            break;
+        case OPT_TIMING:
+            o->timing = 1;
+            break;
+        case 'o':
+            o->output = optarg;
+            break;
+        case 'q':
+            o->quiet = 1;
+            break;
+        case OPT_DEBUG:
+            o->debug = 1;
+            break;
+        case 'h':
+            usage(stdout);
+            exit(0);
+        case 'V':
+            printf(PROG " (pd) " PD_VERSION "\n");
+            exit(0);
+        default:
+            fprintf(stderr, "Try '" PROG " --help' for more information.\n");
+            return 2;
+        }
+    }
+    if (!o->has_steps)
+        return usage_error("--steps is required", NULL);
+    if (o->has_c == o->has_k)
+        return usage_error(o->has_c ? "give --c or --bulk-modulus, not both"
+                                    : "give the stiffness: --c or --bulk-modulus",
+                           NULL);
+    if (optind != argc - 1)
+        return usage_error(optind < argc ? "give exactly one INPUT" : "missing INPUT (a file or '-')",
+                           NULL);
+    o->input = argv[optind];
+    return 0;
+}
+
+/* The resolved scene in scene-file form, enough to rerun. */
+static char *scene_text(const pd_scene *s)
+{
+    size_t cap = 2048;
+    char *t = malloc(cap), *p = t;
+    if (t == NULL)
+        return NULL;
+    p += sprintf(p, "model pmb\nc %.17g\n", s->c);
+    if (s->has_failure)
+        p += sprintf(p, "failure %.17g,%.17g\n", s->s00, s->alpha);
+    if (s->has_contact)
+        p += sprintf(p, "contact\ncontact-skin %.17g\n", s->contact_skin);
+    if (s->has_indenter)
+        p += sprintf(p, "indenter sphere,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
+                     s->ind_center[0], s->ind_center[1], s->ind_center[2], s->ind_radius, s->ind_k,
+                     s->ind_velocity[0], s->ind_velocity[1], s->ind_velocity[2]);
+    sprintf(p, "dt %.17g\nsteps %lld\nevery %lld\n", s->dt, (long long)s->steps,
+            (long long)s->every);
+    return t;
+}
+
+static void progress(int64_t step, int64_t steps, double elapsed)
+{
+    int width = 30, done = steps ? (int)((double)width * (double)step / (double)steps) : width;
+    double eta = step ? elapsed * (double)(steps - step) / (double)step : 0;
+    fprintf(stderr, "\r[");
+    for (int k = 0; k < width; k++)
+        fputc(k < done ? '#' : '.', stderr);
+    fprintf(stderr, "] %3.0f%% step %lld/%lld ETA %.0f s ", steps ? 100.0 * (double)step / (double)steps : 100.0,
+            (long long)step, (long long)steps, eta);
+    fflush(stderr);
+}
+
+static void status_line(const pd_sim *sim, int64_t steps, int tty)
+{
+    fprintf(stderr, "%s" PROG ": step %lld/%lld t=%.6e s KE=%.6e J broken=%lld max_damage=%.4f\n",
+            tty ? "\r\033[K" : "", (long long)pd_sim_stepno(sim), (long long)steps,
+            pd_sim_time(sim), pd_sim_kinetic(sim), (long long)pd_sim_broken(sim),
+            pd_sim_max_damage(sim));
+}
+
+static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
+                             const pd_sim *sim, double *t_out)
+{
+    double t0 = pd_wtime();
+    pd_frame_info fi = {pd_sim_stepno(sim), pd_sim_time(sim), pd_sim_kinetic(sim),
+                        pd_sim_broken(sim)};
+    pd_status s = pd_write_frame(out, p, &fi, pd_sim_positions(sim), pd_sim_velocities(sim),
+                                 pd_sim_intact(sim), b->count);
+    *t_out += pd_wtime() - t0;
+    return s;
+}
+
+static void print_timing(const pd_sim *sim, double wall, double output)
+{
+    static const char *names[PD_T_COUNT] = {"bonds", "contact", "neighbour lists", "indenter",
+                                            "integration", "output"};
+    double t[PD_T_COUNT];
+    memcpy(t, pd_sim_timers(sim), sizeof t);
+    t[PD_T_OUTPUT] = output;
+    fprintf(stderr, PROG ": timing (wall %.3f s)\n", wall);
+    for (int k = 0; k < PD_T_COUNT; k++)
+        fprintf(stderr, "  %-16s %10.3f s %6.1f%%\n", names[k], t[k],
+                wall > 0 ? 100.0 * t[k] / wall : 0.0);
+}
+
+static int fail(void)
+{
+    fprintf(stderr, PROG ": error: %s\n", pd_errmsg());
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    int nargc = 0;
+    char **nargv = NULL;
+    int rc = expand_scene(argc, argv, &nargc, &nargv);
+    if (rc)
+        return rc;
+    struct options o;
+    rc = parse_options(nargc, nargv, &o);
+    free(nargv);
+    if (rc)
+        return rc;
+    pd_h5_debug(o.debug);
+    if (o.sc.threads > 0)
+        omp_set_num_threads(o.sc.threads);
+    o.sc.threads = omp_get_max_threads();
+
+    pd_file *in = NULL;
+    pd_particles *p = NULL;
+    pd_bonds *b = NULL;
+    if (pd_file_open(o.input, &in) != PD_OK || pd_read_particles(in, &p) != PD_OK ||
+        pd_read_bonds(in, p, &b) != PD_OK) {
+        pd_file_close(in);
+        pd_particles_free(p);
+        return fail();
+    }
+    pd_scene *sc = &o.sc;
+    if (o.has_k)
+        sc->c = pd_pmb_c_from_bulk(sc->bulk_modulus, b->horizon);
+    if (sc->has_contact && !(sc->contact_skin > 0))
+        sc->contact_skin = 0.5 * p->spacing;
+    sc->dt_stable = pd_stable_dt(p, b, sc);
+    if (!o.has_dt) {
+        if (!isfinite(sc->dt_stable)) {
+            fprintf(stderr, PROG ": error: no bonds, so no stable time step; give --dt\n");
+            return 1;
+        }
+        sc->dt = sc->safety * sc->dt_stable;
+    } else if (sc->dt > sc->dt_stable && !o.force_dt) {
+        fprintf(stderr,
+                PROG ": error: --dt %g s exceeds the stable time step %g s (seed 004 eq. 46); "
+                     "use --force-dt to run anyway\n",
+                sc->dt, sc->dt_stable);
+        pd_bonds_free(b);
+        pd_particles_free(p);
+        pd_file_close(in);
+        return 1;
+    }
+    int64_t status_every = o.has_status ? o.status_every : (sc->steps >= 10 ? sc->steps / 10 : 1);
+
+    pd_sim *sim = NULL;
+    pd_status s = pd_sim_new(p, b, sc, &sim);
+    char *cmdline = pd_join_argv(argc, argv);
+    char *text = scene_text(sc);
+    pd_file *out = NULL;
+    if (s == PD_OK)
+        s = pd_file_create(o.output, &out);
+    if (s == PD_OK)
+        s = pd_write_header(out, in, cmdline ? cmdline : PROG);
+    if (s == PD_OK)
+        s = pd_write_particles(out, p);
+    if (s == PD_OK)
+        s = pd_write_bonds(out, b);
+    if (s == PD_OK)
+        s = pd_write_scene(out, sc, pd_sim_effects(sim), text ? text : "");
+    free(cmdline);
+    free(text);
+    pd_file_close(in);
+    if (s != PD_OK) {
+        pd_file_abort(out);
+        pd_sim_free(sim);
+        pd_bonds_free(b);
+        pd_particles_free(p);
+        return fail();
+    }
+    int tty = isatty(STDERR_FILENO) && !o.quiet;
+    if (!o.quiet)
+        fprintf(stderr,
+                PROG ": %lld particles, %lld bonds; effects: %s\n" PROG
+                     ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps\n",
+                (long long)p->n, (long long)(b->count / 2), pd_sim_effects(sim), sc->dt,
+                sc->dt_stable, (long long)sc->steps);
+
+    double t_output = 0, t_start = pd_wtime(), t_shown = 0;
+    s = pd_sim_setup(sim);
+    if (s == PD_OK && sc->every > 0)
+        s = write_frame(out, p, b, sim, &t_output);
+    for (int64_t n = 1; n <= sc->steps && s == PD_OK; n++) {
+        s = pd_sim_step(sim);
+        if (s != PD_OK)
+            break;
+        if (n % status_every == 0 || n == sc->steps) {
+            double ke = pd_sim_kinetic(sim);
+            if (!isfinite(ke)) {
+                s = pd_fail(PD_ERR_UNSTABLE,
+                            "kinetic energy is not finite at step %lld (time step too large or "
+                            "contact too stiff?)",
+                            (long long)n);
+                break;
+            }
+            if (!o.quiet)
+                status_line(sim, sc->steps, tty);
+        }
+        if ((sc->every > 0 && n % sc->every == 0) || n == sc->steps)
+            s = write_frame(out, p, b, sim, &t_output);
+        if (tty) {
+            double now = pd_wtime();
+            if (now - t_shown > 0.2 || n == sc->steps) {
+                progress(n, sc->steps, now - t_start);
+                t_shown = now;
+            }
+        }
+    }
+    if (s == PD_OK && sc->steps == 0 && sc->every == 0)
+        s = write_frame(out, p, b, sim, &t_output);
+    double wall = pd_wtime() - t_start;
+    if (tty)
+        fputc('\n', stderr);
+    if (s == PD_OK)
+        s = pd_file_close(out);
+    else
+        pd_file_abort(out);
+    if (s == PD_OK && !o.quiet)
+        fprintf(stderr, PROG ": %lld steps in %.3f s (%.3g bond updates/s), contact list builds %lld\n",
+                (long long)sc->steps, wall,
+                wall > 0 ? (double)b->count * (double)sc->steps / wall : 0.0,
+                (long long)pd_sim_contact_builds(sim));
+    if (s == PD_OK && o.timing)
+        print_timing(sim, wall, t_output);
+    pd_sim_free(sim);
+    pd_bonds_free(b);
+    pd_particles_free(p);
+    return s == PD_OK ? 0 : fail();
+}

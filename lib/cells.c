@@ -1,0 +1,101 @@
+/*
+ * cells.c -- cell lists: particles binned into cubes of edge >= cutoff, so
+ * that every pair closer than the cutoff lies in the same or adjacent cells.
+ * Building is a counting sort, O(N); each particle's partners are then found
+ * among 27 cells, never among all pairs.
+ */
+#include <math.h>
+#include <stdlib.h>
+
+#include "pd.h"
+
+void pd_cells_locate(const pd_cells *c, const double x[3], int64_t cell[3])
+{
+    for (int d = 0; d < 3; d++) {
+        double t = floor((x[d] - c->lo[d]) / c->size);
+        int64_t k = isfinite(t) ? (int64_t)fmax(0.0, fmin(t, (double)(c->dim[d] - 1))) : 0;
+        cell[d] = k;
+    }
+}
+
+static int64_t cell_of(const pd_cells *c, const double x[3])
+{
+    int64_t k[3];
+    pd_cells_locate(c, x, k);
+    return (k[2] * c->dim[1] + k[1]) * c->dim[0] + k[0];
+}
+
+pd_status pd_cells_build(pd_cells *c, int64_t n, double *const x[3], double cutoff)
+{
+    c->start = NULL;
+    c->index = NULL;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = 0; i < n; i++)
+        for (int d = 0; d < 3; d++)
+            if (isfinite(x[d][i])) {
+                lo[d] = fmin(lo[d], x[d][i]);
+                hi[d] = fmax(hi[d], x[d][i]);
+            }
+    for (int d = 0; d < 3; d++)
+        if (!(lo[d] <= hi[d]))
+            lo[d] = hi[d] = 0;
+    if (!(cutoff > 0))
+        return pd_fail(PD_ERR_INVALID, "cell size must be positive");
+    /* Keep the grid near the particle count: particles flying far away must
+     * not make the grid (and the build) huge. */
+    double size = cutoff;
+    double limit = fmax(8.0 * (double)n, 4096.0);
+    for (;;) {
+        double cells = 1;
+        for (int d = 0; d < 3; d++)
+            cells *= floor((hi[d] - lo[d]) / size) + 1;
+        if (cells <= limit)
+            break;
+        size *= 1.25;
+    }
+    c->size = size;
+    int64_t ncell = 1;
+    for (int d = 0; d < 3; d++) {
+        c->lo[d] = lo[d];
+        c->dim[d] = (int64_t)floor((hi[d] - lo[d]) / size) + 1;
+        ncell *= c->dim[d];
+    }
+    c->start = calloc((size_t)ncell + 1, sizeof(int64_t));
+    c->index = malloc((size_t)(n > 0 ? n : 1) * sizeof(int32_t));
+    int64_t *cellof = malloc((size_t)(n > 0 ? n : 1) * sizeof(int64_t));
+    if (c->start == NULL || c->index == NULL || cellof == NULL) {
+        free(cellof);
+        pd_cells_free(c);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for a cell list");
+    }
+    for (int64_t i = 0; i < n; i++) {
+        double p[3] = {x[0][i], x[1][i], x[2][i]};
+        cellof[i] = cell_of(c, p);
+        c->start[cellof[i] + 1]++;
+    }
+    for (int64_t k = 0; k < ncell; k++)
+        c->start[k + 1] += c->start[k];
+    int64_t *fill = malloc((size_t)ncell * sizeof(int64_t));
+    if (fill == NULL) {
+        free(cellof);
+        pd_cells_free(c);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for a cell list");
+    }
+    for (int64_t k = 0; k < ncell; k++)
+        fill[k] = c->start[k];
+    for (int64_t i = 0; i < n; i++)
+        c->index[fill[cellof[i]]++] = (int32_t)i;
+    free(fill);
+    free(cellof);
+    return PD_OK;
+}
+
+void pd_cells_free(pd_cells *c)
+{
+    if (c == NULL)
+        return;
+    free(c->start);
+    free(c->index);
+    c->start = NULL;
+    c->index = NULL;
+}

@@ -1,0 +1,211 @@
+/*
+ * contact.c -- short-range contact forces, seed 000 eqs. 13-15.
+ *
+ * Between any two particles (bonded or not) closer than
+ *   d_ij = min(0.9 |x_j - x_i|, 1.35 (r_i + r_j))     (reference positions)
+ * a repulsive force density acts on i:
+ *   f_i += (c_S / delta) (|y_j - y_i| - d_ij) V_j (y_j - y_i) / |y_j - y_i|
+ * with c_S = 15 c.  The force only repels, and only while |y_ij| < d_ij.
+ *
+ * d_ij never exceeds 1.35 (r_i + r_j) (about 1.35 spacings), far below the
+ * horizon, so the pairs live in a list of their own with cutoff
+ * max d + skin, built with cell lists and rebuilt only when some particle
+ * has moved more than skin/2 since the last build (then no pair can have
+ * come within max d unseen).
+ */
+#include <math.h>
+#include <stdlib.h>
+
+#include "sim.h"
+
+typedef struct {
+    double cutoff;     /* largest d_ij, m                      */
+    double skin;       /* m                                    */
+    int64_t *offset;   /* n+1                                  */
+    int32_t *partner;  /* candidates within cutoff + skin       */
+    double *d;         /* d_ij per candidate, m                 */
+    int64_t cap;
+    double *ybuild[3]; /* positions at the last build           */
+} contact_list;
+
+static void contact_free(void *state)
+{
+    contact_list *cl = state;
+    if (cl == NULL)
+        return;
+    free(cl->offset);
+    free(cl->partner);
+    free(cl->d);
+    for (int k = 0; k < 3; k++)
+        free(cl->ybuild[k]);
+    free(cl);
+}
+
+static pd_status contact_init(pd_sim *sim, void **state)
+{
+    contact_list *cl = calloc(1, sizeof *cl);
+    if (cl == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact list");
+    double rmax = 0;
+    for (int64_t i = 0; i < sim->n; i++)
+        rmax = fmax(rmax, sim->p->radius[i]);
+    cl->cutoff = PD_CONTACT_RADIUS_FAC * 2.0 * rmax;
+    cl->skin = sim->sc.contact_skin;
+    cl->offset = calloc((size_t)sim->n + 1, sizeof(int64_t));
+    for (int k = 0; k < 3; k++)
+        cl->ybuild[k] = malloc((size_t)sim->n * sizeof(double));
+    if (cl->offset == NULL || !cl->ybuild[0] || !cl->ybuild[1] || !cl->ybuild[2]) {
+        contact_free(cl);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact list");
+    }
+    *state = cl;
+    return PD_OK;
+}
+
+/* Candidates of i within cutoff + skin: count (out == NULL) or write. */
+static int64_t candidates(const pd_sim *sim, const pd_cells *c, double reach2, int64_t i,
+                          int32_t *out, double *dout)
+{
+    const pd_particles *p = sim->p;
+    double *const *y = sim->y;
+    double yi[3] = {y[0][i], y[1][i], y[2][i]};
+    int64_t k[3];
+    pd_cells_locate(c, yi, k);
+    int64_t m = 0;
+    for (int64_t cz = k[2] - 1; cz <= k[2] + 1; cz++) {
+        if (cz < 0 || cz >= c->dim[2])
+            continue;
+        for (int64_t cy = k[1] - 1; cy <= k[1] + 1; cy++) {
+            if (cy < 0 || cy >= c->dim[1])
+                continue;
+            for (int64_t cx = k[0] - 1; cx <= k[0] + 1; cx++) {
+                if (cx < 0 || cx >= c->dim[0])
+                    continue;
+                int64_t cell = (cz * c->dim[1] + cy) * c->dim[0] + cx;
+                for (int64_t q = c->start[cell]; q < c->start[cell + 1]; q++) {
+                    int32_t j = c->index[q];
+                    if (j == i)
+                        continue;
+                    double dx = yi[0] - y[0][j], dy = yi[1] - y[1][j], dz = yi[2] - y[2][j];
+                    if (dx * dx + dy * dy + dz * dz > reach2)
+                        continue;
+                    if (out) {
+                        double ex = p->x[0][i] - p->x[0][j], ey = p->x[1][i] - p->x[1][j],
+                               ez = p->x[2][i] - p->x[2][j];
+                        double r0 = sqrt(ex * ex + ey * ey + ez * ez);
+                        out[m] = j;
+                        dout[m] = fmin(PD_CONTACT_REF_FRAC * r0,
+                                       PD_CONTACT_RADIUS_FAC * (p->radius[i] + p->radius[j]));
+                    }
+                    m++;
+                }
+            }
+        }
+    }
+    return m;
+}
+
+static pd_status contact_build(pd_sim *sim, contact_list *cl)
+{
+    double t0 = pd_wtime();
+    double reach = cl->cutoff + cl->skin;
+    pd_cells c;
+    pd_status s = pd_cells_build(&c, sim->n, sim->y, reach);
+    if (s != PD_OK)
+        return s;
+    int64_t n = sim->n;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++)
+        cl->offset[i + 1] = candidates(sim, &c, reach * reach, i, NULL, NULL);
+    cl->offset[0] = 0;
+    for (int64_t i = 0; i < n; i++)
+        cl->offset[i + 1] += cl->offset[i];
+    int64_t total = cl->offset[n];
+    if (total > cl->cap) {
+        int64_t cap = total + total / 4 + 16;
+        int32_t *np = realloc(cl->partner, (size_t)cap * sizeof(int32_t));
+        if (np)
+            cl->partner = np;
+        double *nd = realloc(cl->d, (size_t)cap * sizeof(double));
+        if (nd)
+            cl->d = nd;
+        if (np == NULL || nd == NULL) {
+            pd_cells_free(&c);
+            return pd_fail(PD_ERR_NOMEM, "out of memory for %lld contact pairs", (long long)total);
+        }
+        cl->cap = cap;
+    }
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++)
+        candidates(sim, &c, reach * reach, i, cl->partner + cl->offset[i], cl->d + cl->offset[i]);
+    pd_cells_free(&c);
+    for (int k = 0; k < 3; k++)
+        for (int64_t i = 0; i < n; i++)
+            cl->ybuild[k][i] = sim->y[k][i];
+    sim->contact_builds++;
+    sim->timers[PD_T_NEIGHBOR] += pd_wtime() - t0;
+    return PD_OK;
+}
+
+/* Has any particle moved more than skin/2 since the last build? */
+static int needs_rebuild(const pd_sim *sim, const contact_list *cl)
+{
+    if (sim->contact_builds == 0)
+        return 1;
+    double lim2 = 0.25 * cl->skin * cl->skin;
+    int moved = 0;
+#pragma omp parallel for schedule(static) reduction(| : moved)
+    for (int64_t i = 0; i < sim->n; i++) {
+        double dx = sim->y[0][i] - cl->ybuild[0][i], dy = sim->y[1][i] - cl->ybuild[1][i],
+               dz = sim->y[2][i] - cl->ybuild[2][i];
+        double d2 = dx * dx + dy * dy + dz * dz;
+        moved |= !(d2 <= lim2);
+    }
+    return moved;
+}
+
+static pd_status contact_force(pd_sim *sim, void *state)
+{
+    contact_list *cl = state;
+    if (needs_rebuild(sim, cl)) {
+        pd_status s = contact_build(sim, cl);
+        if (s != PD_OK)
+            return s;
+    }
+    const double k = PD_CONTACT_SCALE * sim->sc.c / sim->b->horizon;
+    const double *V = sim->p->volume;
+    double *const *y = sim->y;
+    double *restrict fx = sim->f[0], *restrict fy = sim->f[1], *restrict fz = sim->f[2];
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        const double yi0 = y[0][i], yi1 = y[1][i], yi2 = y[2][i];
+        double ax = 0, ay = 0, az = 0;
+        for (int64_t q = cl->offset[i]; q < cl->offset[i + 1]; q++) {
+            const int32_t j = cl->partner[q];
+            const double dx = y[0][j] - yi0, dy = y[1][j] - yi1, dz = y[2][j] - yi2;
+            const double r2 = dx * dx + dy * dy + dz * dz;
+            const double d = cl->d[q];
+            if (r2 >= d * d)
+                continue;
+            const double r = sqrt(r2);
+            if (r < d && r > 0.0) {
+                const double fk = k * V[j] * (r - d) / r;
+                ax += fk * dx;
+                ay += fk * dy;
+                az += fk * dz;
+            }
+        }
+        fx[i] += ax;
+        fy[i] += ay;
+        fz[i] += az;
+    }
+    return PD_OK;
+}
+
+const pd_effect pd_effect_contact = {"contact", PD_T_CONTACT, contact_init, contact_force,
+                                     contact_free};
+
+int64_t pd_sim_contact_builds(const pd_sim *sim)
+{
+    return sim->contact_builds;
+}

@@ -1,0 +1,34 @@
+/*
+ * error.c -- the library's error channel: a status and a one-line message
+ * per thread.  Library code never prints; cmd/ prints pd_errmsg().
+ */
+#include <stdarg.h>
+#include <stdio.h>
+
+#include <hdf5.h>
+
+#include "pd.h"
+
+static _Thread_local char message[512];
+
+const char *pd_errmsg(void)
+{
+    return message[0] ? message : "unknown error";
+}
+
+pd_status pd_fail(pd_status st, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(message, sizeof message, fmt, ap);
+    va_end(ap);
+    return st;
+}
+
+void pd_h5_debug(int on)
+{
+    if (on)
+        H5Eset_auto2(H5E_DEFAULT, (H5E_auto2_t)H5Eprint2, stderr);
+    else
+        H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+}

@@ -1,0 +1,398 @@
+/*
+ * h5file.c -- opening and publishing pd-h5 files.
+ *
+ * Reading "-" takes the whole of stdin and opens it as an HDF5 file image
+ * (core driver).  Writing "-" builds the file in memory (core driver, no
+ * backing store) and streams its image to stdout at close.  Writing a path
+ * goes to a temporary file beside it that is renamed over the path only once
+ * the file is complete, so a failed or killed program never leaves a half
+ * written file under the final name.
+ */
+
+#include <errno.h>
+#include <fcntl.h>
+#include <libgen.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <hdf5.h>
+
+#include "h5util.h"
+#include "pd.h"
+
+static const unsigned char hdf5_signature[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+
+/* Read all of a stream into memory. */
+static pd_status slurp(FILE *in, const char *what, unsigned char **buf, size_t *len)
+{
+    size_t cap = 1 << 20, n = 0;
+    unsigned char *b = malloc(cap);
+    if (b == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory reading %s", what);
+    for (;;) {
+        if (n == cap) {
+            unsigned char *nb = realloc(b, cap * 2);
+            if (nb == NULL) {
+                free(b);
+                return pd_fail(PD_ERR_NOMEM, "out of memory reading %s", what);
+            }
+            b = nb;
+            cap *= 2;
+        }
+        size_t got = fread(b + n, 1, cap - n, in);
+        n += got;
+        if (got == 0) {
+            if (ferror(in)) {
+                free(b);
+                return pd_fail(PD_ERR_IO, "cannot read %s: %s", what, strerror(errno));
+            }
+            break;
+        }
+    }
+    *buf = b;
+    *len = n;
+    return PD_OK;
+}
+
+/* Open an in-memory image (read-only or writable, never backed by a file). */
+static hid_t open_image(const void *buf, size_t len, unsigned flags)
+{
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    H5Pset_fapl_core(fapl, 1 << 20, 0);
+    H5Pset_file_image(fapl, (void *)buf, len);
+    hid_t fid = H5Fopen("pd-image", flags, fapl);
+    H5Pclose(fapl);
+    return fid;
+}
+
+static pd_status check_header(pd_file *f)
+{
+    char *format = NULL;
+    if (!pd_h5_has_attr(f->fid, "pd_format") ||
+        pd_h5_read_attr_string(f->fid, "pd_format", &format) != PD_OK ||
+        strcmp(format, PD_FORMAT) != 0) {
+        free(format);
+        return pd_fail(PD_ERR_FORMAT, "'%s' is an HDF5 file but not a pd-h5 file (no pd_format)",
+                       f->name);
+    }
+    free(format);
+    int64_t version = 0;
+    if (pd_h5_read_attr_int(f->fid, "pd_format_version", &version) != PD_OK)
+        return pd_fail(PD_ERR_FORMAT, "'%s': no pd_format_version", f->name);
+    if (version != PD_FORMAT_VERSION)
+        return pd_fail(PD_ERR_FORMAT, "'%s': pd-h5 format version %lld, this pd reads version %d",
+                       f->name, (long long)version, PD_FORMAT_VERSION);
+    return PD_OK;
+}
+
+static pd_file *file_new(const char *path)
+{
+    pd_file *f = calloc(1, sizeof *f);
+    if (f == NULL)
+        return NULL;
+    f->fid = H5I_INVALID_HID;
+    f->name = strdup(strcmp(path, "-") == 0 ? "<stdin>" : path);
+    return f;
+}
+
+static void file_free(pd_file *f)
+{
+    if (f == NULL)
+        return;
+    free(f->name);
+    free(f->path);
+    free(f->tmp);
+    free(f->image);
+    free(f);
+}
+
+static pd_status load_bytes(const char *path, unsigned char **buf, size_t *len)
+{
+    if (strcmp(path, "-") == 0) {
+        if (isatty(STDIN_FILENO))
+            return pd_fail(PD_ERR_IO, "refusing to read an HDF5 file from a terminal (give a file "
+                                      "or a pipe)");
+        return slurp(stdin, "stdin", buf, len);
+    }
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+    if (S_ISDIR(st.st_mode))
+        return pd_fail(PD_ERR_IO, "cannot open '%s': is a directory", path);
+    FILE *in = fopen(path, "rb");
+    if (in == NULL)
+        return pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+    pd_status s = slurp(in, path, buf, len);
+    fclose(in);
+    return s;
+}
+
+static pd_status check_signature(const char *name, const unsigned char *buf, size_t len)
+{
+    if (len == 0)
+        return pd_fail(PD_ERR_FORMAT, "'%s' is empty", name);
+    if (len < 8 || memcmp(buf, hdf5_signature, 8) != 0)
+        return pd_fail(PD_ERR_FORMAT, "'%s' is not an HDF5 file", name);
+    return PD_OK;
+}
+
+pd_status pd_file_open(const char *path, pd_file **out)
+{
+    pd_file *f = file_new(path);
+    if (f == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    pd_status s;
+    if (strcmp(path, "-") == 0) {
+        unsigned char *buf;
+        size_t len;
+        if ((s = load_bytes(path, &buf, &len)) != PD_OK) {
+            file_free(f);
+            return s;
+        }
+        f->image = buf;
+        if ((s = check_signature(f->name, buf, len)) != PD_OK) {
+            file_free(f);
+            return s;
+        }
+        f->fid = open_image(buf, len, H5F_ACC_RDONLY);
+    } else {
+        struct stat st;
+        if (stat(path, &st) != 0) {
+            s = pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+            file_free(f);
+            return s;
+        }
+        if (S_ISDIR(st.st_mode)) {
+            file_free(f);
+            return pd_fail(PD_ERR_IO, "cannot open '%s': is a directory", path);
+        }
+        if (st.st_size == 0) {
+            file_free(f);
+            return pd_fail(PD_ERR_FORMAT, "'%s' is empty", path);
+        }
+        if (access(path, R_OK) != 0) {
+            s = pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+            file_free(f);
+            return s;
+        }
+        if (H5Fis_hdf5(path) <= 0) {
+            file_free(f);
+            return pd_fail(PD_ERR_FORMAT, "'%s' is not an HDF5 file", path);
+        }
+        f->fid = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    }
+    if (f->fid < 0) {
+        s = pd_fail(PD_ERR_FORMAT, "cannot open '%s' as HDF5 (damaged or truncated?)", f->name);
+        file_free(f);
+        return s;
+    }
+    f->readonly = 1;
+    if ((s = check_header(f)) != PD_OK) {
+        H5Fclose(f->fid);
+        file_free(f);
+        return s;
+    }
+    *out = f;
+    return PD_OK;
+}
+
+/* A temporary path beside `path`; the file is created (empty) by mkstemp. */
+static pd_status make_temp(const char *path, char **tmp)
+{
+    char *copy = strdup(path);
+    char *base = strdup(path);
+    if (copy == NULL || base == NULL) {
+        free(copy);
+        free(base);
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    const char *dir = dirname(copy);
+    const char *name = basename(base);
+    size_t len = strlen(dir) + strlen(name) + 32;
+    char *t = malloc(len);
+    if (t == NULL) {
+        free(copy);
+        free(base);
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    snprintf(t, len, "%s/.%s.tmp.XXXXXX", dir, name);
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        free(copy);
+        free(base);
+        free(t);
+        return pd_fail(PD_ERR_IO, "cannot write '%s': is a directory", path);
+    }
+    int fd = mkstemp(t);
+    if (fd < 0) {
+        pd_status s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", path, strerror(errno));
+        free(copy);
+        free(base);
+        free(t);
+        return s;
+    }
+    close(fd);
+    free(copy);
+    free(base);
+    *tmp = t;
+    return PD_OK;
+}
+
+pd_status pd_file_create(const char *path, pd_file **out)
+{
+    pd_file *f = file_new(path);
+    if (f == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    free(f->name);
+    f->name = strdup(strcmp(path, "-") == 0 ? "<stdout>" : path);
+    pd_status s;
+    if (strcmp(path, "-") == 0) {
+        if (isatty(STDOUT_FILENO)) {
+            file_free(f);
+            return pd_fail(PD_ERR_IO, "refusing to write an HDF5 file to a terminal (use -o FILE "
+                                      "or a pipe)");
+        }
+        f->to_stdout = 1;
+        hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+        H5Pset_fapl_core(fapl, 1 << 22, 0);
+        f->fid = H5Fcreate("pd-stdout", H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+        H5Pclose(fapl);
+    } else {
+        if ((s = make_temp(path, &f->tmp)) != PD_OK) {
+            file_free(f);
+            return s;
+        }
+        f->path = strdup(path);
+        f->fid = H5Fcreate(f->tmp, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    }
+    if (f->fid < 0) {
+        s = pd_fail(PD_ERR_IO, "cannot create '%s'", f->name);
+        if (f->tmp)
+            unlink(f->tmp);
+        file_free(f);
+        return s;
+    }
+    *out = f;
+    return PD_OK;
+}
+
+pd_status pd_file_update(const char *inpath, const char *outpath, pd_file **out)
+{
+    unsigned char *buf;
+    size_t len;
+    const char *inname = strcmp(inpath, "-") == 0 ? "<stdin>" : inpath;
+    pd_status s = load_bytes(inpath, &buf, &len);
+    if (s != PD_OK)
+        return s;
+    if ((s = check_signature(inname, buf, len)) != PD_OK) {
+        free(buf);
+        return s;
+    }
+    pd_file *f = file_new(outpath);
+    if (f == NULL) {
+        free(buf);
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    free(f->name);
+    f->name = strdup(inname);
+    if (strcmp(outpath, "-") == 0) {
+        if (isatty(STDOUT_FILENO)) {
+            free(buf);
+            file_free(f);
+            return pd_fail(PD_ERR_IO, "refusing to write an HDF5 file to a terminal (use -o FILE "
+                                      "or a pipe)");
+        }
+        f->to_stdout = 1;
+        f->image = buf;
+        f->fid = open_image(buf, len, H5F_ACC_RDWR);
+    } else {
+        if ((s = make_temp(outpath, &f->tmp)) != PD_OK) {
+            free(buf);
+            file_free(f);
+            return s;
+        }
+        f->path = strdup(outpath);
+        FILE *o = fopen(f->tmp, "wb");
+        int ok = o != NULL && fwrite(buf, 1, len, o) == len;
+        if (o != NULL && fclose(o) != 0)
+            ok = 0;
+        free(buf);
+        if (!ok) {
+            s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", outpath, strerror(errno));
+            unlink(f->tmp);
+            file_free(f);
+            return s;
+        }
+        f->fid = H5Fopen(f->tmp, H5F_ACC_RDWR, H5P_DEFAULT);
+    }
+    if (f->fid < 0) {
+        s = pd_fail(PD_ERR_FORMAT, "cannot open '%s' as HDF5 (damaged or truncated?)", inname);
+        if (f->tmp)
+            unlink(f->tmp);
+        file_free(f);
+        return s;
+    }
+    if ((s = check_header(f)) != PD_OK) {
+        pd_file_abort(f);
+        return s;
+    }
+    *out = f;
+    return PD_OK;
+}
+
+pd_status pd_file_close(pd_file *f)
+{
+    if (f == NULL)
+        return PD_OK;
+    pd_status s = PD_OK;
+    if (f->readonly) {
+        H5Fclose(f->fid);
+        file_free(f);
+        return PD_OK;
+    }
+    if (f->to_stdout) {
+        if (H5Fflush(f->fid, H5F_SCOPE_GLOBAL) < 0)
+            s = pd_fail(PD_ERR_IO, "cannot finish the output file");
+        ssize_t size = s == PD_OK ? H5Fget_file_image(f->fid, NULL, 0) : -1;
+        unsigned char *img = size > 0 ? malloc((size_t)size) : NULL;
+        if (s == PD_OK && (img == NULL || H5Fget_file_image(f->fid, img, (size_t)size) != size))
+            s = pd_fail(PD_ERR_IO, "cannot build the output image");
+        H5Fclose(f->fid);
+        if (s == PD_OK) {
+            if (fwrite(img, 1, (size_t)size, stdout) != (size_t)size || fflush(stdout) != 0)
+                s = pd_fail(PD_ERR_IO, "cannot write to stdout: %s", strerror(errno));
+        }
+        free(img);
+        file_free(f);
+        return s;
+    }
+    if (H5Fclose(f->fid) < 0)
+        s = pd_fail(PD_ERR_IO, "cannot write '%s' (disk full?)", f->path);
+    if (s == PD_OK) {
+        int fd = open(f->tmp, O_RDONLY);
+        if (fd >= 0) {
+            if (fsync(fd) != 0)
+                s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", f->path, strerror(errno));
+            close(fd);
+        }
+    }
+    if (s == PD_OK && rename(f->tmp, f->path) != 0)
+        s = pd_fail(PD_ERR_IO, "cannot rename the output to '%s': %s", f->path, strerror(errno));
+    if (s != PD_OK)
+        unlink(f->tmp);
+    file_free(f);
+    return s;
+}
+
+void pd_file_abort(pd_file *f)
+{
+    if (f == NULL)
+        return;
+    if (f->fid >= 0)
+        H5Fclose(f->fid);
+    if (f->tmp)
+        unlink(f->tmp);
+    file_free(f);
+}

@@ -1,0 +1,247 @@
+/*
+ * h5util.c -- checked HDF5 attribute and dataset access for libpd.  Every
+ * read checks class, size and shape against the documented form before it
+ * allocates, and refuses sizes larger than the machine's memory.
+ */
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "h5util.h"
+
+int pd_h5_has_attr(hid_t loc, const char *name)
+{
+    return H5Aexists(loc, name) > 0;
+}
+
+int pd_h5_has_link(hid_t loc, const char *path)
+{
+    /* check each component, as H5Lexists requires */
+    char buf[512];
+    if (strlen(path) >= sizeof buf)
+        return 0;
+    strcpy(buf, path);
+    for (char *p = buf + 1; ; p++) {
+        if (*p == '/' || *p == '\0') {
+            char c = *p;
+            *p = '\0';
+            if (H5Lexists(loc, buf, H5P_DEFAULT) <= 0)
+                return 0;
+            if (c == '\0')
+                return 1;
+            *p = c;
+        }
+    }
+}
+
+static hid_t open_attr(hid_t loc, const char *name)
+{
+    if (!pd_h5_has_attr(loc, name))
+        return H5I_INVALID_HID;
+    return H5Aopen(loc, name, H5P_DEFAULT);
+}
+
+pd_status pd_h5_read_attr_string(hid_t loc, const char *name, char **out)
+{
+    hid_t a = open_attr(loc, name);
+    if (a < 0)
+        return pd_fail(PD_ERR_FORMAT, "missing attribute '%s'", name);
+    hid_t t = H5Aget_type(a);
+    hid_t sp = H5Aget_space(a);
+    pd_status s = PD_OK;
+    if (H5Tget_class(t) != H5T_STRING || H5Sget_simple_extent_npoints(sp) != 1) {
+        s = pd_fail(PD_ERR_FORMAT, "attribute '%s' is not a string", name);
+    } else if (H5Tis_variable_str(t) > 0) {
+        hid_t mt = H5Tcopy(H5T_C_S1);
+        H5Tset_size(mt, H5T_VARIABLE);
+        H5Tset_cset(mt, H5Tget_cset(t));
+        char *v = NULL;
+        if (H5Aread(a, mt, &v) < 0 || v == NULL)
+            s = pd_fail(PD_ERR_FORMAT, "cannot read attribute '%s'", name);
+        else {
+            *out = strdup(v);
+            H5free_memory(v);
+        }
+        H5Tclose(mt);
+    } else {
+        size_t len = H5Tget_size(t);
+        char *v = calloc(len + 1, 1);
+        hid_t mt = H5Tcopy(H5T_C_S1);
+        H5Tset_size(mt, len + 1);
+        H5Tset_cset(mt, H5Tget_cset(t));
+        if (v == NULL || H5Aread(a, mt, v) < 0) {
+            free(v);
+            s = pd_fail(PD_ERR_FORMAT, "cannot read attribute '%s'", name);
+        } else
+            *out = v;
+        H5Tclose(mt);
+    }
+    H5Sclose(sp);
+    H5Tclose(t);
+    H5Aclose(a);
+    return s;
+}
+
+static pd_status read_attr_scalar(hid_t loc, const char *name, H5T_class_t cls, hid_t mt,
+                                  void *out)
+{
+    hid_t a = open_attr(loc, name);
+    if (a < 0)
+        return pd_fail(PD_ERR_FORMAT, "missing attribute '%s'", name);
+    hid_t t = H5Aget_type(a);
+    hid_t sp = H5Aget_space(a);
+    pd_status s = PD_OK;
+    H5T_class_t c = H5Tget_class(t);
+    int ok = (c == cls || (cls == H5T_FLOAT && c == H5T_INTEGER));
+    if (!ok || H5Sget_simple_extent_npoints(sp) != 1)
+        s = pd_fail(PD_ERR_FORMAT, "attribute '%s' has the wrong type or shape", name);
+    else if (H5Aread(a, mt, out) < 0)
+        s = pd_fail(PD_ERR_FORMAT, "cannot read attribute '%s'", name);
+    H5Sclose(sp);
+    H5Tclose(t);
+    H5Aclose(a);
+    return s;
+}
+
+pd_status pd_h5_read_attr_int(hid_t loc, const char *name, int64_t *out)
+{
+    return read_attr_scalar(loc, name, H5T_INTEGER, H5T_NATIVE_INT64, out);
+}
+
+pd_status pd_h5_read_attr_double(hid_t loc, const char *name, double *out)
+{
+    return read_attr_scalar(loc, name, H5T_FLOAT, H5T_NATIVE_DOUBLE, out);
+}
+
+static pd_status write_attr(hid_t loc, const char *name, hid_t type, hid_t space, const void *v)
+{
+    if (pd_h5_has_attr(loc, name))
+        H5Adelete(loc, name);
+    hid_t a = H5Acreate2(loc, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
+    pd_status s = PD_OK;
+    if (a < 0 || H5Awrite(a, type, v) < 0)
+        s = pd_fail(PD_ERR_IO, "cannot write attribute '%s'", name);
+    if (a >= 0)
+        H5Aclose(a);
+    return s;
+}
+
+pd_status pd_h5_write_attr_string(hid_t loc, const char *name, const char *value)
+{
+    hid_t t = H5Tcopy(H5T_C_S1);
+    H5Tset_size(t, H5T_VARIABLE);
+    H5Tset_cset(t, H5T_CSET_UTF8);
+    hid_t sp = H5Screate(H5S_SCALAR);
+    pd_status s = write_attr(loc, name, t, sp, &value);
+    H5Sclose(sp);
+    H5Tclose(t);
+    return s;
+}
+
+pd_status pd_h5_write_attr_int(hid_t loc, const char *name, int64_t value)
+{
+    hid_t sp = H5Screate(H5S_SCALAR);
+    pd_status s = write_attr(loc, name, H5T_NATIVE_INT64, sp, &value);
+    H5Sclose(sp);
+    return s;
+}
+
+pd_status pd_h5_write_attr_doubles(hid_t loc, const char *name, const double *v, int n)
+{
+    hsize_t dim = (hsize_t)n;
+    hid_t sp = n == 1 ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &dim, NULL);
+    pd_status s = write_attr(loc, name, H5T_NATIVE_DOUBLE, sp, v);
+    H5Sclose(sp);
+    return s;
+}
+
+pd_status pd_h5_write_data(hid_t loc, const char *name, hid_t filetype, hid_t memtype, int rank,
+                           const hsize_t *dims, const void *data)
+{
+    hid_t sp = H5Screate_simple(rank, dims, NULL);
+    hid_t d = H5Dcreate2(loc, name, filetype, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    pd_status s = PD_OK;
+    hsize_t total = 1;
+    for (int r = 0; r < rank; r++)
+        total *= dims[r];
+    if (d < 0 || (total > 0 && H5Dwrite(d, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0))
+        s = pd_fail(PD_ERR_IO, "cannot write dataset '%s' (disk full?)", name);
+    if (d >= 0)
+        H5Dclose(d);
+    H5Sclose(sp);
+    return s;
+}
+
+static double memory_bytes(void)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
+    if (pages <= 0 || size <= 0)
+        return 1e12;
+    return (double)pages * (double)size;
+}
+
+static const char *class_name(H5T_class_t c, size_t size)
+{
+    if (c == H5T_FLOAT)
+        return size == 8 ? "float64" : "float32";
+    if (c == H5T_INTEGER)
+        return size == 8 ? "int64" : size == 4 ? "int32" : size == 1 ? "uint8" : "integer";
+    return "non-numeric";
+}
+
+pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
+                          hid_t memtype, size_t elsize, void **buf, hsize_t *dims_out)
+{
+    if (!pd_h5_has_link(loc, name))
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no dataset '%s'", file, name);
+    hid_t d = H5Dopen2(loc, name, H5P_DEFAULT);
+    if (d < 0)
+        return pd_fail(PD_ERR_FORMAT, "'%s': '%s' is not a dataset", file, name);
+    hid_t t = H5Dget_type(d), sp = H5Dget_space(d);
+    pd_status s = PD_OK;
+    hsize_t dims[8] = {0};
+    int rank = H5Sget_simple_extent_ndims(sp);
+    H5T_class_t cls = H5Tget_class(t);
+    size_t size = H5Tget_size(t);
+    if (cls != form->cls || size != form->size) {
+        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' is %s, expected %s", file, name,
+                    class_name(cls, size), class_name(form->cls, form->size));
+    } else if (rank != form->rank) {
+        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has rank %d, expected %d", file, name, rank,
+                    form->rank);
+    } else {
+        H5Sget_simple_extent_dims(sp, dims, NULL);
+        double total = 1;
+        for (int r = 0; r < rank; r++) {
+            if (form->dims[r] != 0 && dims[r] != form->dims[r]) {
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': dataset '%s' has %llu entries along axis %d, expected %llu",
+                            file, name, (unsigned long long)dims[r], r,
+                            (unsigned long long)form->dims[r]);
+                break;
+            }
+            total *= (double)dims[r];
+        }
+        if (s == PD_OK && total * (double)elsize > memory_bytes())
+            s = pd_fail(PD_ERR_NOMEM, "'%s': dataset '%s' declares %.3g bytes, more than memory",
+                        file, name, total * (double)elsize);
+        if (s == PD_OK) {
+            void *b = malloc(total > 0 ? (size_t)total * elsize : 1);
+            if (b == NULL)
+                s = pd_fail(PD_ERR_NOMEM, "out of memory reading '%s'", name);
+            else if (total > 0 && H5Dread(d, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, b) < 0) {
+                free(b);
+                s = pd_fail(PD_ERR_FORMAT, "'%s': cannot read dataset '%s'", file, name);
+            } else {
+                *buf = b;
+                if (dims_out)
+                    for (int r = 0; r < rank; r++)
+                        dims_out[r] = dims[r];
+            }
+        }
+    }
+    H5Sclose(sp);
+    H5Tclose(t);
+    H5Dclose(d);
+    return s;
+}

@@ -1,0 +1,46 @@
+/*
+ * h5util.h -- internal helpers of libpd for HDF5 attributes and datasets.
+ * Not installed; the public interface is pd.h.
+ */
+#ifndef PD_H5UTIL_H
+#define PD_H5UTIL_H
+
+#include <hdf5.h>
+
+#include "pd.h"
+
+struct pd_file {
+    hid_t fid;
+    char *name;           /* for messages                          */
+    char *path;           /* final path (NULL for stdout)          */
+    char *tmp;            /* temporary path being written          */
+    unsigned char *image; /* stdin or update image kept alive      */
+    int to_stdout;
+    int readonly;
+};
+
+int pd_h5_has_attr(hid_t loc, const char *name);
+int pd_h5_has_link(hid_t loc, const char *path);
+pd_status pd_h5_read_attr_string(hid_t loc, const char *name, char **out);
+pd_status pd_h5_read_attr_int(hid_t loc, const char *name, int64_t *out);
+pd_status pd_h5_read_attr_double(hid_t loc, const char *name, double *out);
+pd_status pd_h5_write_attr_string(hid_t loc, const char *name, const char *value);
+pd_status pd_h5_write_attr_int(hid_t loc, const char *name, int64_t value);
+pd_status pd_h5_write_attr_doubles(hid_t loc, const char *name, const double *v, int n);
+pd_status pd_h5_write_data(hid_t loc, const char *name, hid_t filetype, hid_t memtype, int rank,
+                           const hsize_t *dims, const void *data);
+
+/* The expected form of a dataset: class (H5T_FLOAT/H5T_INTEGER), size in
+ * bytes, rank and dimensions (0 = any). */
+typedef struct {
+    H5T_class_t cls;
+    size_t size;
+    int rank;
+    hsize_t dims[2];
+} pd_h5_form;
+
+/* Read a whole dataset after checking its form; *buf is allocated. */
+pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
+                          hid_t memtype, size_t elsize, void **buf, hsize_t *dims);
+
+#endif

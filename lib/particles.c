@@ -1,0 +1,44 @@
+/*
+ * particles.c -- the particle arrays (structure of arrays) and their
+ * lifecycle.
+ */
+#include <stdlib.h>
+
+#include "pd.h"
+
+pd_particles *pd_particles_new(int64_t n)
+{
+    pd_particles *p = calloc(1, sizeof *p);
+    if (p == NULL)
+        return NULL;
+    p->n = n;
+    size_t m = n > 0 ? (size_t)n : 1;
+    for (int d = 0; d < 3; d++)
+        p->x[d] = malloc(m * sizeof(double));
+    p->volume = malloc(m * sizeof(double));
+    p->density = malloc(m * sizeof(double));
+    p->radius = malloc(m * sizeof(double));
+    p->material = malloc(m * sizeof(int32_t));
+    p->id = malloc(m * sizeof(int64_t));
+    p->dimension = 3;
+    if (!p->x[0] || !p->x[1] || !p->x[2] || !p->volume || !p->density ||
+        !p->radius || !p->material || !p->id) {
+        pd_particles_free(p);
+        return NULL;
+    }
+    return p;
+}
+
+void pd_particles_free(pd_particles *p)
+{
+    if (p == NULL)
+        return;
+    for (int d = 0; d < 3; d++)
+        free(p->x[d]);
+    free(p->volume);
+    free(p->density);
+    free(p->radius);
+    free(p->material);
+    free(p->id);
+    free(p);
+}

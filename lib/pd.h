@@ -1,0 +1,334 @@
+/*
+ * pd.h -- the one public header of libpd, the peridynamics core of the pd
+ * toolkit.
+ *
+ * Units are SI throughout (m, kg, s, Pa, J).  Every function returns a
+ * pd_status; on failure it leaves a one-line message that pd_errmsg() returns
+ * and the caller prints.  The library never prints and never exits.
+ *
+ * Data are structures of arrays.  Particles carry a stable global id (1-based,
+ * /particles/id) apart from their local row index, so that a later domain
+ * decomposition can renumber rows without touching ids.
+ */
+#ifndef PD_H
+#define PD_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#define PD_VERSION "0.1.0"
+#define PD_FORMAT "pd-h5"
+#define PD_FORMAT_VERSION 1
+
+/* ---------------------------------------------------------------- status */
+
+typedef enum {
+    PD_OK = 0,
+    PD_ERR_IO,       /* cannot open, read or write a file */
+    PD_ERR_FORMAT,   /* a file is not a pd-h5 file of the expected shape */
+    PD_ERR_INVALID,  /* a parameter is out of its domain */
+    PD_ERR_NOMEM,    /* an allocation failed or would be absurdly large */
+    PD_ERR_UNSTABLE  /* a run produced NaN/Inf or exceeded a stability limit */
+} pd_status;
+
+/* The message of the last failure in this thread. */
+const char *pd_errmsg(void);
+/* Set the message (printf-style); returns `st` so one can `return
+ * pd_fail(PD_ERR_IO, "...")`. */
+pd_status pd_fail(pd_status st, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+/* Switch HDF5's own error printing on (debug) or off (default). */
+void pd_h5_debug(int on);
+
+/* ------------------------------------------------------ physics constants */
+
+/* Every constant of the seeds lives here, with its source. */
+#define PD_CONTACT_SCALE 15.0      /* c_S = 15 c (seed 000 eq. 14)              */
+#define PD_CONTACT_REF_FRAC 0.9    /* d_ij <= 0.9 |x_i - x_j| (seed 000 eq. 15) */
+#define PD_CONTACT_RADIUS_FAC 1.35 /* d_ij <= 1.35 (r_i + r_j) (seed 000 eq. 15)*/
+#define PD_NEAR_ZERO 2.2204e-16    /* |dr| below this is 0 (seed 000, "A
+                                      Numerical Example": eps_machine, as in
+                                      LAMMPS)                                  */
+#define PD_PMB_C_FACTOR 18.0       /* c = 18 K / (pi delta^4) (seed 000 eq. 6)  */
+
+/* ---------------------------------------------------------------- particles */
+
+typedef struct {
+    int64_t n;         /* number of particles                              */
+    double *x[3];      /* reference positions, m (x[d][i])                 */
+    double *volume;    /* particle volume V_i, m^3                         */
+    double *density;   /* mass density rho_i, kg/m^3                       */
+    double *radius;    /* node radius r_i (half the spacing), m            */
+    int32_t *material; /* material id                                      */
+    int64_t *id;       /* global id, 1-based, stable across files          */
+    double spacing;    /* lattice spacing Delta x, m                       */
+    int dimension;     /* 3 (2 reserved for plates)                        */
+} pd_particles;
+
+pd_particles *pd_particles_new(int64_t n);
+void pd_particles_free(pd_particles *p);
+
+/* ---------------------------------------------------------------- regions */
+
+typedef enum { PD_REGION_BOX, PD_REGION_CYLINDER, PD_REGION_SPHERE } pd_region_kind;
+
+typedef struct {
+    pd_region_kind kind;
+    int axis;        /* cylinder: 0,1,2 for x,y,z                              */
+    double p[6];     /* box: xlo,xhi,ylo,yhi,zlo,zhi
+                        cylinder: c1,c2,R,lo,hi (LAMMPS region cylinder: c1,c2
+                        are the axis coordinates in the other two dimensions,
+                        in x,y,z order)
+                        sphere: x,y,z,R                                       */
+    int subtract;    /* 1: cut this region out of the union                  */
+} pd_region;
+
+/* Parse "XLO,XHI,..." style specs.  kind_spec is e.g. "box" and spec the
+ * comma list; for --subtract the spec is "box,..." etc. */
+pd_status pd_region_parse(pd_region_kind kind, const char *spec, pd_region *out);
+pd_status pd_region_parse_tagged(const char *spec, pd_region *out);
+int pd_region_inside(const pd_region *r, const double x[3]);
+/* Axis-aligned bounding box of a region. */
+void pd_region_bounds(const pd_region *r, double lo[3], double hi[3]);
+
+typedef struct {
+    double spacing;     /* m, > 0                          */
+    double density;     /* kg/m^3, > 0                     */
+    int32_t material;   /* material id                     */
+    double perturb;     /* amplitude of uniform perturbation, m (0 = none) */
+    unsigned long seed; /* GSL mt19937 seed                */
+} pd_lattice_params;
+
+/* Simple cubic lattice sites n*spacing (anchored at the origin, LAMMPS
+ * `lattice sc`) inside the union of the non-subtract regions and outside
+ * every subtract region; z outermost, x innermost, as LAMMPS create_atoms. */
+pd_status pd_lattice_make(const pd_region *regions, int nregions,
+                          const pd_lattice_params *lp, pd_particles **out);
+
+/* ---------------------------------------------------------------- cells */
+
+/* Cell list over a set of points: cells of edge >= `cutoff`. */
+typedef struct {
+    double lo[3];      /* lower corner, m                 */
+    double size;       /* cell edge, m                    */
+    int64_t dim[3];    /* cells per axis                  */
+    int64_t *start;    /* ncell+1 offsets into `index`    */
+    int32_t *index;    /* particle indices sorted by cell */
+} pd_cells;
+
+pd_status pd_cells_build(pd_cells *c, int64_t n, double *const x[3], double cutoff);
+void pd_cells_free(pd_cells *c);
+/* Cell coordinates of a point (clamped into the grid). */
+void pd_cells_locate(const pd_cells *c, const double x[3], int64_t cell[3]);
+
+/* ---------------------------------------------------------------- bonds */
+
+typedef struct {
+    int64_t n;          /* particles (rows)                                 */
+    int64_t count;      /* directed bonds: each bond i-j is stored in the
+                           families of i and of j                           */
+    int64_t *offset;    /* n+1 CSR offsets                                  */
+    int32_t *neighbor;  /* count: local row of the partner                  */
+    double *length;     /* count: reference length |xi|, m                  */
+    double *vfactor;    /* count: partial-volume factor nu in [1/2, 1]      */
+    uint64_t *intact;   /* ceil(count/64) words: bit b = mu of bond b       */
+    double horizon;     /* delta, m                                         */
+} pd_bonds;
+
+pd_bonds *pd_bonds_alloc(int64_t n, int64_t count);
+void pd_bonds_free(pd_bonds *b);
+/* Families within the horizon by cell lists (linear in N). */
+pd_status pd_bonds_build(const pd_particles *p, double horizon, pd_bonds **out);
+
+static inline int pd_bond_intact(const uint64_t *bits, int64_t b)
+{
+    return (int)((__atomic_load_n(&bits[b >> 6], __ATOMIC_RELAXED) >> (b & 63)) & 1u);
+}
+static inline void pd_bond_break(uint64_t *bits, int64_t b)
+{
+    __atomic_fetch_and(&bits[b >> 6], ~(UINT64_C(1) << (b & 63)), __ATOMIC_RELAXED);
+}
+int64_t pd_bits_words(int64_t count);
+/* Number of cleared bits among the first `count`. */
+int64_t pd_bits_count_broken(const uint64_t *bits, int64_t count);
+
+/* Damage (seed 000 eq. 10, as LAMMPS compute damage/atom): 1 - sum of V_j
+ * over intact bonds / sum of V_j over the reference family; 0 for a particle
+ * without family. */
+void pd_damage(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
+               double *damage);
+
+/* Reorder particles along a Morton curve of horizon-sized cells, so that
+ * families are close in memory.  Ids travel with the particles. */
+pd_status pd_particles_sort_spatial(pd_particles *p, double cell);
+
+/* ---------------------------------------------------------------- scene */
+
+typedef enum { PD_MODEL_PMB = 0 } pd_model_kind;
+
+typedef struct {
+    pd_model_kind model;
+    double c;              /* PMB micromodulus, N/m^6                       */
+    double bulk_modulus;   /* K, Pa (0 when c was given)                    */
+    int has_failure;
+    double s00;            /* critical stretch parameter s00               */
+    double alpha;          /* s0 = s00 - alpha s_min (seed 000 eq. 9)       */
+    int has_contact;
+    double contact_skin;   /* m                                            */
+    int has_indenter;
+    double ind_center[3];  /* centre at t = 0, m                            */
+    double ind_radius;     /* m                                            */
+    double ind_k;          /* K of F = K (R - r)^2, force density per m^2   */
+    double ind_velocity[3];/* m/s                                           */
+    double dt;             /* s                                            */
+    double dt_stable;      /* eq. 46 estimate, s                           */
+    double safety;         /* dt = safety * dt_stable when dt not given     */
+    int64_t steps;
+    int64_t every;         /* frame every N steps; 0 = last step only      */
+    int threads;
+} pd_scene;
+
+/* ---------------------------------------------------------------- run */
+
+typedef struct pd_sim pd_sim;
+
+/* Timers of the step (pd-run --timing). */
+typedef enum {
+    PD_T_BONDS, PD_T_CONTACT, PD_T_NEIGHBOR, PD_T_INDENTER, PD_T_INTEGRATE,
+    PD_T_OUTPUT, PD_T_COUNT
+} pd_timer;
+
+pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
+                     pd_sim **out);
+void pd_sim_free(pd_sim *sim);
+
+/* PMB micromodulus from the bulk modulus: c = 18 K / (pi delta^4) (seed 000
+ * eq. 6, 3-D). */
+double pd_pmb_c_from_bulk(double bulk_modulus, double horizon);
+
+/* Stable step of seed 004 eq. 46 for the bonds of the scene's model. */
+double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s);
+
+/* Compute the forces of the initial state (step 0). */
+pd_status pd_sim_setup(pd_sim *sim);
+/* One velocity-Verlet step (seed 000 Algorithm 1) with the declared effects. */
+pd_status pd_sim_step(pd_sim *sim);
+
+/* Names of the active effects, e.g. "pmb-bonds failure contact indenter". */
+const char *pd_sim_effects(const pd_sim *sim);
+int64_t pd_sim_stepno(const pd_sim *sim);
+double pd_sim_time(const pd_sim *sim);
+double pd_sim_kinetic(const pd_sim *sim);
+int64_t pd_sim_broken(const pd_sim *sim);      /* broken bonds (pairs) */
+double pd_sim_max_damage(const pd_sim *sim);
+int64_t pd_sim_contact_builds(const pd_sim *sim);
+const double *pd_sim_timers(const pd_sim *sim); /* seconds per pd_timer */
+/* Views of the state (current positions y, velocities v), SoA. */
+double *const *pd_sim_positions(const pd_sim *sim);
+double *const *pd_sim_velocities(const pd_sim *sim);
+const uint64_t *pd_sim_intact(const pd_sim *sim);
+
+/* ---------------------------------------------------------------- files */
+
+typedef struct pd_file pd_file;
+
+/* Open for reading; path "-" reads the whole of stdin as an HDF5 image. */
+pd_status pd_file_open(const char *path, pd_file **out);
+/* Create for writing; "-" builds the file in memory and streams it to stdout
+ * at close.  Otherwise the file is written under a temporary name beside
+ * `path` and renamed when pd_file_close() succeeds. */
+pd_status pd_file_create(const char *path, pd_file **out);
+/* Open an existing file for update through a copy: the original is copied to
+ * a temporary beside `outpath` ("-" for stdout), modified, and renamed to
+ * `outpath` on close. */
+pd_status pd_file_update(const char *inpath, const char *outpath, pd_file **out);
+/* Close: flush, publish (rename or stream), free.  On failure the temporary
+ * file is removed. */
+pd_status pd_file_close(pd_file *f);
+/* Abandon a file being written: remove the temporary, free. */
+void pd_file_abort(pd_file *f);
+
+/* Root attributes: format, version, units, history.  `history` of a new
+ * file starts from `from` (may be NULL) and gets `cmdline` appended. */
+pd_status pd_write_header(pd_file *f, const pd_file *from, const char *cmdline);
+pd_status pd_append_history(pd_file *f, const char *cmdline);
+/* The history text (lines); caller frees. */
+pd_status pd_read_history(const pd_file *f, char **out);
+
+pd_status pd_read_particles(const pd_file *f, pd_particles **out);
+pd_status pd_write_particles(pd_file *f, const pd_particles *p);
+int pd_file_has_bonds(const pd_file *f);
+pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out);
+pd_status pd_write_bonds(pd_file *f, const pd_bonds *b);
+pd_status pd_write_scene(pd_file *f, const pd_scene *s, const char *effects,
+                         const char *options_text);
+
+/* Frames. */
+typedef struct {
+    int64_t step;
+    double time;       /* s */
+    double kinetic;    /* J */
+    int64_t broken;    /* broken bonds (pairs) */
+} pd_frame_info;
+
+pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
+                         double *const y[3], double *const v[3],
+                         const uint64_t *intact, int64_t nbonds);
+/* Number of frames and their names in step order; caller frees with
+ * pd_frames_free_list. */
+pd_status pd_list_frames(const pd_file *f, int64_t *nframes, char ***names);
+void pd_frames_free_list(int64_t nframes, char **names);
+pd_status pd_read_frame_info(const pd_file *f, const char *name, pd_frame_info *fi);
+/* Per-particle fields of a frame: displacement and velocity (N,3) into SoA
+ * arrays d[3] (any may be NULL to skip). */
+pd_status pd_read_frame_vectors(const pd_file *f, const char *name, int64_t n,
+                                double *disp[3], double *vel[3]);
+/* Bond state bits of a frame (count bonds) into a words array. */
+pd_status pd_read_frame_state(const pd_file *f, const char *name, int64_t count,
+                              uint64_t *intact);
+/* Optional scalar field (N) of a frame, e.g. "damage"; *present = 0 when
+ * absent (not an error). */
+pd_status pd_read_frame_scalar(const pd_file *f, const char *name, const char *field,
+                               int64_t n, double *out, int *present);
+pd_status pd_write_frame_scalar(pd_file *f, const char *name, const char *field,
+                                int64_t n, const double *values);
+
+/* ---------------------------------------------------------------- VTK */
+
+/* One VTK XML UnstructuredGrid (binary appended data, vertex cells) of a
+ * frame: points at current positions, point data as given (NULL skips). */
+typedef struct {
+    int64_t n;
+    double *const *position;      /* current positions, SoA          */
+    double *const *displacement;  /* SoA                             */
+    double *const *velocity;      /* SoA                             */
+    const double *damage;
+    const int32_t *material;
+    const int64_t *id;
+} pd_vtk_frame;
+
+pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr);
+/* A ParaView collection listing files (relative names) with their times. */
+pd_status pd_pvd_write(const char *path, int64_t nfiles, char *const *files,
+                       const double *times);
+
+/* ---------------------------------------------------------------- utilities */
+
+/* Checked number parsing: whole string, finite. */
+int pd_parse_double(const char *s, double *out);
+int pd_parse_int64(const char *s, int64_t *out);
+/* Comma list of exactly n doubles. */
+int pd_parse_doubles(const char *s, double *out, int n);
+/* The command line as one line of history (quoted where needed); free it. */
+char *pd_join_argv(int argc, char **argv);
+/* A scene file as long options: "option value" lines become "--option",
+ * "value"; `#` starts a comment.  *argv and its strings are malloc'ed. */
+pd_status pd_scene_args(const char *path, int *argc, char ***argv);
+/* Wall clock, s. */
+double pd_wtime(void);
+/* Peak resident memory of this process, bytes (0 if unknown). */
+int64_t pd_peak_rss(void);
+
+#endif

@@ -1,0 +1,717 @@
+/*
+ * schema.c -- the pd-h5 layout (schema v1, man/man5/pd-h5.5): root
+ * attributes and history, /particles, /bonds, /scene and /frames.  Readers
+ * validate everything before use: dtypes, shapes, sizes consistent across
+ * datasets, values in their domain, CSR offsets and neighbours in range,
+ * families symmetric.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "h5util.h"
+
+/* ------------------------------------------------------------ header */
+
+pd_status pd_read_history(const pd_file *f, char **out)
+{
+    if (!pd_h5_has_attr(f->fid, "history")) {
+        *out = strdup("");
+        return *out ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    return pd_h5_read_attr_string(f->fid, "history", out);
+}
+
+static pd_status write_history(pd_file *f, const char *old, const char *cmdline)
+{
+    size_t len = strlen(old) + strlen(cmdline) + 2;
+    char *h = malloc(len);
+    if (h == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    snprintf(h, len, "%s%s%s", old, (old[0] && old[strlen(old) - 1] != '\n') ? "\n" : "",
+             cmdline);
+    pd_status s = pd_h5_write_attr_string(f->fid, "history", h);
+    free(h);
+    return s;
+}
+
+pd_status pd_write_header(pd_file *f, const pd_file *from, const char *cmdline)
+{
+    pd_status s;
+    if ((s = pd_h5_write_attr_string(f->fid, "pd_format", PD_FORMAT)) != PD_OK ||
+        (s = pd_h5_write_attr_int(f->fid, "pd_format_version", PD_FORMAT_VERSION)) != PD_OK ||
+        (s = pd_h5_write_attr_string(f->fid, "units", "SI")) != PD_OK)
+        return s;
+    char *old = NULL;
+    if (from != NULL && (s = pd_read_history(from, &old)) != PD_OK)
+        return s;
+    s = write_history(f, old ? old : "", cmdline);
+    free(old);
+    return s;
+}
+
+pd_status pd_append_history(pd_file *f, const char *cmdline)
+{
+    char *old = NULL;
+    pd_status s = pd_read_history(f, &old);
+    if (s != PD_OK)
+        return s;
+    s = write_history(f, old, cmdline);
+    free(old);
+    return s;
+}
+
+/* ------------------------------------------------------------ particles */
+
+static const pd_h5_form F64_N3 = {H5T_FLOAT, 8, 2, {0, 3}};
+
+pd_status pd_read_particles(const pd_file *f, pd_particles **out)
+{
+    const char *fn = f->name;
+    if (!pd_h5_has_link(f->fid, "/particles"))
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no /particles (not made by pd-lattice?)", fn);
+    double *pos = NULL;
+    hsize_t dims[2];
+    pd_status s = pd_h5_read_data(f->fid, fn, "/particles/position", &F64_N3, H5T_NATIVE_DOUBLE,
+                                  sizeof(double), (void **)&pos, dims);
+    if (s != PD_OK)
+        return s;
+    int64_t n = (int64_t)dims[0];
+    if (n == 0) {
+        free(pos);
+        return pd_fail(PD_ERR_FORMAT, "'%s' holds no particles", fn);
+    }
+    if (n >= INT32_MAX) {
+        free(pos);
+        return pd_fail(PD_ERR_FORMAT, "'%s' holds too many particles for one process", fn);
+    }
+    pd_particles *p = pd_particles_new(n);
+    if (p == NULL) {
+        free(pos);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld particles", (long long)n);
+    }
+    for (int64_t i = 0; i < n; i++)
+        for (int d = 0; d < 3; d++)
+            p->x[d][i] = pos[3 * i + d];
+    free(pos);
+
+    struct {
+        const char *name;
+        H5T_class_t cls;
+        size_t size;
+        hid_t mt;
+        void *dst;
+    } fields[] = {
+        {"/particles/volume", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, p->volume},
+        {"/particles/density", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, p->density},
+        {"/particles/radius", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, p->radius},
+        {"/particles/material", H5T_INTEGER, 4, H5T_NATIVE_INT32, p->material},
+        {"/particles/id", H5T_INTEGER, 8, H5T_NATIVE_INT64, p->id},
+    };
+    for (size_t k = 0; k < sizeof fields / sizeof fields[0]; k++) {
+        pd_h5_form form = {fields[k].cls, fields[k].size, 1, {(hsize_t)n, 0}};
+        void *buf = NULL;
+        s = pd_h5_read_data(f->fid, fn, fields[k].name, &form, fields[k].mt, fields[k].size, &buf,
+                            NULL);
+        if (s != PD_OK) {
+            pd_particles_free(p);
+            return s;
+        }
+        memcpy(fields[k].dst, buf, (size_t)n * fields[k].size);
+        free(buf);
+    }
+    hid_t g = H5Gopen2(f->fid, "/particles", H5P_DEFAULT);
+    int64_t dim = 3;
+    s = pd_h5_read_attr_double(g, "spacing", &p->spacing);
+    if (s == PD_OK && pd_h5_has_attr(g, "dimension"))
+        s = pd_h5_read_attr_int(g, "dimension", &dim);
+    H5Gclose(g);
+    if (s != PD_OK) {
+        pd_particles_free(p);
+        return pd_fail(PD_ERR_FORMAT, "'%s': /particles: %s", fn, pd_errmsg());
+    }
+    p->dimension = (int)dim;
+    if (!(p->spacing > 0) || !isfinite(p->spacing))
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /particles spacing must be positive", fn);
+    else if (dim != 3)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /particles dimension %lld (this pd runs 3-D bodies)", fn,
+                    (long long)dim);
+    for (int64_t i = 0; i < n && s == PD_OK; i++) {
+        if (!isfinite(p->x[0][i]) || !isfinite(p->x[1][i]) || !isfinite(p->x[2][i]))
+            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has a non-finite position", fn,
+                        (long long)i);
+        else if (!(p->volume[i] > 0) || !isfinite(p->volume[i]))
+            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has volume %g", fn, (long long)i,
+                        p->volume[i]);
+        else if (!(p->density[i] > 0) || !isfinite(p->density[i]))
+            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has density %g", fn, (long long)i,
+                        p->density[i]);
+        else if (!(p->radius[i] > 0) || !isfinite(p->radius[i]))
+            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has radius %g", fn, (long long)i,
+                        p->radius[i]);
+        else if (p->id[i] < 1)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has id %lld (ids start at 1)", fn,
+                        (long long)i, (long long)p->id[i]);
+    }
+    if (s != PD_OK) {
+        pd_particles_free(p);
+        return s;
+    }
+    *out = p;
+    return PD_OK;
+}
+
+pd_status pd_write_particles(pd_file *f, const pd_particles *p)
+{
+    hid_t g = H5Gcreate2(f->fid, "/particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (g < 0)
+        return pd_fail(PD_ERR_IO, "cannot create /particles");
+    size_t n = (size_t)p->n;
+    double *pos = malloc((n ? n : 1) * 3 * sizeof(double));
+    if (pos == NULL) {
+        H5Gclose(g);
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    for (size_t i = 0; i < n; i++)
+        for (int d = 0; d < 3; d++)
+            pos[3 * i + d] = p->x[d][i];
+    hsize_t d2[2] = {n, 3}, d1[1] = {n};
+    pd_status s;
+    if ((s = pd_h5_write_data(g, "position", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 2, d2, pos)) ==
+            PD_OK &&
+        (s = pd_h5_write_data(g, "volume", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, d1,
+                              p->volume)) == PD_OK &&
+        (s = pd_h5_write_data(g, "density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, d1,
+                              p->density)) == PD_OK &&
+        (s = pd_h5_write_data(g, "radius", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, d1,
+                              p->radius)) == PD_OK &&
+        (s = pd_h5_write_data(g, "material", H5T_STD_I32LE, H5T_NATIVE_INT32, 1, d1,
+                              p->material)) == PD_OK &&
+        (s = pd_h5_write_data(g, "id", H5T_STD_I64LE, H5T_NATIVE_INT64, 1, d1, p->id)) ==
+            PD_OK &&
+        (s = pd_h5_write_attr_doubles(g, "spacing", &p->spacing, 1)) == PD_OK)
+        s = pd_h5_write_attr_int(g, "dimension", p->dimension);
+    free(pos);
+    H5Gclose(g);
+    return s;
+}
+
+/* ------------------------------------------------------------ bonds */
+
+int pd_file_has_bonds(const pd_file *f)
+{
+    return pd_h5_has_link(f->fid, "/bonds");
+}
+
+/* Packed little-endian bits (bond b = bit b%8 of byte b/8) <-> words. */
+static void bytes_to_words(const uint8_t *bytes, int64_t count, uint64_t *words)
+{
+    int64_t nb = (count + 7) / 8;
+    memset(words, 0, (size_t)pd_bits_words(count) * sizeof(uint64_t));
+    for (int64_t k = 0; k < nb; k++)
+        words[k / 8] |= (uint64_t)bytes[k] << (8 * (k % 8));
+    /* bits past `count` stay clear */
+    if (count % 64)
+        words[count / 64] &= (UINT64_C(1) << (count % 64)) - 1;
+}
+
+static uint8_t *words_to_bytes(const uint64_t *words, int64_t count)
+{
+    int64_t nb = (count + 7) / 8;
+    uint8_t *bytes = malloc((size_t)(nb ? nb : 1));
+    if (bytes == NULL)
+        return NULL;
+    for (int64_t k = 0; k < nb; k++)
+        bytes[k] = (uint8_t)(words[k / 8] >> (8 * (k % 8)));
+    if (count % 8)
+        bytes[nb - 1] &= (uint8_t)((1u << (count % 8)) - 1);
+    return bytes;
+}
+
+static int has_partner(const pd_bonds *b, int64_t j, int32_t i, int64_t *where)
+{
+    int64_t lo = b->offset[j], hi = b->offset[j + 1] - 1;
+    while (lo <= hi) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (b->neighbor[mid] == i) {
+            *where = mid;
+            return 1;
+        }
+        if (b->neighbor[mid] < i)
+            lo = mid + 1;
+        else
+            hi = mid - 1;
+    }
+    return 0;
+}
+
+/* Check the CSR structure; families must be sorted and symmetric with equal
+ * state on both sides. */
+static pd_status check_bonds(const char *fn, const pd_bonds *b)
+{
+    if (b->offset[0] != 0)
+        return pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset must start at 0", fn);
+    for (int64_t i = 0; i < b->n; i++)
+        if (b->offset[i + 1] < b->offset[i])
+            return pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset decreases at row %lld", fn,
+                           (long long)i);
+    if (b->offset[b->n] != b->count)
+        return pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset ends at %lld but there are %lld bonds",
+                       fn, (long long)b->offset[b->n], (long long)b->count);
+    for (int64_t i = 0; i < b->n; i++)
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            int32_t j = b->neighbor[k];
+            if (j == i)
+                return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld is bonded to itself", fn,
+                               (long long)i);
+            if (k > b->offset[i] && b->neighbor[k - 1] >= j)
+                return pd_fail(PD_ERR_FORMAT, "'%s': family of particle %lld is not sorted", fn,
+                               (long long)i);
+            if (!(b->length[k] > 0) || !isfinite(b->length[k]))
+                return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has length %g", fn, (long long)k,
+                               b->length[k]);
+            if (!(b->vfactor[k] > 0 && b->vfactor[k] <= 1))
+                return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has volume factor %g", fn,
+                               (long long)k, b->vfactor[k]);
+        }
+    pd_status s = PD_OK;
+#pragma omp parallel for schedule(dynamic, 4096)
+    for (int64_t i = 0; i < b->n; i++) {
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            int64_t back;
+            int32_t j = b->neighbor[k];
+            if (!has_partner(b, j, (int32_t)i, &back) ||
+                pd_bond_intact(b->intact, k) != pd_bond_intact(b->intact, back)) {
+#pragma omp critical
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': bonds are not symmetric (%lld-%lld has no matching %lld-%lld)",
+                            fn, (long long)i, (long long)j, (long long)j, (long long)i);
+                break;
+            }
+        }
+    }
+    return s;
+}
+
+pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
+{
+    const char *fn = f->name;
+    if (!pd_file_has_bonds(f))
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no /bonds (run pd-bonds first)", fn);
+    int64_t n = p->n;
+    pd_h5_form of = {H5T_INTEGER, 8, 1, {(hsize_t)n + 1, 0}};
+    int64_t *offset = NULL;
+    pd_status s = pd_h5_read_data(f->fid, fn, "/bonds/offset", &of, H5T_NATIVE_INT64,
+                                  sizeof(int64_t), (void **)&offset, NULL);
+    if (s != PD_OK)
+        return s;
+    int64_t count = offset[n];
+    if (count < 0) {
+        free(offset);
+        return pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset ends negative", fn);
+    }
+    int64_t *nb64 = NULL;
+    pd_h5_form nf = {H5T_INTEGER, 8, 1, {(hsize_t)count, 0}};
+    if (count == 0)
+        nf.dims[0] = 0;
+    hsize_t ndim[1];
+    s = pd_h5_read_data(f->fid, fn, "/bonds/neighbor", &nf, H5T_NATIVE_INT64, sizeof(int64_t),
+                        (void **)&nb64, ndim);
+    if (s == PD_OK && (int64_t)ndim[0] != count)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/neighbor has %llu entries, offsets say %lld", fn,
+                    (unsigned long long)ndim[0], (long long)count);
+    if (s != PD_OK) {
+        free(offset);
+        free(nb64);
+        return s;
+    }
+    pd_bonds *b = pd_bonds_alloc(n, count);
+    if (b == NULL) {
+        free(offset);
+        free(nb64);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)count);
+    }
+    memcpy(b->offset, offset, (size_t)(n + 1) * sizeof(int64_t));
+    free(offset);
+    for (int64_t k = 0; k < count && s == PD_OK; k++) {
+        if (nb64[k] < 0 || nb64[k] >= n)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': bond %lld points to particle %lld of %lld", fn,
+                        (long long)k, (long long)nb64[k], (long long)n);
+        else
+            b->neighbor[k] = (int32_t)nb64[k];
+    }
+    free(nb64);
+    pd_h5_form df = {H5T_FLOAT, 8, 1, {(hsize_t)count, 0}};
+    pd_h5_form bf = {H5T_INTEGER, 1, 1, {(hsize_t)((count + 7) / 8), 0}};
+    double *len = NULL, *vf = NULL;
+    uint8_t *state = NULL;
+    if (s == PD_OK && count > 0)
+        s = pd_h5_read_data(f->fid, fn, "/bonds/length", &df, H5T_NATIVE_DOUBLE, sizeof(double),
+                            (void **)&len, NULL);
+    if (s == PD_OK && count > 0)
+        s = pd_h5_read_data(f->fid, fn, "/bonds/volume_factor", &df, H5T_NATIVE_DOUBLE,
+                            sizeof(double), (void **)&vf, NULL);
+    if (s == PD_OK && count > 0)
+        s = pd_h5_read_data(f->fid, fn, "/bonds/state", &bf, H5T_NATIVE_UINT8, 1,
+                            (void **)&state, NULL);
+    if (s == PD_OK && count > 0) {
+        memcpy(b->length, len, (size_t)count * sizeof(double));
+        memcpy(b->vfactor, vf, (size_t)count * sizeof(double));
+        bytes_to_words(state, count, b->intact);
+    }
+    free(len);
+    free(vf);
+    free(state);
+    hid_t g = H5Gopen2(f->fid, "/bonds", H5P_DEFAULT);
+    if (s == PD_OK && pd_h5_read_attr_double(g, "horizon", &b->horizon) != PD_OK)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds has no horizon attribute", fn);
+    H5Gclose(g);
+    if (s == PD_OK && !(b->horizon > 0))
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds horizon must be positive", fn);
+    if (s == PD_OK)
+        s = check_bonds(fn, b);
+    if (s != PD_OK) {
+        pd_bonds_free(b);
+        return s;
+    }
+    *out = b;
+    return PD_OK;
+}
+
+pd_status pd_write_bonds(pd_file *f, const pd_bonds *b)
+{
+    hid_t g = H5Gcreate2(f->fid, "/bonds", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (g < 0)
+        return pd_fail(PD_ERR_IO, "cannot create /bonds");
+    int64_t *nb64 = malloc((size_t)(b->count ? b->count : 1) * sizeof(int64_t));
+    uint8_t *bytes = words_to_bytes(b->intact, b->count);
+    if (nb64 == NULL || bytes == NULL) {
+        free(nb64);
+        free(bytes);
+        H5Gclose(g);
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    for (int64_t k = 0; k < b->count; k++)
+        nb64[k] = b->neighbor[k];
+    hsize_t dn[1] = {(hsize_t)b->n + 1}, db[1] = {(hsize_t)b->count},
+            ds[1] = {(hsize_t)((b->count + 7) / 8)};
+    pd_status s;
+    if ((s = pd_h5_write_data(g, "offset", H5T_STD_I64LE, H5T_NATIVE_INT64, 1, dn, b->offset)) ==
+            PD_OK &&
+        (s = pd_h5_write_data(g, "neighbor", H5T_STD_I64LE, H5T_NATIVE_INT64, 1, db, nb64)) ==
+            PD_OK &&
+        (s = pd_h5_write_data(g, "length", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, db,
+                              b->length)) == PD_OK &&
+        (s = pd_h5_write_data(g, "volume_factor", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, db,
+                              b->vfactor)) == PD_OK &&
+        (s = pd_h5_write_data(g, "state", H5T_STD_U8LE, H5T_NATIVE_UINT8, 1, ds, bytes)) ==
+            PD_OK &&
+        (s = pd_h5_write_attr_doubles(g, "horizon", &b->horizon, 1)) == PD_OK)
+        s = pd_h5_write_attr_int(g, "count", b->count);
+    free(nb64);
+    free(bytes);
+    H5Gclose(g);
+    return s;
+}
+
+/* ------------------------------------------------------------ scene */
+
+pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
+                         const char *options_text)
+{
+    if (pd_h5_has_link(f->fid, "/scene"))
+        H5Ldelete(f->fid, "/scene", H5P_DEFAULT);
+    hid_t g = H5Gcreate2(f->fid, "/scene", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (g < 0)
+        return pd_fail(PD_ERR_IO, "cannot create /scene");
+    pd_status s = PD_OK;
+#define TRY(call)                                                                                  \
+    do {                                                                                           \
+        if (s == PD_OK)                                                                            \
+            s = (call);                                                                            \
+    } while (0)
+    TRY(pd_h5_write_attr_string(g, "model", "pmb"));
+    TRY(pd_h5_write_attr_string(g, "effects", effects));
+    TRY(pd_h5_write_attr_string(g, "options", options_text));
+    TRY(pd_h5_write_attr_doubles(g, "c", &sc->c, 1));
+    if (sc->bulk_modulus > 0)
+        TRY(pd_h5_write_attr_doubles(g, "bulk_modulus", &sc->bulk_modulus, 1));
+    if (sc->has_failure) {
+        TRY(pd_h5_write_attr_doubles(g, "s00", &sc->s00, 1));
+        TRY(pd_h5_write_attr_doubles(g, "alpha", &sc->alpha, 1));
+    }
+    if (sc->has_contact)
+        TRY(pd_h5_write_attr_doubles(g, "contact_skin", &sc->contact_skin, 1));
+    if (sc->has_indenter) {
+        double ind[8] = {sc->ind_center[0], sc->ind_center[1],   sc->ind_center[2],
+                         sc->ind_radius,    sc->ind_k,           sc->ind_velocity[0],
+                         sc->ind_velocity[1], sc->ind_velocity[2]};
+        TRY(pd_h5_write_attr_doubles(g, "indenter", ind, 8));
+    }
+    TRY(pd_h5_write_attr_doubles(g, "dt", &sc->dt, 1));
+    TRY(pd_h5_write_attr_doubles(g, "dt_stable", &sc->dt_stable, 1));
+    TRY(pd_h5_write_attr_doubles(g, "safety", &sc->safety, 1));
+    TRY(pd_h5_write_attr_int(g, "steps", sc->steps));
+    TRY(pd_h5_write_attr_int(g, "every", sc->every));
+    TRY(pd_h5_write_attr_int(g, "threads", sc->threads));
+#undef TRY
+    H5Gclose(g);
+    return s;
+}
+
+/* ------------------------------------------------------------ frames */
+
+static pd_status frame_path(const char *name, const char *field, char *buf, size_t len)
+{
+    if (snprintf(buf, len, "/frames/%s%s%s", name, field ? "/" : "", field ? field : "") >=
+        (int)len)
+        return pd_fail(PD_ERR_INVALID, "frame name too long");
+    return PD_OK;
+}
+
+pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
+                         double *const y[3], double *const v[3], const uint64_t *intact,
+                         int64_t nbonds)
+{
+    if (!pd_h5_has_link(f->fid, "/frames")) {
+        hid_t g = H5Gcreate2(f->fid, "/frames", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+        if (g < 0)
+            return pd_fail(PD_ERR_IO, "cannot create /frames");
+        H5Gclose(g);
+    }
+    char path[64];
+    snprintf(path, sizeof path, "/frames/%08lld", (long long)fi->step);
+    hid_t g = H5Gcreate2(f->fid, path, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (g < 0)
+        return pd_fail(PD_ERR_IO, "cannot create frame %s", path);
+    size_t n = (size_t)p->n;
+    double *buf = malloc((n ? n : 1) * 3 * sizeof(double));
+    uint8_t *bytes = words_to_bytes(intact, nbonds);
+    pd_status s = PD_OK;
+    if (buf == NULL || bytes == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory writing a frame");
+    hsize_t d2[2] = {n, 3}, ds[1] = {(hsize_t)((nbonds + 7) / 8)};
+    if (s == PD_OK) {
+        for (size_t i = 0; i < n; i++)
+            for (int d = 0; d < 3; d++)
+                buf[3 * i + d] = y[d][i] - p->x[d][i];
+        s = pd_h5_write_data(g, "displacement", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 2, d2, buf);
+    }
+    if (s == PD_OK) {
+        for (size_t i = 0; i < n; i++)
+            for (int d = 0; d < 3; d++)
+                buf[3 * i + d] = v[d][i];
+        s = pd_h5_write_data(g, "velocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 2, d2, buf);
+    }
+    if (s == PD_OK)
+        s = pd_h5_write_data(g, "state", H5T_STD_U8LE, H5T_NATIVE_UINT8, 1, ds, bytes);
+    if (s == PD_OK)
+        s = pd_h5_write_attr_int(g, "step", fi->step);
+    if (s == PD_OK)
+        s = pd_h5_write_attr_doubles(g, "time", &fi->time, 1);
+    if (s == PD_OK)
+        s = pd_h5_write_attr_doubles(g, "kinetic_energy", &fi->kinetic, 1);
+    if (s == PD_OK)
+        s = pd_h5_write_attr_int(g, "broken_bonds", fi->broken);
+    free(buf);
+    free(bytes);
+    H5Gclose(g);
+    return s;
+}
+
+typedef struct {
+    int64_t step;
+    char *name;
+} frame_entry;
+
+typedef struct {
+    frame_entry *v;
+    int64_t n, cap;
+    pd_status st;
+    const char *file;
+} frame_list;
+
+static herr_t collect_frame(hid_t g, const char *name, const H5L_info_t *info, void *data)
+{
+    (void)info;
+    frame_list *fl = data;
+    hid_t fg = H5Gopen2(g, name, H5P_DEFAULT);
+    if (fg < 0) {
+        fl->st = pd_fail(PD_ERR_FORMAT, "'%s': /frames/%s is not a group", fl->file, name);
+        return 1;
+    }
+    int64_t step;
+    pd_status s = pd_h5_read_attr_int(fg, "step", &step);
+    H5Gclose(fg);
+    if (s != PD_OK) {
+        fl->st = pd_fail(PD_ERR_FORMAT, "'%s': frame '%s' has no step attribute", fl->file, name);
+        return 1;
+    }
+    if (fl->n == fl->cap) {
+        int64_t cap = fl->cap ? 2 * fl->cap : 64;
+        frame_entry *nv = realloc(fl->v, (size_t)cap * sizeof *nv);
+        if (nv == NULL) {
+            fl->st = pd_fail(PD_ERR_NOMEM, "out of memory listing frames");
+            return 1;
+        }
+        fl->v = nv;
+        fl->cap = cap;
+    }
+    fl->v[fl->n].step = step;
+    fl->v[fl->n].name = strdup(name);
+    fl->n++;
+    return 0;
+}
+
+static int cmp_frame(const void *a, const void *b)
+{
+    const frame_entry *x = a, *y = b;
+    return (x->step > y->step) - (x->step < y->step);
+}
+
+pd_status pd_list_frames(const pd_file *f, int64_t *nframes, char ***names)
+{
+    *nframes = 0;
+    *names = NULL;
+    if (!pd_h5_has_link(f->fid, "/frames"))
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no /frames (not made by pd-run?)", f->name);
+    hid_t g = H5Gopen2(f->fid, "/frames", H5P_DEFAULT);
+    frame_list fl = {NULL, 0, 0, PD_OK, f->name};
+    hsize_t idx = 0;
+    H5Literate(g, H5_INDEX_NAME, H5_ITER_INC, &idx, collect_frame, &fl);
+    H5Gclose(g);
+    if (fl.st != PD_OK) {
+        for (int64_t k = 0; k < fl.n; k++)
+            free(fl.v[k].name);
+        free(fl.v);
+        return fl.st;
+    }
+    if (fl.n == 0) {
+        free(fl.v);
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no frames", f->name);
+    }
+    qsort(fl.v, (size_t)fl.n, sizeof *fl.v, cmp_frame);
+    char **out = malloc((size_t)fl.n * sizeof *out);
+    if (out == NULL) {
+        for (int64_t k = 0; k < fl.n; k++)
+            free(fl.v[k].name);
+        free(fl.v);
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    for (int64_t k = 0; k < fl.n; k++)
+        out[k] = fl.v[k].name;
+    free(fl.v);
+    *nframes = fl.n;
+    *names = out;
+    return PD_OK;
+}
+
+void pd_frames_free_list(int64_t nframes, char **names)
+{
+    if (names == NULL)
+        return;
+    for (int64_t k = 0; k < nframes; k++)
+        free(names[k]);
+    free(names);
+}
+
+pd_status pd_read_frame_info(const pd_file *f, const char *name, pd_frame_info *fi)
+{
+    char path[256];
+    pd_status s = frame_path(name, NULL, path, sizeof path);
+    if (s != PD_OK)
+        return s;
+    hid_t g = H5Gopen2(f->fid, path, H5P_DEFAULT);
+    if (g < 0)
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no frame '%s'", f->name, name);
+    memset(fi, 0, sizeof *fi);
+    s = pd_h5_read_attr_int(g, "step", &fi->step);
+    if (s == PD_OK)
+        s = pd_h5_read_attr_double(g, "time", &fi->time);
+    if (s == PD_OK && pd_h5_has_attr(g, "kinetic_energy"))
+        s = pd_h5_read_attr_double(g, "kinetic_energy", &fi->kinetic);
+    if (s == PD_OK && pd_h5_has_attr(g, "broken_bonds"))
+        s = pd_h5_read_attr_int(g, "broken_bonds", &fi->broken);
+    H5Gclose(g);
+    if (s != PD_OK)
+        return pd_fail(PD_ERR_FORMAT, "'%s': frame '%s': %s", f->name, name, pd_errmsg());
+    return PD_OK;
+}
+
+pd_status pd_read_frame_vectors(const pd_file *f, const char *name, int64_t n, double *disp[3],
+                                double *vel[3])
+{
+    const char *fields[2] = {"displacement", "velocity"};
+    double **dst[2] = {disp, vel};
+    for (int k = 0; k < 2; k++) {
+        if (dst[k] == NULL)
+            continue;
+        char path[256];
+        pd_status s = frame_path(name, fields[k], path, sizeof path);
+        if (s != PD_OK)
+            return s;
+        pd_h5_form form = {H5T_FLOAT, 8, 2, {(hsize_t)n, 3}};
+        double *buf = NULL;
+        s = pd_h5_read_data(f->fid, f->name, path, &form, H5T_NATIVE_DOUBLE, sizeof(double),
+                            (void **)&buf, NULL);
+        if (s != PD_OK)
+            return s;
+        for (int64_t i = 0; i < n; i++)
+            for (int d = 0; d < 3; d++)
+                dst[k][d][i] = buf[3 * i + d];
+        free(buf);
+    }
+    return PD_OK;
+}
+
+pd_status pd_read_frame_state(const pd_file *f, const char *name, int64_t count, uint64_t *intact)
+{
+    char path[256];
+    pd_status s = frame_path(name, "state", path, sizeof path);
+    if (s != PD_OK)
+        return s;
+    pd_h5_form form = {H5T_INTEGER, 1, 1, {(hsize_t)((count + 7) / 8), 0}};
+    if (count == 0)
+        return PD_OK;
+    uint8_t *bytes = NULL;
+    s = pd_h5_read_data(f->fid, f->name, path, &form, H5T_NATIVE_UINT8, 1, (void **)&bytes, NULL);
+    if (s != PD_OK)
+        return s;
+    bytes_to_words(bytes, count, intact);
+    free(bytes);
+    return PD_OK;
+}
+
+pd_status pd_read_frame_scalar(const pd_file *f, const char *name, const char *field, int64_t n,
+                               double *out, int *present)
+{
+    char path[256];
+    pd_status s = frame_path(name, field, path, sizeof path);
+    if (s != PD_OK)
+        return s;
+    *present = pd_h5_has_link(f->fid, path);
+    if (!*present)
+        return PD_OK;
+    pd_h5_form form = {H5T_FLOAT, 8, 1, {(hsize_t)n, 0}};
+    double *buf = NULL;
+    s = pd_h5_read_data(f->fid, f->name, path, &form, H5T_NATIVE_DOUBLE, sizeof(double),
+                        (void **)&buf, NULL);
+    if (s != PD_OK)
+        return s;
+    memcpy(out, buf, (size_t)n * sizeof(double));
+    free(buf);
+    return PD_OK;
+}
+
+pd_status pd_write_frame_scalar(pd_file *f, const char *name, const char *field, int64_t n,
+                                const double *values)
+{
+    char path[256];
+    pd_status s = frame_path(name, field, path, sizeof path);
+    if (s != PD_OK)
+        return s;
+    if (pd_h5_has_link(f->fid, path))
+        H5Ldelete(f->fid, path, H5P_DEFAULT);
+    hsize_t d1[1] = {(hsize_t)n};
+    return pd_h5_write_data(f->fid, path, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, d1, values);
+}

@@ -1,0 +1,227 @@
+/*
+ * sim.c -- the run: state arrays, the effect list, and velocity Verlet
+ * (seed 000 Algorithm 1):
+ *   1. v^{n+1/2} = v^n + dt/(2 rho) f^n
+ *   2. y^{n+1}   = y^n + dt v^{n+1/2}
+ *      f^{n+1}   = sum of the declared effects at y^{n+1}
+ *   3. v^{n+1}   = v^{n+1/2} + dt/(2 rho) f^{n+1}
+ * f is a force density (N/m^3), so the acceleration is f/rho (LAMMPS peri
+ * stores the density as the particle "mass").
+ */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim.h"
+
+static pd_status add_effect(pd_sim *sim, const pd_effect *e)
+{
+    if (sim->neffects == PD_MAX_EFFECTS)
+        return pd_fail(PD_ERR_INVALID, "too many effects");
+    sim->effects[sim->neffects] = e;
+    sim->state[sim->neffects] = NULL;
+    if (e->init) {
+        pd_status s = e->init(sim, &sim->state[sim->neffects]);
+        if (s != PD_OK)
+            return s;
+    }
+    sim->neffects++;
+    size_t len = strlen(sim->names);
+    snprintf(sim->names + len, sizeof sim->names - len, "%s%s", len ? " " : "", e->name);
+    return PD_OK;
+}
+
+pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s, pd_sim **out)
+{
+    if (!(s->dt > 0) || !isfinite(s->dt))
+        return pd_fail(PD_ERR_INVALID, "time step must be positive");
+    pd_sim *sim = calloc(1, sizeof *sim);
+    if (sim == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    sim->p = p;
+    sim->b = b;
+    sim->sc = *s;
+    sim->n = p->n;
+    size_t n = (size_t)p->n;
+    int ok = 1;
+    for (int d = 0; d < 3; d++) {
+        sim->y[d] = malloc(n * sizeof(double));
+        sim->v[d] = calloc(n, sizeof(double));
+        sim->f[d] = calloc(n, sizeof(double));
+        ok = ok && sim->y[d] && sim->v[d] && sim->f[d];
+    }
+    int64_t words = pd_bits_words(b->count) + 1;
+    sim->intact = malloc((size_t)words * sizeof(uint64_t));
+    ok = ok && sim->intact;
+    if (s->has_failure) {
+        sim->s0 = malloc(n * sizeof(double));
+        sim->s0_new = malloc(n * sizeof(double));
+        ok = ok && sim->s0 && sim->s0_new;
+    }
+    if (!ok) {
+        pd_sim_free(sim);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the run state");
+    }
+    for (int d = 0; d < 3; d++)
+        memcpy(sim->y[d], p->x[d], n * sizeof(double));
+    memcpy(sim->intact, b->intact, (size_t)words * sizeof(uint64_t));
+    if (s->has_failure)
+        for (size_t i = 0; i < n; i++)
+            sim->s0[i] = sim->s0_new[i] = DBL_MAX;
+
+    /* The step is assembled from the declared effects only. */
+    pd_status st = add_effect(sim, s->has_failure ? &pd_effect_pmb_failure : &pd_effect_pmb);
+    if (st == PD_OK && s->has_contact)
+        st = add_effect(sim, &pd_effect_contact);
+    if (st == PD_OK && s->has_indenter)
+        st = add_effect(sim, &pd_effect_indenter);
+    if (st != PD_OK) {
+        pd_sim_free(sim);
+        return st;
+    }
+    *out = sim;
+    return PD_OK;
+}
+
+void pd_sim_free(pd_sim *sim)
+{
+    if (sim == NULL)
+        return;
+    for (int k = 0; k < sim->neffects; k++)
+        if (sim->effects[k]->free)
+            sim->effects[k]->free(sim->state[k]);
+    for (int d = 0; d < 3; d++) {
+        free(sim->y[d]);
+        free(sim->v[d]);
+        free(sim->f[d]);
+    }
+    free(sim->intact);
+    free(sim->s0);
+    free(sim->s0_new);
+    free(sim);
+}
+
+static pd_status compute_forces(pd_sim *sim)
+{
+    for (int d = 0; d < 3; d++)
+        memset(sim->f[d], 0, (size_t)sim->n * sizeof(double));
+    for (int k = 0; k < sim->neffects; k++) {
+        double t0 = pd_wtime();
+        pd_status s = sim->effects[k]->force(sim, sim->state[k]);
+        sim->timers[sim->effects[k]->timer] += pd_wtime() - t0;
+        if (s != PD_OK)
+            return s;
+    }
+    return PD_OK;
+}
+
+pd_status pd_sim_setup(pd_sim *sim)
+{
+    sim->setup = 1;
+    pd_status s = compute_forces(sim);
+    sim->setup = 0;
+    return s;
+}
+
+/* Half a kick: v += dt/(2 rho) f. */
+static void half_kick(pd_sim *sim)
+{
+    const double half = 0.5 * sim->sc.dt;
+    const double *rho = sim->p->density;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        const double dtfm = half / rho[i];
+        sim->v[0][i] += dtfm * sim->f[0][i];
+        sim->v[1][i] += dtfm * sim->f[1][i];
+        sim->v[2][i] += dtfm * sim->f[2][i];
+    }
+}
+
+pd_status pd_sim_step(pd_sim *sim)
+{
+    double t0 = pd_wtime();
+    const double dt = sim->sc.dt;
+    half_kick(sim);
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        sim->y[0][i] += dt * sim->v[0][i];
+        sim->y[1][i] += dt * sim->v[1][i];
+        sim->y[2][i] += dt * sim->v[2][i];
+    }
+    sim->step++;
+    sim->time = (double)sim->step * dt;
+    sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
+    pd_status s = compute_forces(sim);
+    if (s != PD_OK)
+        return s;
+    t0 = pd_wtime();
+    half_kick(sim);
+    sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
+    return PD_OK;
+}
+
+const char *pd_sim_effects(const pd_sim *sim)
+{
+    return sim->names;
+}
+
+int64_t pd_sim_stepno(const pd_sim *sim)
+{
+    return sim->step;
+}
+
+double pd_sim_time(const pd_sim *sim)
+{
+    return sim->time;
+}
+
+double pd_sim_kinetic(const pd_sim *sim)
+{
+    /* a serial sum: the same figure at any thread count */
+    double e = 0;
+    for (int64_t i = 0; i < sim->n; i++) {
+        double v2 = sim->v[0][i] * sim->v[0][i] + sim->v[1][i] * sim->v[1][i] +
+                    sim->v[2][i] * sim->v[2][i];
+        e += 0.5 * sim->p->density[i] * sim->p->volume[i] * v2;
+    }
+    return e;
+}
+
+int64_t pd_sim_broken(const pd_sim *sim)
+{
+    return pd_bits_count_broken(sim->intact, sim->b->count) / 2;
+}
+
+double pd_sim_max_damage(const pd_sim *sim)
+{
+    double *dmg = malloc((size_t)sim->n * sizeof(double));
+    if (dmg == NULL)
+        return NAN;
+    pd_damage(sim->p, sim->b, sim->intact, dmg);
+    double m = 0;
+    for (int64_t i = 0; i < sim->n; i++)
+        m = fmax(m, dmg[i]);
+    free(dmg);
+    return m;
+}
+
+const double *pd_sim_timers(const pd_sim *sim)
+{
+    return sim->timers;
+}
+
+double *const *pd_sim_positions(const pd_sim *sim)
+{
+    return sim->y;
+}
+
+double *const *pd_sim_velocities(const pd_sim *sim)
+{
+    return sim->v;
+}
+
+const uint64_t *pd_sim_intact(const pd_sim *sim)
+{
+    return sim->intact;
+}

@@ -1,0 +1,76 @@
+/*
+ * util.c -- checked number parsing, clocks and memory figures shared by the
+ * programs.
+ */
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+
+#include "pd.h"
+
+int pd_parse_double(const char *s, double *out)
+{
+    char *end;
+    if (s == NULL || *s == '\0')
+        return 0;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (errno != 0 || *end != '\0' || !isfinite(v))
+        return 0;
+    *out = v;
+    return 1;
+}
+
+int pd_parse_int64(const char *s, int64_t *out)
+{
+    char *end;
+    if (s == NULL || *s == '\0')
+        return 0;
+    errno = 0;
+    long long v = strtoll(s, &end, 10);
+    if (errno != 0 || *end != '\0')
+        return 0;
+    *out = (int64_t)v;
+    return 1;
+}
+
+int pd_parse_doubles(const char *s, double *out, int n)
+{
+    char buf[1024];
+    if (s == NULL || strlen(s) >= sizeof buf)
+        return 0;
+    strcpy(buf, s);
+    int k = 0;
+    char *save = NULL;
+    /* strtok_r skips empty fields, so count commas to catch "1,,2". */
+    int commas = 0;
+    for (const char *c = s; *c; c++)
+        commas += (*c == ',');
+    if (commas != n - 1)
+        return 0;
+    for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+        if (k >= n || !pd_parse_double(tok, &out[k]))
+            return 0;
+        k++;
+    }
+    return k == n;
+}
+
+double pd_wtime(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int64_t pd_peak_rss(void)
+{
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0)
+        return 0;
+    return (int64_t)ru.ru_maxrss * 1024;
+}
