@@ -28,7 +28,7 @@ PD_CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer
 PD_LIBS   += -fsanitize=address,undefined
 endif
 
-PROGRAMS   = pd-lattice pd-bonds pd-run pd-damage pd-dump2vtk pd-crack-tip
+PROGRAMS   = $(patsubst cmd/%.c,%,$(wildcard cmd/pd-*.c))
 LIB_SRC    = $(wildcard lib/*.c)
 LIB_OBJ    = $(LIB_SRC:.c=.o)
 BIN        = $(addprefix bin/,$(PROGRAMS))
