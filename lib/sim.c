@@ -53,7 +53,8 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
     }
     int64_t words = pd_bits_words(b->count) + 1;
     sim->intact = malloc((size_t)words * sizeof(uint64_t));
-    ok = ok && sim->intact;
+    sim->bond_w = malloc((size_t)(b->count > 0 ? b->count : 1) * sizeof(double));
+    ok = ok && sim->intact && sim->bond_w;
     if (s->has_failure) {
         sim->s0 = malloc(n * sizeof(double));
         sim->s0_new = malloc(n * sizeof(double));
@@ -66,6 +67,10 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
     for (int d = 0; d < 3; d++)
         memcpy(sim->y[d], p->x[d], n * sizeof(double));
     memcpy(sim->intact, b->intact, (size_t)words * sizeof(uint64_t));
+    /* (c V_j) nu in the order LAMMPS peri/pmb multiplies them */
+    for (int64_t i = 0; i < b->n; i++)
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
+            sim->bond_w[k] = s->c * p->volume[b->neighbor[k]] * b->vfactor[k];
     if (s->has_failure)
         for (size_t i = 0; i < n; i++)
             sim->s0[i] = sim->s0_new[i] = DBL_MAX;
@@ -97,6 +102,7 @@ void pd_sim_free(pd_sim *sim)
         free(sim->f[d]);
     }
     free(sim->intact);
+    free(sim->bond_w);
     free(sim->s0);
     free(sim->s0_new);
     free(sim);

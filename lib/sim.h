@@ -20,6 +20,15 @@ typedef struct pd_effect {
 
 #define PD_MAX_EFFECTS 8
 
+/* Hot loops are compiled for AVX-512, AVX2 and the baseline, picked at run
+ * time (GCC function multiversioning), so one binary runs anywhere. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(PD_NO_CLONES)
+#define PD_VECTOR_CLONES \
+    __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define PD_VECTOR_CLONES
+#endif
+
 struct pd_sim {
     const pd_particles *p;
     const pd_bonds *b;
@@ -29,6 +38,8 @@ struct pd_sim {
     double *v[3];       /* velocities, m/s                               */
     double *f[3];       /* force densities, N/m^3                        */
     uint64_t *intact;   /* bond state bits mu (1 = intact)               */
+    double *bond_w;     /* per bond c V_j nu, N/m^3 (the force density of
+                           a bond is bond_w * stretch)                    */
     double *s0;         /* critical stretch of the previous step (eq. 9) */
     double *s0_new;     /* being computed in this step                   */
     int64_t step;

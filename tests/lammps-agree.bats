@@ -1,0 +1,183 @@
+#!/usr/bin/env bats
+# pd-run against LAMMPS peri/pmb (`lmp`, Debian's lammps package): the same
+# scene run by both codes must give positions that agree to 1e-9 relative
+# and damage to 1e-12 (tests/lammps/compare.py defines the metrics; its
+# displacement check, 1e-9 of the largest displacement, is the sharp one).
+#
+# The scene is a small version of seed 000's impact example: a disk of
+# radius 6 mm and thickness 2.5 mm on the same 0.5 mm simple cubic lattice
+# (2646 particles, horizon 0.0015001, c = 1.6863e22, s00 = 0.0005,
+# alpha = 0.25, dt = 1e-7), hit by the seed's sphere (R = 5 mm, K = 1e17)
+# that starts touching the top face y = 0 and moves down at 100 m/s.
+# tests/lammps/pd2lmp.py writes the LAMMPS data file (bit-identical
+# positions, ids = /particles/id) and input script from pd's model file,
+# with the scene parameters given explicitly (not read from pd's /scene).
+#
+# Every comparison also asserts that both codes broke bonds: a comparison
+# without damage would prove nothing about failure.
+
+load test_helper
+bats_require_minimum_version 1.5.0
+
+LMPTOOLS=$BATS_TEST_DIRNAME/lammps
+# shellcheck disable=SC2054 # the commas belong to the values
+DISK=(--spacing 0.0005 --cylinder y,0,0,0.006,-0.0025,0 --density 2200)
+DISK_HORIZON=0.0015001
+# pd-run is given one thread: the results do not depend on it, and a busy
+# two-core machine runs these small models faster that way.
+C=1.6863e22
+FAILURE=0.0005,0.25
+DT=1e-7
+PMB_NO_CONTACT=(--c "$C" --failure "$FAILURE" --dt "$DT" --threads 1)
+PMB=("${PMB_NO_CONTACT[@]}" --contact)
+IND_SEED=sphere,0,0.0050,0,0.005,1e17,0,-100,0
+
+# make_disk DIR [pd-lattice option]...: DIR/model.h5
+make_disk() {
+    local dir=$1
+    shift
+    mkdir -p "$dir"
+    pd-lattice "${DISK[@]}" "$@" -q -o "$dir/lattice.h5" &&
+        pd-bonds --horizon "$DISK_HORIZON" -q "$dir/lattice.h5" -o "$dir/model.h5"
+}
+
+# run_pd DIR OUT STEPS EVERY [pd-run option]...: DIR/OUT from DIR/model.h5,
+# with damage added by pd-damage.
+run_pd() {
+    local dir=$1 out=$2 steps=$3 every=$4
+    shift 4
+    pd-run "$dir/model.h5" "${PMB[@]}" --steps "$steps" --every "$every" "$@" -q \
+        -o "$dir/$out" &&
+        pd-damage "$dir/$out" >/dev/null
+}
+
+# run_lmp DIR STEPS EVERY INDENTER: the same scene run by LAMMPS from
+# DIR/model.h5, its parameters given here rather than read from pd's /scene
+# (so a parameter pd-run misreads is a disagreement too); DIR/dump.lmp.
+run_lmp() {
+    local dir=$1 steps=$2 every=$3 ind=$4
+    "$PY" "$LMPTOOLS/pd2lmp.py" "$dir/model.h5" -d "$dir/data.lmp" -i "$dir/in.lmp" \
+        --dump dump.lmp --c "$C" --horizon "$DISK_HORIZON" --failure "$FAILURE" \
+        --dt "$DT" --steps "$steps" --every "$every" --indenter "$ind" || return 1
+    (cd "$dir" && lmp -in in.lmp -log none >lmp.out 2>&1) || {
+        cat "$dir/lmp.out"
+        return 1
+    }
+}
+
+# compare RUN DUMP [compare.py option]...: sets $output/$status.
+compare() {
+    run "$PY" "$LMPTOOLS/compare.py" "$@"
+}
+
+# count WHAT: from compare.py's $output, "pd N lammps M" of line WHAT.
+count() {
+    local line
+    line=$(grep "^$1 " <<<"$output") || return 1
+    read -r _ _ pd _ lmp <<<"$line"
+    echo "$pd $lmp"
+}
+
+# assert_damage_in_both: both codes have damaged particles and broken bonds,
+# the same numbers.
+assert_damage_in_both() {
+    local pd lmp
+    read -r pd lmp < <(count damaged)
+    [ "$pd" -gt 0 ] && [ "$lmp" -gt 0 ] && [ "$pd" -eq "$lmp" ] ||
+        fail "damaged particles: pd $pd, LAMMPS $lmp"
+    read -r pd lmp < <(count broken)
+    [ "$pd" -gt 0 ] && [ "$lmp" -gt 0 ] && [ "$pd" -eq "$lmp" ] ||
+        fail "broken bonds: pd $pd, LAMMPS $lmp"
+}
+
+setup_file() {
+    PATH="$BATS_TEST_DIRNAME/../bin:$PATH"
+    command -v lmp >/dev/null || return 0
+    # the main scene, shared by the agreement test and the negative control
+    local d=$BATS_FILE_TMPDIR/seed
+    make_disk "$d" &&
+        run_pd "$d" run.h5 100 50 --indenter "$IND_SEED" &&
+        run_lmp "$d" 100 50 "$IND_SEED"
+}
+
+setup() {
+    command -v lmp >/dev/null || skip "lmp (LAMMPS with the PERI package) is not installed"
+}
+
+@test "pd-run agrees with LAMMPS peri/pmb: disk, failure + contact + indenter, 100 steps" {
+    local d=$BATS_FILE_TMPDIR/seed
+    for step in 50 100; do
+        compare "$d/run.h5" "$d/dump.lmp" --step "$step"
+        assert_success
+        assert_line --partial "OK"
+    done
+    # by step 100 the sphere is 1 mm deep: a few hundred damaged particles
+    compare "$d/run.h5" "$d/dump.lmp" --step 100 --min-damaged 100
+    assert_success
+    assert_damage_in_both
+}
+
+@test "pd-run agrees with LAMMPS peri/pmb on a perturbed lattice" {
+    # nodes off the lattice sites: bond lengths and partial-volume factors
+    # differ bond by bond, and some 3-spacing bonds fall outside the horizon
+    local d=$BATS_TEST_TMPDIR/perturbed
+    make_disk "$d" --perturb 1e-5 --seed 3
+    run_pd "$d" run.h5 100 100 --indenter "$IND_SEED"
+    run_lmp "$d" 100 100 "$IND_SEED"
+    compare "$d/run.h5" "$d/dump.lmp" --step 100 --min-damaged 100
+    assert_success
+    assert_damage_in_both
+}
+
+@test "pd-run agrees with LAMMPS peri/pmb when contact forces act" {
+    # a stiffer, faster sphere crushes the disk: particles come closer than
+    # the short-range distance d_ij (seed 000 eq. 15)
+    local d=$BATS_TEST_TMPDIR/crush ind=sphere,0,0.0050,0,0.005,1e18,0,-200,0
+    make_disk "$d"
+    run_pd "$d" run.h5 100 100 --indenter "$ind"
+    run_lmp "$d" 100 100 "$ind"
+    compare "$d/run.h5" "$d/dump.lmp" --step 100 --min-damaged 100
+    assert_success
+    assert_damage_in_both
+    # contact is really exercised: without it pd no longer agrees
+    pd-run "$d/model.h5" "${PMB_NO_CONTACT[@]}" --indenter "$ind" --steps 100 -q \
+        -o "$d/nocontact.h5"
+    compare "$d/nocontact.h5" "$d/dump.lmp" --step 100
+    assert_failure 1
+    assert_line --partial "FAIL: positions"
+}
+
+@test "no bond breaks in the first step, in pd as in LAMMPS (s0 starts at +inf)" {
+    # the sphere starts 0.5 mm deep and pushes hard: bonds are stretched
+    # beyond s00 already at step 1, yet neither code breaks them before
+    # step 2, when s0 of step 1 is known
+    local d=$BATS_TEST_TMPDIR/first ind=sphere,0,0.0045,0,0.005,1e19,0,0,0
+    make_disk "$d"
+    run_pd "$d" run.h5 2 1 --indenter "$ind"
+    run_lmp "$d" 2 1 "$ind"
+    run -0 py "
+with h5py.File(sys.argv[1]) as h:
+    x = h['particles/position'][...]
+    off = h['bonds/offset'][...]; nb = h['bonds/neighbor'][...]; L = h['bonds/length'][...]
+    i = np.repeat(np.arange(len(x)), np.diff(off))
+    y = x + h['frames/00000001/displacement'][...]
+    s = (np.linalg.norm(y[nb] - y[i], axis=1) - L) / L
+    print(int((s > 0.0005).sum()))" "$d/run.h5"
+    [ "$output" -gt 0 ] || fail "no bond is stretched beyond s00 at step 1"
+    compare "$d/run.h5" "$d/dump.lmp" --step 1
+    assert_success
+    assert_line --regexp "^broken +pd 0  lammps 0$"
+    compare "$d/run.h5" "$d/dump.lmp" --step 2
+    assert_success
+    assert_damage_in_both
+}
+
+@test "the comparison fails when pd and LAMMPS disagree (negative control)" {
+    # a micromodulus 6e-5 off: pd and LAMMPS then differ by ~7e-8 relative
+    local d=$BATS_FILE_TMPDIR/seed
+    pd-run "$d/model.h5" "${PMB[@]}" --c 1.6864e22 --indenter "$IND_SEED" --steps 100 -q \
+        -o "$BATS_TEST_TMPDIR/off.h5"
+    compare "$BATS_TEST_TMPDIR/off.h5" "$d/dump.lmp" --step 100
+    assert_failure 1
+    assert_line --partial "FAIL: positions"
+}
