@@ -17,6 +17,7 @@
 #include "pd.h"
 
 #define PROG "pd-bonds"
+#include "cli.h"
 
 struct options {
     double horizon;
@@ -34,22 +35,14 @@ static void usage(FILE *out)
             "Build bond families within the horizon (pd-h5 /bonds); INPUT '-' is stdin.\n"
             "\n"
             "Options:\n"
-            "  --horizon DELTA   horizon, m (> spacing; give 3.0001 x spacing, not 3 x,\n"
-            "                    so that pairs at exactly 3 spacings are bonded)\n"
+            "  --horizon DELTA   horizon, m (at least the spacing; give 3.0001 x spacing,\n"
+            "                    not 3 x, so that pairs at exactly 3 spacings are bonded)\n"
             "  --no-sort         keep the particle order of INPUT\n"
             "  -o, --output FILE output file, '-' for stdout (default '-')\n"
             "  -q, --quiet       no summary on stderr\n"
             "      --debug       print HDF5's own error stack\n"
             "  -h, --help        show this help\n"
             "  -V, --version     show the version\n");
-}
-
-static int usage_error(const char *msg, const char *arg)
-{
-    fprintf(stderr, PROG ": error: %s%s%s%s\n", msg, arg ? " '" : "", arg ? arg : "",
-            arg ? "'" : "");
-    fprintf(stderr, "Try '" PROG " --help' for more information.\n");
-    return 2;
 }
 
 static int parse_options(int argc, char **argv, struct options *o)
@@ -67,6 +60,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     memset(o, 0, sizeof *o);
     o->output = "-";
     int c;
+    opterr = 0;
     while ((c = getopt_long(argc, argv, "o:qhV", longopts, NULL)) != -1) {
         switch (c) {
         case OPT_HORIZON:
@@ -93,8 +87,7 @@ static int parse_options(int argc, char **argv, struct options *o)
             printf(PROG " (pd) " PD_VERSION "\n");
             exit(0);
         default:
-            fprintf(stderr, "Try '" PROG " --help' for more information.\n");
-            return 2;
+            return option_error(argv);
         }
     }
     if (!o->has_horizon)
@@ -104,12 +97,6 @@ static int parse_options(int argc, char **argv, struct options *o)
                            NULL);
     o->input = argv[optind];
     return 0;
-}
-
-static int fail(void)
-{
-    fprintf(stderr, PROG ": error: %s\n", pd_errmsg());
-    return 1;
 }
 
 int main(int argc, char **argv)

@@ -14,12 +14,13 @@
 #include "pd.h"
 
 #define PROG "pd-damage"
+#include "cli.h"
 
 struct options {
     const char *input;
     const char *output;  /* NULL: update INPUT in place (through a copy) */
     double threshold;
-    int no_write, debug;
+    int no_write, quiet, debug;
 };
 
 static void usage(FILE *out)
@@ -27,24 +28,17 @@ static void usage(FILE *out)
     fprintf(out,
             "Usage: " PROG " [OPTION]... RUN.h5 [-o OUT.h5]\n"
             "Damage per particle for every frame of a run (seed 000 eq. 10), stored as the\n"
-            "frame field 'damage', and a table on stdout.  Without -o, RUN.h5 is updated\n"
-            "(through a temporary copy renamed over it).\n"
+            "frame field 'damage', and a table on stdout (stderr with -o -).  Without -o,\n"
+            "RUN.h5 is updated (through a temporary copy renamed over it).\n"
             "\n"
             "Options:\n"
             "  -o, --output FILE   write the run with damage to FILE ('-' for stdout)\n"
             "  -n, --no-write      only print the table\n"
+            "  -q, --quiet         no table\n"
             "  --threshold D       count particles with damage above D (default 0.3)\n"
             "      --debug         print HDF5's own error stack\n"
             "  -h, --help          show this help\n"
             "  -V, --version       show the version\n");
-}
-
-static int usage_error(const char *msg, const char *arg)
-{
-    fprintf(stderr, PROG ": error: %s%s%s%s\n", msg, arg ? " '" : "", arg ? arg : "",
-            arg ? "'" : "");
-    fprintf(stderr, "Try '" PROG " --help' for more information.\n");
-    return 2;
 }
 
 static int parse_options(int argc, char **argv, struct options *o)
@@ -53,6 +47,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     static const struct option longopts[] = {
         {"output", required_argument, 0, 'o'},
         {"no-write", no_argument, 0, 'n'},
+        {"quiet", no_argument, 0, 'q'},
         {"threshold", required_argument, 0, OPT_THRESHOLD},
         {"debug", no_argument, 0, OPT_DEBUG},
         {"help", no_argument, 0, 'h'},
@@ -61,13 +56,17 @@ static int parse_options(int argc, char **argv, struct options *o)
     memset(o, 0, sizeof *o);
     o->threshold = 0.3;
     int c;
-    while ((c = getopt_long(argc, argv, "o:nhV", longopts, NULL)) != -1) {
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, "o:nqhV", longopts, NULL)) != -1) {
         switch (c) {
         case 'o':
             o->output = optarg;
             break;
         case 'n':
             o->no_write = 1;
+            break;
+        case 'q':
+            o->quiet = 1;
             break;
         case OPT_THRESHOLD:
             if (!pd_parse_double(optarg, &o->threshold) || o->threshold < 0 || o->threshold > 1)
@@ -83,8 +82,7 @@ static int parse_options(int argc, char **argv, struct options *o)
             printf(PROG " (pd) " PD_VERSION "\n");
             exit(0);
         default:
-            fprintf(stderr, "Try '" PROG " --help' for more information.\n");
-            return 2;
+            return option_error(argv);
         }
     }
     if (optind != argc - 1)
@@ -97,12 +95,6 @@ static int parse_options(int argc, char **argv, struct options *o)
     if (o->output && strcmp(o->output, "-") == 0)
         o->no_write = 0;
     return 0;
-}
-
-static int fail(void)
-{
-    fprintf(stderr, PROG ": error: %s\n", pd_errmsg());
-    return 1;
 }
 
 int main(int argc, char **argv)
@@ -140,7 +132,9 @@ int main(int argc, char **argv)
     }
     /* a table goes to stdout unless stdout carries the file */
     FILE *table = (o.output && strcmp(o.output, "-") == 0) ? stderr : stdout;
-    if (s == PD_OK)
+    if (o.quiet)
+        table = NULL;
+    if (s == PD_OK && table)
         fprintf(table, "# step time_s broken_bonds mean_damage max_damage n_damage_gt_%g\n",
                 o.threshold);
     for (int64_t k = 0; k < nframes && s == PD_OK; k++) {
@@ -156,7 +150,8 @@ int main(int argc, char **argv)
             max = damage[i] > max ? damage[i] : max;
             above += damage[i] > o.threshold;
         }
-        fprintf(table, "%lld %.9e %lld %.9f %.9f %lld\n", (long long)fi.step, fi.time,
+        if (table)
+            fprintf(table, "%lld %.9e %lld %.9f %.9f %lld\n", (long long)fi.step, fi.time,
                 (long long)(pd_bits_count_broken(intact, b->count) / 2), sum / (double)p->n, max,
                 (long long)above);
         if (!o.no_write)

@@ -14,6 +14,7 @@
 #include "pd.h"
 
 #define PROG "pd-lattice"
+#include "cli.h"
 #define MAX_REGIONS 64
 
 struct options {
@@ -36,7 +37,8 @@ static void usage(FILE *out)
             "  --cylinder AXIS,C1,C2,R,LO,HI   axis x|y|z; C1,C2 locate the axis in the\n"
             "                                  other two dimensions (LAMMPS region cylinder)\n"
             "  --sphere X,Y,Z,R\n"
-            "  --subtract KIND,...             cut a region out, e.g. --subtract sphere,0,0,0,1e-3\n"
+            "  --subtract KIND,...             cut a region out; KIND is box, cylinder or\n"
+            "                                  sphere: --subtract sphere,0,0,0,1e-3\n"
             "\n"
             "Options:\n"
             "  --spacing DX      lattice spacing, m (> 0)\n"
@@ -49,14 +51,6 @@ static void usage(FILE *out)
             "      --debug       print HDF5's own error stack\n"
             "  -h, --help        show this help\n"
             "  -V, --version     show the version\n");
-}
-
-static int usage_error(const char *msg, const char *arg)
-{
-    fprintf(stderr, PROG ": error: %s%s%s%s\n", msg, arg ? " '" : "", arg ? arg : "",
-            arg ? "'" : "");
-    fprintf(stderr, "Try '" PROG " --help' for more information.\n");
-    return 2;
 }
 
 static int add_region(struct options *o, pd_region_kind kind, const char *spec, int tagged)
@@ -98,6 +92,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     o->output = "-";
     int c, rc;
     int64_t iv;
+    opterr = 0;
     while ((c = getopt_long(argc, argv, "o:qhV", longopts, NULL)) != -1) {
         switch (c) {
         case OPT_BOX:
@@ -156,8 +151,7 @@ static int parse_options(int argc, char **argv, struct options *o)
             printf(PROG " (pd) " PD_VERSION "\n");
             exit(0);
         default:
-            fprintf(stderr, "Try '" PROG " --help' for more information.\n");
-            return 2;
+            return option_error(argv);
         }
     }
     if (optind < argc)
@@ -172,12 +166,6 @@ static int parse_options(int argc, char **argv, struct options *o)
     if (adds == 0)
         return usage_error("give at least one region (--box, --cylinder or --sphere)", NULL);
     return 0;
-}
-
-static int fail(void)
-{
-    fprintf(stderr, PROG ": error: %s\n", pd_errmsg());
-    return 1;
 }
 
 int main(int argc, char **argv)

@@ -20,6 +20,7 @@
 #include "pd.h"
 
 #define PROG "pd-run"
+#include "cli.h"
 
 struct options {
     pd_scene sc;
@@ -39,13 +40,17 @@ static void usage(FILE *out)
             "Model:\n"
             "  --model pmb           prototype microelastic brittle (default)\n"
             "  --c C                 micromodulus, N/m^6\n"
-            "  --bulk-modulus K      bulk modulus, Pa (c = 18K/(pi delta^4))\n"
+            "  --bulk-modulus K      bulk modulus, Pa (c = 18K/(pi delta^4));\n"
+            "                        the last of --c and --bulk-modulus wins\n"
             "Effects (each only when given):\n"
-            "  --failure S00,ALPHA   critical stretch s0 = S00 - ALPHA s_min\n"
+            "  --failure S00,ALPHA   critical stretch s0 = S00 - ALPHA s_min (both\n"
+            "                        dimensionless)\n"
             "  --contact             short-range contact forces\n"
             "  --contact-skin S      skin of the contact list, m (default spacing/2)\n"
             "  --indenter sphere,X,Y,Z,R,K,VX,VY,VZ\n"
-            "                        moving spherical indenter, force density K (R-r)^2\n"
+            "                        moving spherical indenter: centre X,Y,Z (m) at t = 0,\n"
+            "                        radius R (m), force density K (R-r)^2 with K in\n"
+            "                        N/m^5, velocity VX,VY,VZ (m/s)\n"
             "Time:\n"
             "  --steps N             number of steps\n"
             "  --dt DT               time step, s (default: stable step x safety)\n"
@@ -63,14 +68,6 @@ static void usage(FILE *out)
             "      --debug           print HDF5's own error stack\n"
             "  -h, --help            show this help\n"
             "  -V, --version         show the version\n");
-}
-
-static int usage_error(const char *msg, const char *arg)
-{
-    fprintf(stderr, PROG ": error: %s%s%s%s\n", msg, arg ? " '" : "", arg ? arg : "",
-            arg ? "'" : "");
-    fprintf(stderr, "Try '" PROG " --help' for more information.\n");
-    return 2;
 }
 
 static int positive(const char *opt, const char *arg, double *out)
@@ -100,10 +97,8 @@ static int expand_scene(int argc, char **argv, int *nargc, char ***nargv)
     }
     int sc = 0;
     char **sv = NULL;
-    if (scene && pd_scene_args(scene, &sc, &sv) != PD_OK) {
-        fprintf(stderr, PROG ": error: %s\n", pd_errmsg());
-        return 2;
-    }
+    if (scene && pd_scene_args(scene, &sc, &sv) != PD_OK)
+        return fail();
     char **v = malloc((size_t)(argc + sc + 1) * sizeof *v);
     if (v == NULL)
         return 1;
@@ -161,6 +156,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     int c, rc;
     int64_t iv;
     double ind[8];
+    opterr = 0;
     while ((c = getopt_long(argc, argv, "o:qhV", longopts, NULL)) != -1) {
         switch (c) {
         case OPT_MODEL:
@@ -170,12 +166,14 @@ static int parse_options(int argc, char **argv, struct options *o)
         case OPT_C:
             if ((rc = positive("--c", optarg, &o->sc.c)))
                 return rc;
-            o->has_c = 1;
+            o->has_c = 1; /* the last of --c and --bulk-modulus wins */
+            o->has_k = 0;
             break;
         case OPT_K:
             if ((rc = positive("--bulk-modulus", optarg, &o->sc.bulk_modulus)))
                 return rc;
             o->has_k = 1;
+            o->has_c = 0;
             break;
         case OPT_FAILURE: {
             double v[2];
@@ -263,16 +261,13 @@ static int parse_options(int argc, char **argv, struct options *o)
             printf(PROG " (pd) " PD_VERSION "\n");
             exit(0);
         default:
-            fprintf(stderr, "Try '" PROG " --help' for more information.\n");
-            return 2;
+            return option_error(argv);
         }
     }
     if (!o->has_steps)
         return usage_error("--steps is required", NULL);
-    if (o->has_c == o->has_k)
-        return usage_error(o->has_c ? "give --c or --bulk-modulus, not both"
-                                    : "give the stiffness: --c or --bulk-modulus",
-                           NULL);
+    if (!o->has_c && !o->has_k)
+        return usage_error("give the stiffness: --c or --bulk-modulus", NULL);
     if (optind != argc - 1)
         return usage_error(optind < argc ? "give exactly one INPUT" : "missing INPUT (a file or '-')",
                            NULL);
@@ -344,12 +339,6 @@ static void print_timing(const pd_sim *sim, double wall, double output)
     for (int k = 0; k < PD_T_COUNT; k++)
         fprintf(stderr, "  %-16s %10.3f s %6.1f%%\n", names[k], t[k],
                 wall > 0 ? 100.0 * t[k] / wall : 0.0);
-}
-
-static int fail(void)
-{
-    fprintf(stderr, PROG ": error: %s\n", pd_errmsg());
-    return 1;
 }
 
 int main(int argc, char **argv)

@@ -15,12 +15,14 @@ char *pd_join_argv(int argc, char **argv)
     size_t len = 1;
     for (int k = 0; k < argc; k++)
         len += strlen(argv[k]) + 3;
-    char *s = malloc(len), *p = s;
+    char *s = malloc(len);
     if (s == NULL)
         return NULL;
+    size_t used = 0;
     for (int k = 0; k < argc; k++) {
         int quote = argv[k][0] == '\0' || strpbrk(argv[k], " \t\n'\"") != NULL;
-        p += sprintf(p, "%s%s%s%s", k ? " " : "", quote ? "'" : "", argv[k], quote ? "'" : "");
+        used += (size_t)snprintf(s + used, len - used, "%s%s%s%s", k ? " " : "",
+                                 quote ? "'" : "", argv[k], quote ? "'" : "");
     }
     return s;
 }

@@ -6,7 +6,9 @@
  * backing store) and streams its image to stdout at close.  Writing a path
  * goes to a temporary file beside it that is renamed over the path only once
  * the file is complete, so a failed or killed program never leaves a half
- * written file under the final name.
+ * written file under the final name.  A path that exists and is neither a
+ * regular file nor a directory (/dev/null, a FIFO, /dev/stdout) is written
+ * like stdout: built in memory and streamed to it at close, never replaced.
  */
 
 #include <errno.h>
@@ -226,6 +228,16 @@ static pd_status make_temp(const char *path, char **tmp)
         return pd_fail(PD_ERR_IO, "cannot write '%s': is a directory", path);
     }
     int fd = mkstemp(t);
+    if (fd >= 0) {
+        /* mkstemp makes 0600; a published file gets 0666 less the umask */
+        mode_t mask = umask(0);
+        umask(mask);
+        if (fchmod(fd, 0666 & ~mask) != 0) {
+            close(fd);
+            unlink(t);
+            fd = -1;
+        }
+    }
     if (fd < 0) {
         pd_status s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", path, strerror(errno));
         free(copy);
@@ -238,6 +250,24 @@ static pd_status make_temp(const char *path, char **tmp)
     free(base);
     *tmp = t;
     return PD_OK;
+}
+
+/* Is `path` an existing special file (device, FIFO, socket)? */
+static int is_special(const char *path)
+{
+    struct stat st;
+    return strcmp(path, "-") != 0 && stat(path, &st) == 0 && !S_ISREG(st.st_mode) &&
+           !S_ISDIR(st.st_mode);
+}
+
+/* A writable in-memory file (core driver, no backing store). */
+static hid_t create_image(void)
+{
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    H5Pset_fapl_core(fapl, 1 << 22, 0);
+    hid_t fid = H5Fcreate("pd-image", H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+    H5Pclose(fapl);
+    return fid;
 }
 
 pd_status pd_file_create(const char *path, pd_file **out)
@@ -255,10 +285,11 @@ pd_status pd_file_create(const char *path, pd_file **out)
                                       "or a pipe)");
         }
         f->to_stdout = 1;
-        hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-        H5Pset_fapl_core(fapl, 1 << 22, 0);
-        f->fid = H5Fcreate("pd-stdout", H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
-        H5Pclose(fapl);
+        f->fid = create_image();
+    } else if (is_special(path)) {
+        f->to_stdout = 1;
+        f->path = strdup(path);
+        f->fid = create_image();
     } else {
         if ((s = make_temp(path, &f->tmp)) != PD_OK) {
             file_free(f);
@@ -297,14 +328,16 @@ pd_status pd_file_update(const char *inpath, const char *outpath, pd_file **out)
     }
     free(f->name);
     f->name = strdup(inname);
-    if (strcmp(outpath, "-") == 0) {
-        if (isatty(STDOUT_FILENO)) {
+    if (strcmp(outpath, "-") == 0 || is_special(outpath)) {
+        if (strcmp(outpath, "-") == 0 && isatty(STDOUT_FILENO)) {
             free(buf);
             file_free(f);
             return pd_fail(PD_ERR_IO, "refusing to write an HDF5 file to a terminal (use -o FILE "
                                       "or a pipe)");
         }
         f->to_stdout = 1;
+        if (strcmp(outpath, "-") != 0)
+            f->path = strdup(outpath);
         f->image = buf;
         f->fid = open_image(buf, len, H5F_ACC_RDWR);
     } else {
@@ -361,8 +394,17 @@ pd_status pd_file_close(pd_file *f)
             s = pd_fail(PD_ERR_IO, "cannot build the output image");
         H5Fclose(f->fid);
         if (s == PD_OK) {
-            if (fwrite(img, 1, (size_t)size, stdout) != (size_t)size || fflush(stdout) != 0)
-                s = pd_fail(PD_ERR_IO, "cannot write to stdout: %s", strerror(errno));
+            /* stdout, or a special file given as the output path */
+            FILE *o = f->path ? fopen(f->path, "wb") : stdout;
+            const char *where = f->path ? f->path : "stdout";
+            if (o == NULL)
+                s = pd_fail(PD_ERR_IO, "cannot write to '%s': %s", where, strerror(errno));
+            else {
+                if (fwrite(img, 1, (size_t)size, o) != (size_t)size || fflush(o) != 0)
+                    s = pd_fail(PD_ERR_IO, "cannot write to %s: %s", where, strerror(errno));
+                if (f->path && fclose(o) != 0 && s == PD_OK)
+                    s = pd_fail(PD_ERR_IO, "cannot write to %s: %s", where, strerror(errno));
+            }
         }
         free(img);
         file_free(f);

@@ -172,14 +172,6 @@ pd_status pd_h5_write_data(hid_t loc, const char *name, hid_t filetype, hid_t me
     return s;
 }
 
-static double memory_bytes(void)
-{
-    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
-    if (pages <= 0 || size <= 0)
-        return 1e12;
-    return (double)pages * (double)size;
-}
-
 static const char *class_name(H5T_class_t c, size_t size)
 {
     if (c == H5T_FLOAT)
@@ -222,7 +214,7 @@ pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const p
             }
             total *= (double)dims[r];
         }
-        if (s == PD_OK && total * (double)elsize > memory_bytes())
+        if (s == PD_OK && total * (double)elsize > pd_memory_bytes())
             s = pd_fail(PD_ERR_NOMEM, "'%s': dataset '%s' declares %.3g bytes, more than memory",
                         file, name, total * (double)elsize);
         if (s == PD_OK) {

@@ -100,6 +100,12 @@ pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_latti
                 }
         if (pass == 0) {
             n = k;
+            /* position (3), volume, density, radius, id: 8 bytes; material: 4 */
+            double bytes = (double)n * (7 * 8 + 4);
+            if (bytes > 0.5 * pd_memory_bytes())
+                return pd_fail(PD_ERR_NOMEM,
+                               "%lld particles would need %.3g GB, more than this machine has",
+                               (long long)n, bytes / 1e9);
             continue;
         }
         if (lp->perturb > 0) {

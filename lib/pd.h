@@ -216,7 +216,7 @@ pd_status pd_sim_setup(pd_sim *sim);
 /* One velocity-Verlet step (seed 000 Algorithm 1) with the declared effects. */
 pd_status pd_sim_step(pd_sim *sim);
 
-/* Names of the active effects, e.g. "pmb-bonds failure contact indenter". */
+/* Names of the active effects, e.g. "pmb+failure contact indenter". */
 const char *pd_sim_effects(const pd_sim *sim);
 int64_t pd_sim_stepno(const pd_sim *sim);
 double pd_sim_time(const pd_sim *sim);
@@ -292,6 +292,11 @@ pd_status pd_read_frame_state(const pd_file *f, const char *name, int64_t count,
  * absent (not an error). */
 pd_status pd_read_frame_scalar(const pd_file *f, const char *name, const char *field,
                                int64_t n, double *out, int *present);
+/* Damage of a frame: its stored `damage` field, or else computed from its
+ * bond state (pd_damage).  *b and *intact are read on first need and reused
+ * for later frames; the caller frees them (pd_bonds_free, free). */
+pd_status pd_read_frame_damage(const pd_file *f, const pd_particles *p, const char *frame,
+                               pd_bonds **b, uint64_t **intact, double *damage);
 pd_status pd_write_frame_scalar(pd_file *f, const char *name, const char *field,
                                 int64_t n, const double *values);
 
@@ -314,6 +319,16 @@ pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr);
 pd_status pd_pvd_write(const char *path, int64_t nfiles, char *const *files,
                        const double *times);
 
+/* ---------------------------------------------------------------- crack tips */
+
+/* Crack tip (seed 004 §5): the largest coordinate along `axis` (0, 1, 2 for
+ * x, y, z) of the current positions x + u among particles whose damage
+ * exceeds `threshold` (the seed's phi_0 = 0.3).  u may be NULL (reference
+ * positions).  *ndamaged gets the number of such particles and *tip, in m,
+ * NaN when there is none. */
+pd_status pd_crack_tip(const pd_particles *p, double *const u[3], const double *damage, int axis,
+                       double threshold, double *tip, int64_t *ndamaged);
+
 /* ---------------------------------------------------------------- utilities */
 
 /* Checked number parsing: whole string, finite. */
@@ -326,6 +341,8 @@ char *pd_join_argv(int argc, char **argv);
 /* A scene file as long options: "option value" lines become "--option",
  * "value"; `#` starts a comment.  *argv and its strings are malloc'ed. */
 pd_status pd_scene_args(const char *path, int *argc, char ***argv);
+/* Physical memory of this machine, bytes (a large guess if unknown). */
+double pd_memory_bytes(void);
 /* Wall clock, s. */
 double pd_wtime(void);
 /* Peak resident memory of this process, bytes (0 if unknown). */

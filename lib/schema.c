@@ -715,3 +715,23 @@ pd_status pd_write_frame_scalar(pd_file *f, const char *name, const char *field,
     hsize_t d1[1] = {(hsize_t)n};
     return pd_h5_write_data(f->fid, path, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, d1, values);
 }
+
+pd_status pd_read_frame_damage(const pd_file *f, const pd_particles *p, const char *frame,
+                               pd_bonds **b, uint64_t **intact, double *damage)
+{
+    int present = 0;
+    pd_status s = pd_read_frame_scalar(f, frame, "damage", p->n, damage, &present);
+    if (s != PD_OK || present)
+        return s;
+    if (*b == NULL) {
+        if ((s = pd_read_bonds(f, p, b)) != PD_OK)
+            return s;
+        *intact = calloc((size_t)pd_bits_words((*b)->count) + 1, sizeof(uint64_t));
+        if (*intact == NULL)
+            return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    if ((s = pd_read_frame_state(f, frame, (*b)->count, *intact)) != PD_OK)
+        return s;
+    pd_damage(p, *b, *intact, damage);
+    return PD_OK;
+}

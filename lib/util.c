@@ -9,6 +9,7 @@
 #include <string.h>
 #include <sys/resource.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "pd.h"
 
@@ -58,6 +59,14 @@ int pd_parse_doubles(const char *s, double *out, int n)
         k++;
     }
     return k == n;
+}
+
+double pd_memory_bytes(void)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
+    if (pages <= 0 || size <= 0)
+        return 1e12;
+    return (double)pages * (double)size;
 }
 
 double pd_wtime(void)

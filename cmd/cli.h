@@ -1,0 +1,36 @@
+/*
+ * cli.h -- the lines of glue every program shares: one-line errors and the
+ * exit status (1 runtime or data error, 2 usage error).  Include it after
+ * defining PROG.  Library code never prints; these are the only printers of
+ * pd_errmsg().
+ */
+#ifndef PD_CLI_H
+#define PD_CLI_H
+
+#include <getopt.h>
+#include <stdio.h>
+
+#include "pd.h"
+
+/* A usage error: one line on stderr, exit status 2. */
+static inline int usage_error(const char *msg, const char *arg)
+{
+    fprintf(stderr, PROG ": error: %s%s%s%s (see '" PROG " --help')\n", msg, arg ? " '" : "",
+            arg ? arg : "", arg ? "'" : "");
+    return 2;
+}
+
+/* getopt_long's '?' (its own message is switched off by opterr = 0). */
+static inline int option_error(char **argv)
+{
+    return usage_error("unknown option or missing value in", argv[optind - 1]);
+}
+
+/* A runtime or data error from libpd: one line on stderr, exit status 1. */
+static inline int fail(void)
+{
+    fprintf(stderr, PROG ": error: %s\n", pd_errmsg());
+    return 1;
+}
+
+#endif
