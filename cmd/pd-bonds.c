@@ -5,8 +5,8 @@
  * with cell lists of edge delta (linear in N).  Stored as CSR with reference
  * lengths, partial-volume factors (seed 000, "Modification to the Particle
  * Volume") and the bond state mu as one bit per bond.  Particles are first
- * put in Morton order of horizon-sized cells so families sit close in
- * memory; ids travel with them.
+ * sorted by horizon-sized cells, row by row along the longest axis, so that
+ * families sit close in memory; ids travel with them.
  */
 #include <getopt.h>
 #include <math.h>

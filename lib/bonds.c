@@ -185,18 +185,6 @@ void pd_damage(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
     }
 }
 
-/* Spread the low 21 bits of v to every third bit. */
-static uint64_t spread3(uint64_t v)
-{
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffULL;
-    v = (v | v << 16) & 0x1f0000ff0000ffULL;
-    v = (v | v << 8) & 0x100f00f00f00f00fULL;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-    v = (v | v << 2) & 0x1249249249249249ULL;
-    return v;
-}
-
 typedef struct {
     uint64_t key;
     int64_t index;
@@ -225,12 +213,22 @@ pd_status pd_particles_sort_spatial(pd_particles *p, double cell)
         pd_cells_free(&c);
         return pd_fail(PD_ERR_NOMEM, "out of memory sorting particles");
     }
+    /* the longest axis outermost: slabs across it are the thinnest */
+    int outer = 0;
+    for (int d = 1; d < 3; d++)
+        if (c.dim[d] > c.dim[outer])
+            outer = d;
+    int mid = (outer + 1) % 3, inner = (outer + 2) % 3;
+    if (c.dim[inner] > c.dim[mid]) {
+        int t = mid;
+        mid = inner;
+        inner = t;
+    }
     for (int64_t i = 0; i < n; i++) {
         double x[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
         int64_t k[3];
         pd_cells_locate(&c, x, k);
-        items[i].key = spread3((uint64_t)k[0]) | spread3((uint64_t)k[1]) << 1 |
-                       spread3((uint64_t)k[2]) << 2;
+        items[i].key = (uint64_t)((k[outer] * c.dim[mid] + k[mid]) * c.dim[inner] + k[inner]);
         items[i].index = i;
     }
     pd_cells_free(&c);

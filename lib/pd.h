@@ -160,8 +160,10 @@ int64_t pd_bits_count_broken(const uint64_t *bits, int64_t count);
 void pd_damage(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
                double *damage);
 
-/* Reorder particles along a Morton curve of horizon-sized cells, so that
- * families are close in memory.  Ids travel with the particles. */
+/* Reorder particles by horizon-sized cells, row by row with the longest
+ * axis outermost, so that families are close in memory and every bond joins
+ * rows a bounded distance apart (a few slabs of cells): the run's kernel
+ * cuts rows into blocks of that distance.  Ids travel with the particles. */
 pd_status pd_particles_sort_spatial(pd_particles *p, double cell);
 
 /* ---------------------------------------------------------------- scene */

@@ -5,7 +5,8 @@
  * For every intact bond i-j with reference length |xi| and current length
  * r = |y_j - y_i|:
  *   s = (r - |xi|) / |xi|                      bond stretch
- *   f_i += c s nu V_j (y_j - y_i) / r          force density on i
+ *   f_i += c s nu_ij V_j (y_j - y_i) / r       force density on i
+ *   f_j -= c s nu_ji V_i (y_j - y_i) / r       force density on j
  * with dr = r - |xi| set to 0 when |dr| < eps_machine (seed 000, "A
  * Numerical Example"), and no force when r = 0.
  *
@@ -17,40 +18,138 @@
  * breaks still carries its force in the step it breaks (LAMMPS peri/pmb).
  * Bonds never heal.
  *
- * Both directed copies of a bond see bitwise the same stretch and the same
- * min(s0_i, s0_j), so they break together.
+ * The run keeps each bond once (i < j, "half bonds"), so a bond's stretch,
+ * test and state are computed once and its force is added to both ends.
+ * Rows are cut into blocks of at least the largest row distance j - i of a
+ * bond, so a block writes only to itself and the next block; even blocks run
+ * in parallel, then odd blocks.  Every force density is summed in an order
+ * fixed by the blocks alone: the result does not depend on the thread count.
  */
 #include <float.h>
 #include <math.h>
+#include <stdlib.h>
 
 #include "sim.h"
 
 #define PMB_CHUNK 256 /* bonds per vector pass */
 
-/* The forces of the family of particle i (and with `failure` its breaking
- * test and new s0), written branch-free so that it vectorizes.  Returns 1
- * when some bond of i must break: pmb_break_row then clears their bits. */
-static inline __attribute__((always_inline)) int pmb_row(const pd_sim *sim, int64_t i,
-                                                         const int failure)
+static int64_t lower_bound(const int32_t *v, int64_t lo, int64_t hi, int32_t key)
 {
-    const pd_bonds *b = sim->b;
-    const double *restrict w = sim->bond_w;
+    while (lo < hi) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (v[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+void pd_half_free(pd_half_bonds *h)
+{
+    if (h == NULL)
+        return;
+    free(h->offset);
+    free(h->neighbor);
+    free(h->length);
+    free(h->w_ij);
+    free(h->w_ji);
+    free(h->intact);
+    free(h->cursor);
+}
+
+pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h)
+{
+    int64_t n = b->n, count = 0;
+    h->n = n;
+    h->offset = malloc((size_t)(n + 1) * sizeof(int64_t));
+    h->cursor = malloc((size_t)(n > 0 ? n : 1) * sizeof(int64_t));
+    if (h->offset == NULL || h->cursor == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");
+    h->offset[0] = 0;
+    int64_t span = 1;
+    for (int64_t i = 0; i < n; i++) {
+        int64_t first = lower_bound(b->neighbor, b->offset[i], b->offset[i + 1], (int32_t)i + 1);
+        count += b->offset[i + 1] - first;
+        h->offset[i + 1] = count;
+        if (b->offset[i + 1] > first) {
+            int64_t d = b->neighbor[b->offset[i + 1] - 1] - i;
+            span = d > span ? d : span;
+        }
+    }
+    h->count = count;
+    size_t m = (size_t)(count > 0 ? count : 1);
+    h->neighbor = malloc(m * sizeof(int32_t));
+    h->length = malloc(m * sizeof(double));
+    h->w_ij = malloc(m * sizeof(double));
+    h->w_ji = malloc(m * sizeof(double));
+    h->intact = calloc((size_t)pd_bits_words(count) + 1, sizeof(uint64_t));
+    if (!h->neighbor || !h->length || !h->w_ij || !h->w_ji || !h->intact)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)count);
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++) {
+        int64_t k = b->offset[i + 1] - (h->offset[i + 1] - h->offset[i]);
+        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++, k++) {
+            int32_t j = b->neighbor[k];
+            int64_t back = lower_bound(b->neighbor, b->offset[j], b->offset[j + 1], (int32_t)i);
+            h->neighbor[q] = j;
+            h->length[q] = b->length[k];
+            /* (c V_j) nu in the order LAMMPS peri/pmb multiplies them */
+            h->w_ij[q] = c * p->volume[j] * b->vfactor[k];
+            h->w_ji[q] = c * p->volume[i] * b->vfactor[back];
+            if (pd_bond_intact(b->intact, k))
+                __atomic_fetch_or(&h->intact[q >> 6], UINT64_C(1) << (q & 63), __ATOMIC_RELAXED);
+        }
+    }
+    h->block = span;
+    h->nblocks = (n + span - 1) / span;
+    return PD_OK;
+}
+
+void pd_half_expand(pd_half_bonds *h, const pd_bonds *b, uint64_t *intact)
+{
+    /* Row i meets its bonds to j < i in ascending i for each j, so a cursor
+     * per row walks the half bonds of j in order. */
+    for (int64_t i = 0; i < h->n; i++)
+        h->cursor[i] = h->offset[i];
+    int64_t words = pd_bits_words(b->count);
+    for (int64_t w = 0; w < words; w++)
+        intact[w] = 0;
+    for (int64_t i = 0; i < h->n; i++) {
+        int64_t own = h->offset[i];
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            int32_t j = b->neighbor[k];
+            int64_t q = j < i ? h->cursor[j]++ : own++;
+            if (pd_bond_intact(h->intact, q))
+                intact[k >> 6] |= UINT64_C(1) << (k & 63);
+        }
+    }
+}
+
+/* The forces of the half bonds of row i (and with `failure` their breaking
+ * test and the new s0 of both ends), branch-free so that the arithmetic
+ * vectorizes; the scatter to the partners j is a plain loop. */
+static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i,
+                                                          const int failure)
+{
+    pd_half_bonds *h = &sim->half;
     const double s00 = sim->sc.s00, alpha = sim->sc.alpha;
     const double *restrict y0 = sim->y[0], *restrict y1 = sim->y[1], *restrict y2 = sim->y[2];
-    const double *restrict len = b->length;
-    const int32_t *restrict nb = b->neighbor;
-    const uint64_t *restrict intact = sim->intact;
+    const double *restrict len = h->length, *restrict wij = h->w_ij, *restrict wji = h->w_ji;
+    const int32_t *restrict nb = h->neighbor;
     const double *restrict s0 = sim->s0;
+    double *restrict fx = sim->f[0], *restrict fy = sim->f[1], *restrict fz = sim->f[2];
+    double *restrict s0_new = sim->s0_new;
     const double yi0 = y0[i], yi1 = y1[i], yi2 = y2[i];
     const double s0i_old = failure ? s0[i] : 0;
-    double ax = 0, ay = 0, az = 0, s0i = -INFINITY, nbreak = 0;
-    /* the state bits of a chunk of the family as 0/1 doubles, so that the
-     * arithmetic below runs on contiguous data */
-    double mu[PMB_CHUNK];
-    for (int64_t c0 = b->offset[i]; c0 < b->offset[i + 1]; c0 += PMB_CHUNK) {
-        const int64_t m = b->offset[i + 1] - c0 < PMB_CHUNK ? b->offset[i + 1] - c0 : PMB_CHUNK;
+    double ax = 0, ay = 0, az = 0, s0i = -INFINITY;
+    double mu[PMB_CHUNK], gx[PMB_CHUNK], gy[PMB_CHUNK], gz[PMB_CHUNK], t[PMB_CHUNK],
+        brk[PMB_CHUNK];
+    for (int64_t c0 = h->offset[i]; c0 < h->offset[i + 1]; c0 += PMB_CHUNK) {
+        const int64_t m = h->offset[i + 1] - c0 < PMB_CHUNK ? h->offset[i + 1] - c0 : PMB_CHUNK;
         for (int64_t q = 0; q < m; q++)
-            mu[q] = (double)pd_bond_intact(intact, c0 + q);
+            mu[q] = (double)pd_bond_intact(h->intact, c0 + q);
+        double nbreak = 0;
         for (int64_t q = 0; q < m; q++) {
             const int64_t k = c0 + q;
             const int32_t j = nb[k];
@@ -59,62 +158,77 @@ static inline __attribute__((always_inline)) int pmb_row(const pd_sim *sim, int6
             double dr = r - len[k];
             dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
             const double s = dr / len[k];
-            const double fk = w[k] * s * mu[q];
-            const double f = r > 0.0 ? fk / r : 0.0;
-            ax += f * dx;
-            ay += f * dy;
-            az += f * dz;
+            const double fi = r > 0.0 ? wij[k] * s * mu[q] / r : 0.0;
+            const double fj = r > 0.0 ? wji[k] * s * mu[q] / r : 0.0;
+            ax += fi * dx;
+            ay += fi * dy;
+            az += fi * dz;
+            gx[q] = fj * dx;
+            gy[q] = fj * dy;
+            gz[q] = fj * dz;
             if (failure) {
                 const double thr = fmin(s0i_old, s0[j]);
-                nbreak += s > thr ? mu[q] : 0.0;
-                s0i = fmax(s0i, mu[q] > 0 ? s00 - alpha * s : -INFINITY);
+                brk[q] = s > thr ? mu[q] : 0.0;
+                nbreak += brk[q];
+                t[q] = mu[q] > 0 ? s00 - alpha * s : -INFINITY;
+                s0i = fmax(s0i, t[q]);
             }
         }
+        for (int64_t q = 0; q < m; q++) {
+            const int32_t j = nb[c0 + q];
+            fx[j] -= gx[q];
+            fy[j] -= gy[q];
+            fz[j] -= gz[q];
+            if (failure)
+                s0_new[j] = fmax(s0_new[j], t[q]);
+        }
+        if (failure && nbreak > 0)
+            for (int64_t q = 0; q < m; q++)
+                if (brk[q] > 0)
+                    pd_bond_break(h->intact, c0 + q);
     }
-    sim->f[0][i] += ax;
-    sim->f[1][i] += ay;
-    sim->f[2][i] += az;
-    if (failure) /* no intact bond: s0 stays +inf (DBL_MAX, as LAMMPS) */
-        sim->s0_new[i] = s0i > -INFINITY ? s0i : DBL_MAX;
-    return nbreak > 0;
+    fx[i] += ax;
+    fy[i] += ay;
+    fz[i] += az;
+    if (failure)
+        s0_new[i] = fmax(s0_new[i], s0i);
 }
 
-/* The rows compiled for AVX-512, AVX2 and the baseline, picked at run time. */
-PD_VECTOR_CLONES static int pmb_row_elastic(const pd_sim *sim, int64_t i)
+/* Rows compiled for AVX-512, AVX2 and the baseline, picked at run time. */
+PD_VECTOR_CLONES static void pmb_block_elastic(pd_sim *sim, int64_t lo, int64_t hi)
 {
-    return pmb_row(sim, i, 0);
+    for (int64_t i = lo; i < hi; i++)
+        pmb_row(sim, i, 0);
 }
 
-PD_VECTOR_CLONES static int pmb_row_failure(const pd_sim *sim, int64_t i)
+PD_VECTOR_CLONES static void pmb_block_failure(pd_sim *sim, int64_t lo, int64_t hi)
 {
-    return pmb_row(sim, i, 1);
-}
-
-/* Clear the bits of i's bonds that fail the test s > min(s0_i, s0_j): the
- * same arithmetic as pmb_row, so both copies of a bond agree. */
-static void pmb_break_row(const pd_sim *sim, int64_t i)
-{
-    const pd_bonds *b = sim->b;
-    double *const *y = sim->y;
-    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(sim->intact, k))
-            continue;
-        const int32_t j = b->neighbor[k];
-        const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i], dz = y[2][j] - y[2][i];
-        const double r = sqrt(dx * dx + dy * dy + dz * dz);
-        double dr = r - b->length[k];
-        dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-        if (dr / b->length[k] > fmin(sim->s0[i], sim->s0[j]))
-            pd_bond_break(sim->intact, k);
-    }
+    for (int64_t i = lo; i < hi; i++)
+        pmb_row(sim, i, 1);
 }
 
 static void pmb_kernel(pd_sim *sim, int failure)
 {
+    const pd_half_bonds *h = &sim->half;
+    if (failure)
 #pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++)
-        if (failure ? pmb_row_failure(sim, i) : pmb_row_elastic(sim, i))
-            pmb_break_row(sim, i);
+        for (int64_t i = 0; i < sim->n; i++)
+            sim->s0_new[i] = -INFINITY;
+    for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int64_t blk = phase; blk < h->nblocks; blk += 2) {
+            int64_t lo = blk * h->block, hi = lo + h->block < sim->n ? lo + h->block : sim->n;
+            if (failure)
+                pmb_block_failure(sim, lo, hi);
+            else
+                pmb_block_elastic(sim, lo, hi);
+        }
+    }
+    if (failure)
+#pragma omp parallel for schedule(static)
+        for (int64_t i = 0; i < sim->n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
+            if (sim->s0_new[i] == -INFINITY)
+                sim->s0_new[i] = DBL_MAX;
 }
 
 static pd_status pmb_force(pd_sim *sim, void *state)
@@ -137,6 +251,7 @@ static pd_status pmb_failure_force(pd_sim *sim, void *state)
     double *t = sim->s0;
     sim->s0 = sim->s0_new;
     sim->s0_new = t;
+    sim->intact_stale = 1;
     return PD_OK;
 }
 

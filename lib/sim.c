@@ -53,8 +53,7 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
     }
     int64_t words = pd_bits_words(b->count) + 1;
     sim->intact = malloc((size_t)words * sizeof(uint64_t));
-    sim->bond_w = malloc((size_t)(b->count > 0 ? b->count : 1) * sizeof(double));
-    ok = ok && sim->intact && sim->bond_w;
+    ok = ok && sim->intact;
     if (s->has_failure) {
         sim->s0 = malloc(n * sizeof(double));
         sim->s0_new = malloc(n * sizeof(double));
@@ -67,10 +66,11 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
     for (int d = 0; d < 3; d++)
         memcpy(sim->y[d], p->x[d], n * sizeof(double));
     memcpy(sim->intact, b->intact, (size_t)words * sizeof(uint64_t));
-    /* (c V_j) nu in the order LAMMPS peri/pmb multiplies them */
-    for (int64_t i = 0; i < b->n; i++)
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-            sim->bond_w[k] = s->c * p->volume[b->neighbor[k]] * b->vfactor[k];
+    pd_status hs = pd_half_build(p, b, s->c, &sim->half);
+    if (hs != PD_OK) {
+        pd_sim_free(sim);
+        return hs;
+    }
     if (s->has_failure)
         for (size_t i = 0; i < n; i++)
             sim->s0[i] = sim->s0_new[i] = DBL_MAX;
@@ -102,7 +102,7 @@ void pd_sim_free(pd_sim *sim)
         free(sim->f[d]);
     }
     free(sim->intact);
-    free(sim->bond_w);
+    pd_half_free(&sim->half);
     free(sim->s0);
     free(sim->s0_new);
     free(sim);
@@ -196,7 +196,7 @@ double pd_sim_kinetic(const pd_sim *sim)
 
 int64_t pd_sim_broken(const pd_sim *sim)
 {
-    return pd_bits_count_broken(sim->intact, sim->b->count) / 2;
+    return pd_bits_count_broken(sim->half.intact, sim->half.count);
 }
 
 double pd_sim_max_damage(const pd_sim *sim)
@@ -204,7 +204,7 @@ double pd_sim_max_damage(const pd_sim *sim)
     double *dmg = malloc((size_t)sim->n * sizeof(double));
     if (dmg == NULL)
         return NAN;
-    pd_damage(sim->p, sim->b, sim->intact, dmg);
+    pd_damage(sim->p, sim->b, pd_sim_intact(sim), dmg);
     double m = 0;
     for (int64_t i = 0; i < sim->n; i++)
         m = fmax(m, dmg[i]);
@@ -229,5 +229,10 @@ double *const *pd_sim_velocities(const pd_sim *sim)
 
 const uint64_t *pd_sim_intact(const pd_sim *sim)
 {
+    pd_sim *mut = (pd_sim *)sim; /* a cache: the state itself does not change */
+    if (mut->intact_stale) {
+        pd_half_expand(&mut->half, sim->b, mut->intact);
+        mut->intact_stale = 0;
+    }
     return sim->intact;
 }

@@ -20,6 +20,27 @@ typedef struct pd_effect {
 
 #define PD_MAX_EFFECTS 8
 
+/* The bonds of a run, each stored once (i < j), as the PMB kernel walks
+ * them; the directed bonds of the file are expanded from it on demand. */
+typedef struct {
+    int64_t n;         /* particles                                      */
+    int64_t count;     /* bonds                                          */
+    int64_t *offset;   /* n+1 CSR offsets                                */
+    int32_t *neighbor; /* j > i, ascending                               */
+    double *length;    /* |xi|, m                                        */
+    double *w_ij;      /* c V_j nu_ij: force density on i per stretch    */
+    double *w_ji;      /* c V_i nu_ji: force density on j per stretch    */
+    uint64_t *intact;  /* mu per bond                                    */
+    int64_t block;     /* rows per block (>= the largest j - i)          */
+    int64_t nblocks;
+    int64_t *cursor;   /* scratch of pd_half_expand                      */
+} pd_half_bonds;
+
+pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h);
+void pd_half_free(pd_half_bonds *h);
+/* Directed state bits (the file's) from the half bonds' bits. */
+void pd_half_expand(pd_half_bonds *h, const pd_bonds *b, uint64_t *intact);
+
 /* Hot loops are compiled for AVX-512, AVX2 and the baseline, picked at run
  * time (GCC function multiversioning), so one binary runs anywhere. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(PD_NO_CLONES)
@@ -37,9 +58,10 @@ struct pd_sim {
     double *y[3];       /* current positions, m                          */
     double *v[3];       /* velocities, m/s                               */
     double *f[3];       /* force densities, N/m^3                        */
-    uint64_t *intact;   /* bond state bits mu (1 = intact)               */
-    double *bond_w;     /* per bond c V_j nu, N/m^3 (the force density of
-                           a bond is bond_w * stretch)                    */
+    pd_half_bonds half; /* the bonds as the kernel walks them             */
+    uint64_t *intact;   /* directed bond state bits mu (1 = intact), kept
+                           up to date from `half` on demand              */
+    int intact_stale;   /* `intact` lags behind half.intact              */
     double *s0;         /* critical stretch of the previous step (eq. 9) */
     double *s0_new;     /* being computed in this step                   */
     int64_t step;
