@@ -218,11 +218,12 @@ pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const p
             s = pd_fail(PD_ERR_NOMEM, "'%s': dataset '%s' declares %.3g bytes, more than memory",
                         file, name, total * (double)elsize);
         if (s == PD_OK) {
-            void *b = malloc(total > 0 ? (size_t)total * elsize : 1);
+            void *b = *buf ? *buf : malloc(total > 0 ? (size_t)total * elsize : 1);
             if (b == NULL)
                 s = pd_fail(PD_ERR_NOMEM, "out of memory reading '%s'", name);
             else if (total > 0 && H5Dread(d, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, b) < 0) {
-                free(b);
+                if (b != *buf)
+                    free(b);
                 s = pd_fail(PD_ERR_FORMAT, "'%s': cannot read dataset '%s'", file, name);
             } else {
                 *buf = b;

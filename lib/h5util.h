@@ -39,7 +39,10 @@ typedef struct {
     hsize_t dims[2];
 } pd_h5_form;
 
-/* Read a whole dataset after checking its form; *buf is allocated. */
+/* Read a whole dataset after checking its form: into *buf when it is not
+ * NULL (then every dimension of the form must be fixed), else into a new
+ * allocation returned in *buf.  Integers out of the memory type's range are
+ * clipped by HDF5, so callers range-check what they read. */
 pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
                           hid_t memtype, size_t elsize, void **buf, hsize_t *dims);
 

@@ -310,57 +310,51 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
         free(offset);
         return pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset ends negative", fn);
     }
-    int64_t *nb64 = NULL;
-    pd_h5_form nf = {H5T_INTEGER, 8, 1, {(hsize_t)count, 0}};
-    if (count == 0)
-        nf.dims[0] = 0;
-    hsize_t ndim[1];
-    s = pd_h5_read_data(f->fid, fn, "/bonds/neighbor", &nf, H5T_NATIVE_INT64, sizeof(int64_t),
-                        (void **)&nb64, ndim);
-    if (s == PD_OK && (int64_t)ndim[0] != count)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/neighbor has %llu entries, offsets say %lld", fn,
-                    (unsigned long long)ndim[0], (long long)count);
-    if (s != PD_OK) {
+    /* neighbour (int32 in memory), length, volume factor, state bits */
+    if ((double)count * 24 > pd_memory_bytes()) {
         free(offset);
-        free(nb64);
-        return s;
+        return pd_fail(PD_ERR_NOMEM, "'%s': /bonds/offset declares %lld bonds, more than memory",
+                       fn, (long long)count);
     }
     pd_bonds *b = pd_bonds_alloc(n, count);
     if (b == NULL) {
         free(offset);
-        free(nb64);
         return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)count);
     }
     memcpy(b->offset, offset, (size_t)(n + 1) * sizeof(int64_t));
     free(offset);
-    for (int64_t k = 0; k < count && s == PD_OK; k++) {
-        if (nb64[k] < 0 || nb64[k] >= n)
-            s = pd_fail(PD_ERR_FORMAT, "'%s': bond %lld points to particle %lld of %lld", fn,
-                        (long long)k, (long long)nb64[k], (long long)n);
-        else
-            b->neighbor[k] = (int32_t)nb64[k];
+    const char *names[3] = {"/bonds/neighbor", "/bonds/length", "/bonds/volume_factor"};
+    pd_h5_form forms[3] = {{H5T_INTEGER, 8, 1, {(hsize_t)count, 0}},
+                           {H5T_FLOAT, 8, 1, {(hsize_t)count, 0}},
+                           {H5T_FLOAT, 8, 1, {(hsize_t)count, 0}}};
+    hid_t types[3] = {H5T_NATIVE_INT32, H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE};
+    void *dst[3] = {b->neighbor, b->length, b->vfactor};
+    size_t sizes[3] = {sizeof(int32_t), sizeof(double), sizeof(double)};
+    for (int k = 0; k < 3 && s == PD_OK; k++) {
+        if (count == 0) { /* "any" length: then it must be empty */
+            void *tmp = NULL;
+            hsize_t dims[1] = {0};
+            forms[k].dims[0] = 0;
+            s = pd_h5_read_data(f->fid, fn, names[k], &forms[k], types[k], sizes[k], &tmp, dims);
+            free(tmp);
+            if (s == PD_OK && dims[0] != 0)
+                s = pd_fail(PD_ERR_FORMAT, "'%s': %s has %llu entries, offsets say 0", fn,
+                            names[k], (unsigned long long)dims[0]);
+        } else
+            s = pd_h5_read_data(f->fid, fn, names[k], &forms[k], types[k], sizes[k], &dst[k],
+                                NULL);
     }
-    free(nb64);
-    pd_h5_form df = {H5T_FLOAT, 8, 1, {(hsize_t)count, 0}};
+    for (int64_t k = 0; k < count && s == PD_OK; k++)
+        if (b->neighbor[k] < 0 || b->neighbor[k] >= n)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': bond %lld points to particle %lld of %lld", fn,
+                        (long long)k, (long long)b->neighbor[k], (long long)n);
     pd_h5_form bf = {H5T_INTEGER, 1, 1, {(hsize_t)((count + 7) / 8), 0}};
-    double *len = NULL, *vf = NULL;
     uint8_t *state = NULL;
-    if (s == PD_OK && count > 0)
-        s = pd_h5_read_data(f->fid, fn, "/bonds/length", &df, H5T_NATIVE_DOUBLE, sizeof(double),
-                            (void **)&len, NULL);
-    if (s == PD_OK && count > 0)
-        s = pd_h5_read_data(f->fid, fn, "/bonds/volume_factor", &df, H5T_NATIVE_DOUBLE,
-                            sizeof(double), (void **)&vf, NULL);
     if (s == PD_OK && count > 0)
         s = pd_h5_read_data(f->fid, fn, "/bonds/state", &bf, H5T_NATIVE_UINT8, 1,
                             (void **)&state, NULL);
-    if (s == PD_OK && count > 0) {
-        memcpy(b->length, len, (size_t)count * sizeof(double));
-        memcpy(b->vfactor, vf, (size_t)count * sizeof(double));
+    if (s == PD_OK && count > 0)
         bytes_to_words(state, count, b->intact);
-    }
-    free(len);
-    free(vf);
     free(state);
     hid_t g = H5Gopen2(f->fid, "/bonds", H5P_DEFAULT);
     if (s == PD_OK && pd_h5_read_attr_double(g, "horizon", &b->horizon) != PD_OK)
