@@ -64,7 +64,7 @@ static hid_t open_image(const void *buf, size_t len, unsigned flags)
     hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
     H5Pset_fapl_core(fapl, 1 << 20, 0);
     H5Pset_file_image(fapl, (void *)buf, len);
-    hid_t fid = H5Fopen("pd-image", flags, fapl);
+    hid_t fid = H5Fopen("pd-input-image", flags, fapl);
     H5Pclose(fapl);
     return fid;
 }
@@ -265,7 +265,7 @@ static hid_t create_image(void)
 {
     hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
     H5Pset_fapl_core(fapl, 1 << 22, 0);
-    hid_t fid = H5Fcreate("pd-image", H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+    hid_t fid = H5Fcreate("pd-output-image", H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
     H5Pclose(fapl);
     return fid;
 }
