@@ -9,6 +9,7 @@
 
 #include <getopt.h>
 #include <stdio.h>
+#include <stdlib.h>
 
 #include "pd.h"
 
@@ -24,6 +25,33 @@ static inline int usage_error(const char *msg, const char *arg)
 static inline int option_error(char **argv)
 {
     return usage_error("unknown option or missing value in", argv[optind - 1]);
+}
+
+/* The long options every program has, with codes above any program's own. */
+enum { OPT_DEBUG = 1000 };
+#define COMMON_LONGOPTS                                                                            \
+    {"debug", no_argument, 0, OPT_DEBUG}, {"help", no_argument, 0, 'h'},                           \
+        {"version", no_argument, 0, 'V'}
+
+/* --help and --version (both exit 0), --debug, and what getopt_long could
+ * not parse (exit status 2); -1 when `c` is one of the program's own. */
+static inline int common_option(int c, char **argv, void (*usage)(FILE *), int *debug)
+{
+    switch (c) {
+    case 'h':
+        usage(stdout);
+        exit(0);
+    case 'V':
+        printf(PROG " (pd) " PD_VERSION "\n");
+        exit(0);
+    case OPT_DEBUG:
+        *debug = 1;
+        return 0;
+    case '?':
+    case ':':
+        return option_error(argv);
+    }
+    return -1;
 }
 
 /* A runtime or data error from libpd: one line on stderr, exit status 1. */

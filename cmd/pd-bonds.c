@@ -47,21 +47,25 @@ static void usage(FILE *out)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_HORIZON = 256, OPT_NOSORT, OPT_DEBUG };
+    enum { OPT_HORIZON = 256, OPT_NOSORT };
     static const struct option longopts[] = {
         {"horizon", required_argument, 0, OPT_HORIZON},
         {"no-sort", no_argument, 0, OPT_NOSORT},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
-        {"debug", no_argument, 0, OPT_DEBUG},
-        {"help", no_argument, 0, 'h'},
-        {"version", no_argument, 0, 'V'},
+        COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->output = "-";
     int c;
     opterr = 0;
     while ((c = getopt_long(argc, argv, "o:qhV", longopts, NULL)) != -1) {
+        int rc = common_option(c, argv, usage, &o->debug);
+        if (rc >= 0) {
+            if (rc > 0)
+                return rc;
+            continue;
+        }
         switch (c) {
         case OPT_HORIZON:
             if (!pd_parse_double(optarg, &o->horizon) || !(o->horizon > 0))
@@ -77,15 +81,6 @@ static int parse_options(int argc, char **argv, struct options *o)
         case 'q':
             o->quiet = 1;
             break;
-        case OPT_DEBUG:
-            o->debug = 1;
-            break;
-        case 'h':
-            usage(stdout);
-            exit(0);
-        case 'V':
-            printf(PROG " (pd) " PD_VERSION "\n");
-            exit(0);
         default:
             return option_error(argv);
         }

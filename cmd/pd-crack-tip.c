@@ -56,19 +56,22 @@ static int parse_axis(const char *s, int *axis)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_DEBUG = 256 };
     static const struct option longopts[] = {
         {"axis", required_argument, 0, 'a'},
         {"threshold", required_argument, 0, 't'},
-        {"debug", no_argument, 0, OPT_DEBUG},
-        {"help", no_argument, 0, 'h'},
-        {"version", no_argument, 0, 'V'},
+        COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->threshold = 0.3;
     int c;
     opterr = 0;
     while ((c = getopt_long(argc, argv, "a:t:hV", longopts, NULL)) != -1) {
+        int rc = common_option(c, argv, usage, &o->debug);
+        if (rc >= 0) {
+            if (rc > 0)
+                return rc;
+            continue;
+        }
         switch (c) {
         case 'a':
             if (!parse_axis(optarg, &o->axis))
@@ -78,15 +81,6 @@ static int parse_options(int argc, char **argv, struct options *o)
             if (!pd_parse_double(optarg, &o->threshold) || o->threshold < 0 || o->threshold > 1)
                 return usage_error("--threshold must be a number in [0,1], not", optarg);
             break;
-        case OPT_DEBUG:
-            o->debug = 1;
-            break;
-        case 'h':
-            usage(stdout);
-            exit(0);
-        case 'V':
-            printf(PROG " (pd) " PD_VERSION "\n");
-            exit(0);
         default:
             return option_error(argv);
         }

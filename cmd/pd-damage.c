@@ -43,21 +43,25 @@ static void usage(FILE *out)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_THRESHOLD = 256, OPT_DEBUG };
+    enum { OPT_THRESHOLD = 256 };
     static const struct option longopts[] = {
         {"output", required_argument, 0, 'o'},
         {"no-write", no_argument, 0, 'n'},
         {"quiet", no_argument, 0, 'q'},
         {"threshold", required_argument, 0, OPT_THRESHOLD},
-        {"debug", no_argument, 0, OPT_DEBUG},
-        {"help", no_argument, 0, 'h'},
-        {"version", no_argument, 0, 'V'},
+        COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->threshold = 0.3;
     int c;
     opterr = 0;
     while ((c = getopt_long(argc, argv, "o:nqhV", longopts, NULL)) != -1) {
+        int rc = common_option(c, argv, usage, &o->debug);
+        if (rc >= 0) {
+            if (rc > 0)
+                return rc;
+            continue;
+        }
         switch (c) {
         case 'o':
             o->output = optarg;
@@ -72,15 +76,6 @@ static int parse_options(int argc, char **argv, struct options *o)
             if (!pd_parse_double(optarg, &o->threshold) || o->threshold < 0 || o->threshold > 1)
                 return usage_error("--threshold must be a number in [0,1], not", optarg);
             break;
-        case OPT_DEBUG:
-            o->debug = 1;
-            break;
-        case 'h':
-            usage(stdout);
-            exit(0);
-        case 'V':
-            printf(PROG " (pd) " PD_VERSION "\n");
-            exit(0);
         default:
             return option_error(argv);
         }

@@ -69,7 +69,7 @@ static int add_region(struct options *o, pd_region_kind kind, const char *spec, 
 static int parse_options(int argc, char **argv, struct options *o)
 {
     enum { OPT_BOX = 256, OPT_CYL, OPT_SPHERE, OPT_SUB, OPT_SPACING, OPT_DENSITY, OPT_MATERIAL,
-           OPT_PERTURB, OPT_SEED, OPT_DEBUG };
+           OPT_PERTURB, OPT_SEED };
     static const struct option longopts[] = {
         {"box", required_argument, 0, OPT_BOX},
         {"cylinder", required_argument, 0, OPT_CYL},
@@ -82,18 +82,22 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"seed", required_argument, 0, OPT_SEED},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
-        {"debug", no_argument, 0, OPT_DEBUG},
-        {"help", no_argument, 0, 'h'},
-        {"version", no_argument, 0, 'V'},
+        COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->lp.material = 1;
     o->lp.seed = 1;
     o->output = "-";
-    int c, rc;
+    int c;
     int64_t iv;
     opterr = 0;
     while ((c = getopt_long(argc, argv, "o:qhV", longopts, NULL)) != -1) {
+        int rc = common_option(c, argv, usage, &o->debug);
+        if (rc >= 0) {
+            if (rc > 0)
+                return rc;
+            continue;
+        }
         switch (c) {
         case OPT_BOX:
             if ((rc = add_region(o, PD_REGION_BOX, optarg, 0)))
@@ -141,15 +145,6 @@ static int parse_options(int argc, char **argv, struct options *o)
         case 'q':
             o->quiet = 1;
             break;
-        case OPT_DEBUG:
-            o->debug = 1;
-            break;
-        case 'h':
-            usage(stdout);
-            exit(0);
-        case 'V':
-            printf(PROG " (pd) " PD_VERSION "\n");
-            exit(0);
         default:
             return option_error(argv);
         }

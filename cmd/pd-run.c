@@ -126,7 +126,7 @@ static int parse_options(int argc, char **argv, struct options *o)
 {
     enum { OPT_MODEL = 256, OPT_C, OPT_K, OPT_FAILURE, OPT_CONTACT, OPT_SKIN, OPT_INDENTER,
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
-           OPT_TIMING, OPT_DEBUG };
+           OPT_TIMING };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -145,19 +145,23 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"timing", no_argument, 0, OPT_TIMING},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
-        {"debug", no_argument, 0, OPT_DEBUG},
-        {"help", no_argument, 0, 'h'},
-        {"version", no_argument, 0, 'V'},
+        COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->output = "-";
     o->sc.model = PD_MODEL_PMB;
     o->sc.safety = 0.8;
-    int c, rc;
+    int c;
     int64_t iv;
     double ind[8];
     opterr = 0;
     while ((c = getopt_long(argc, argv, "o:qhV", longopts, NULL)) != -1) {
+        int rc = common_option(c, argv, usage, &o->debug);
+        if (rc >= 0) {
+            if (rc > 0)
+                return rc;
+            continue;
+        }
         switch (c) {
         case OPT_MODEL:
             if (strcmp(optarg, "pmb") != 0)
@@ -251,15 +255,6 @@ static int parse_options(int argc, char **argv, struct options *o)
         case 'q':
             o->quiet = 1;
             break;
-        case OPT_DEBUG:
-            o->debug = 1;
-            break;
-        case 'h':
-            usage(stdout);
-            exit(0);
-        case 'V':
-            printf(PROG " (pd) " PD_VERSION "\n");
-            exit(0);
         default:
             return option_error(argv);
         }

@@ -78,37 +78,24 @@ static int64_t family(const pd_particles *p, const pd_cells *c, int64_t i, doubl
 {
     const double cut2 = horizon * horizon;
     double xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
-    int64_t k[3];
-    pd_cells_locate(c, xi, k);
+    int64_t cells[27];
+    int ncells = pd_cells_adjacent(c, xi, cells);
     int64_t m = 0;
-    for (int64_t cz = k[2] - 1; cz <= k[2] + 1; cz++) {
-        if (cz < 0 || cz >= c->dim[2])
-            continue;
-        for (int64_t cy = k[1] - 1; cy <= k[1] + 1; cy++) {
-            if (cy < 0 || cy >= c->dim[1])
+    for (int q = 0; q < ncells; q++)
+        for (int64_t e = c->start[cells[q]]; e < c->start[cells[q] + 1]; e++) {
+            int32_t j = c->index[e];
+            if (j == i)
                 continue;
-            for (int64_t cx = k[0] - 1; cx <= k[0] + 1; cx++) {
-                if (cx < 0 || cx >= c->dim[0])
-                    continue;
-                int64_t cell = (cz * c->dim[1] + cy) * c->dim[0] + cx;
-                for (int64_t q = c->start[cell]; q < c->start[cell + 1]; q++) {
-                    int32_t j = c->index[q];
-                    if (j == i)
-                        continue;
-                    /* the same arithmetic as LAMMPS fix PERI_NEIGH, so that
-                     * pairs at exactly the horizon are decided alike */
-                    double dx = xi[0] - p->x[0][j], dy = xi[1] - p->x[1][j],
-                           dz = xi[2] - p->x[2][j];
-                    double rsq = dx * dx + dy * dy + dz * dz;
-                    if (rsq <= cut2) {
-                        if (out)
-                            out[m] = j;
-                        m++;
-                    }
-                }
+            /* the same arithmetic as LAMMPS fix PERI_NEIGH, so that pairs at
+             * exactly the horizon are decided alike */
+            double dx = xi[0] - p->x[0][j], dy = xi[1] - p->x[1][j], dz = xi[2] - p->x[2][j];
+            double rsq = dx * dx + dy * dy + dz * dz;
+            if (rsq <= cut2) {
+                if (out)
+                    out[m] = j;
+                m++;
             }
         }
-    }
     return m;
 }
 

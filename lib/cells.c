@@ -18,6 +18,20 @@ void pd_cells_locate(const pd_cells *c, const double x[3], int64_t cell[3])
     }
 }
 
+int pd_cells_adjacent(const pd_cells *c, const double x[3], int64_t cells[27])
+{
+    int64_t k[3];
+    pd_cells_locate(c, x, k);
+    int m = 0;
+    for (int64_t cz = k[2] - 1; cz <= k[2] + 1; cz++)
+        for (int64_t cy = k[1] - 1; cy <= k[1] + 1; cy++)
+            for (int64_t cx = k[0] - 1; cx <= k[0] + 1; cx++)
+                if (cz >= 0 && cz < c->dim[2] && cy >= 0 && cy < c->dim[1] && cx >= 0 &&
+                    cx < c->dim[0])
+                    cells[m++] = (cz * c->dim[1] + cy) * c->dim[0] + cx;
+    return m;
+}
+
 static int64_t cell_of(const pd_cells *c, const double x[3])
 {
     int64_t k[3];

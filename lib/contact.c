@@ -69,39 +69,27 @@ static int64_t candidates(const pd_sim *sim, const pd_cells *c, double reach2, i
     const pd_particles *p = sim->p;
     double *const *y = sim->y;
     double yi[3] = {y[0][i], y[1][i], y[2][i]};
-    int64_t k[3];
-    pd_cells_locate(c, yi, k);
+    int64_t cells[27];
+    int ncells = pd_cells_adjacent(c, yi, cells);
     int64_t m = 0;
-    for (int64_t cz = k[2] - 1; cz <= k[2] + 1; cz++) {
-        if (cz < 0 || cz >= c->dim[2])
-            continue;
-        for (int64_t cy = k[1] - 1; cy <= k[1] + 1; cy++) {
-            if (cy < 0 || cy >= c->dim[1])
+    for (int q = 0; q < ncells; q++)
+        for (int64_t e = c->start[cells[q]]; e < c->start[cells[q] + 1]; e++) {
+            int32_t j = c->index[e];
+            if (j == i)
                 continue;
-            for (int64_t cx = k[0] - 1; cx <= k[0] + 1; cx++) {
-                if (cx < 0 || cx >= c->dim[0])
-                    continue;
-                int64_t cell = (cz * c->dim[1] + cy) * c->dim[0] + cx;
-                for (int64_t q = c->start[cell]; q < c->start[cell + 1]; q++) {
-                    int32_t j = c->index[q];
-                    if (j == i)
-                        continue;
-                    double dx = yi[0] - y[0][j], dy = yi[1] - y[1][j], dz = yi[2] - y[2][j];
-                    if (dx * dx + dy * dy + dz * dz > reach2)
-                        continue;
-                    if (out) {
-                        double ex = p->x[0][i] - p->x[0][j], ey = p->x[1][i] - p->x[1][j],
-                               ez = p->x[2][i] - p->x[2][j];
-                        double r0 = sqrt(ex * ex + ey * ey + ez * ez);
-                        out[m] = j;
-                        dout[m] = fmin(PD_CONTACT_REF_FRAC * r0,
-                                       PD_CONTACT_RADIUS_FAC * (p->radius[i] + p->radius[j]));
-                    }
-                    m++;
-                }
+            double dx = yi[0] - y[0][j], dy = yi[1] - y[1][j], dz = yi[2] - y[2][j];
+            if (dx * dx + dy * dy + dz * dz > reach2)
+                continue;
+            if (out) {
+                double ex = p->x[0][i] - p->x[0][j], ey = p->x[1][i] - p->x[1][j],
+                       ez = p->x[2][i] - p->x[2][j];
+                double r0 = sqrt(ex * ex + ey * ey + ez * ez);
+                out[m] = j;
+                dout[m] = fmin(PD_CONTACT_REF_FRAC * r0,
+                               PD_CONTACT_RADIUS_FAC * (p->radius[i] + p->radius[j]));
             }
+            m++;
         }
-    }
     return m;
 }
 

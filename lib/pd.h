@@ -122,6 +122,9 @@ pd_status pd_cells_build(pd_cells *c, int64_t n, double *const x[3], double cuto
 void pd_cells_free(pd_cells *c);
 /* Cell coordinates of a point (clamped into the grid). */
 void pd_cells_locate(const pd_cells *c, const double x[3], int64_t cell[3]);
+/* The cell of x and its neighbours inside the grid (up to 27), in z, y, x
+ * order; returns how many. */
+int pd_cells_adjacent(const pd_cells *c, const double x[3], int64_t cells[27]);
 
 /* ---------------------------------------------------------------- bonds */
 
