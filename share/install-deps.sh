@@ -4,7 +4,7 @@
 # user it only reports what is missing.
 set -e
 pkgs="build-essential pkg-config libhdf5-dev libgsl-dev hdf5-tools bats bats-assert bats-support
-python3 python3-numpy python3-h5py python3-meshio lammps openmpi-bin gnuplot-nox groff-base"
+python3 python3-numpy python3-h5py python3-meshio lammps openmpi-bin gnuplot-nox groff-base time"
 missing=""
 for p in $pkgs; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" ||
