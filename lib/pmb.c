@@ -149,7 +149,6 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
         const int64_t m = h->offset[i + 1] - c0 < PMB_CHUNK ? h->offset[i + 1] - c0 : PMB_CHUNK;
         for (int64_t q = 0; q < m; q++)
             mu[q] = (double)pd_bond_intact(h->intact, c0 + q);
-        double nbreak = 0;
         for (int64_t q = 0; q < m; q++) {
             const int64_t k = c0 + q;
             const int32_t j = nb[k];
@@ -166,21 +165,24 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
             gx[q] = fj * dx;
             gy[q] = fj * dy;
             gz[q] = fj * dz;
-            if (failure) {
-                const double thr = fmin(s0i_old, s0[j]);
+            if (failure) { /* ternaries, not fmin/fmax: they vectorize */
+                const double thr = s0i_old < s0[j] ? s0i_old : s0[j];
                 brk[q] = s > thr ? mu[q] : 0.0;
-                nbreak += brk[q];
                 t[q] = mu[q] > 0 ? s00 - alpha * s : -INFINITY;
-                s0i = fmax(s0i, t[q]);
             }
         }
+        /* the partners' share, and the per-particle reductions of failure */
+        double nbreak = 0;
         for (int64_t q = 0; q < m; q++) {
             const int32_t j = nb[c0 + q];
             fx[j] -= gx[q];
             fy[j] -= gy[q];
             fz[j] -= gz[q];
-            if (failure)
-                s0_new[j] = fmax(s0_new[j], t[q]);
+            if (failure) {
+                s0_new[j] = t[q] > s0_new[j] ? t[q] : s0_new[j];
+                s0i = t[q] > s0i ? t[q] : s0i;
+                nbreak += brk[q];
+            }
         }
         if (failure && nbreak > 0)
             for (int64_t q = 0; q < m; q++)
@@ -191,7 +193,7 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
     fy[i] += ay;
     fz[i] += az;
     if (failure)
-        s0_new[i] = fmax(s0_new[i], s0i);
+        s0_new[i] = s0i > s0_new[i] ? s0i : s0_new[i];
 }
 
 /* Rows compiled for AVX-512, AVX2 and the baseline, picked at run time. */

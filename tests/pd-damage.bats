@@ -1,0 +1,299 @@
+#!/usr/bin/env bats
+# pd-damage: damage per particle (seed 000 eq. 10) checked against an
+# independent numpy computation from /bonds and the frames' state bits, the
+# table on stdout, and files left unchanged unless they are the output.
+
+load test_helper
+
+setup() {
+    cd "$BATS_TEST_TMPDIR"
+}
+
+# check_damage RUN.h5 [TABLE]: every frame's stored damage equals
+#   damage_i = 1 - sum_{j intact} V_j / sum_{j in family} V_j
+# with bond b intact when bit b%8 of byte b//8 of the frame's state is set;
+# with TABLE, one row per frame with step, time, broken pairs (cleared bits
+# / 2), mean, max and the count above the threshold in the header.
+check_damage() {
+    py "
+f = h5py.File(sys.argv[1], 'r')
+V = f['particles/volume'][:]
+off, nb = f['bonds/offset'][:], f['bonds/neighbor'][:]
+n, count = V.size, nb.size
+rows = np.repeat(np.arange(n), np.diff(off))
+total = np.bincount(rows, V[nb], minlength=n)
+frames = sorted(f['frames'].values(), key=lambda g: g.attrs['step'])
+table = None
+if len(sys.argv) > 2:
+    text = open(sys.argv[2]).read().splitlines()
+    head = text[0].split()
+    assert head[:6] == ['#', 'step', 'time_s', 'broken_bonds', 'mean_damage', 'max_damage'], head
+    threshold = float(head[6].replace('n_damage_gt_', ''))
+    table = [l.split() for l in text[1:]]
+    assert len(table) == len(frames), (len(table), len(frames))
+for k, g in enumerate(frames):
+    b = np.arange(count)
+    intact = (g['state'][:][b // 8] >> (b % 8)) & 1
+    kept = np.bincount(rows, V[nb] * intact, minlength=n)
+    want = np.where(total > 0, 1 - kept / np.where(total > 0, total, 1), 0)
+    d = g['damage'][:]
+    assert d.dtype == np.float64 and d.shape == (n,)
+    assert np.all((d >= 0) & (d <= 1)), (d.min(), d.max())
+    assert np.allclose(d, want, rtol=0, atol=1e-14), abs(d - want).max()
+    if table is not None:
+        row = table[k]
+        assert int(row[0]) == g.attrs['step'], row
+        assert abs(float(row[1]) - g.attrs['time']) <= 1e-8 * max(g.attrs['time'], 1e-300), row
+        cleared = count - int(intact.sum())
+        assert int(row[2]) * 2 == cleared, (row, cleared)
+        assert abs(float(row[3]) - want.mean()) <= 1e-8, (row, want.mean())
+        assert abs(float(row[4]) - want.max()) <= 1e-8, (row, want.max())
+        assert int(row[5]) == np.count_nonzero(want > threshold), (row, threshold)
+print('ok', len(frames), repr(frames[-1]['damage'][:].max() > 0))
+" "$@"
+}
+
+# digest FILE: its SHA-256.
+digest() {
+    sha256sum "$1" | cut -d' ' -f1
+}
+
+# history FILE: the history attribute, one command per line.
+history() {
+    py "
+h = h5py.File(sys.argv[1], 'r').attrs['history']
+print(h.decode() if isinstance(h, bytes) else h)" "$1"
+}
+
+# ------------------------------------------------------------ the interface
+
+@test "--help prints Usage on stdout and exits 0" {
+    run -0 --separate-stderr pd-damage --help
+    assert_line --index 0 --regexp '^Usage: pd-damage '
+    assert_equal "$stderr" ""
+}
+
+@test "--version prints the program and version" {
+    run -0 --separate-stderr pd-damage --version
+    assert_output --regexp '^pd-damage \(pd\) [0-9]+\.[0-9]+'
+}
+
+@test "an unknown option is a usage error naming the option" {
+    run -2 --separate-stderr pd-damage --bogus run.h5
+    assert_one_error "^pd-damage: error: .*--bogus"
+}
+
+@test "RUN.h5 is required, and only one" {
+    expect_usage_error "RUN\.h5" pd-damage
+    expect_usage_error "RUN\.h5" pd-damage a.h5 b.h5
+}
+
+@test "--no-write and -o exclude each other" {
+    expect_usage_error "--no-write" pd-damage -n -o out.h5 run.h5
+}
+
+@test "--threshold outside [0,1] or not a number is a usage error" {
+    expect_usage_error "--threshold.*'1.5'" pd-damage --threshold 1.5 run.h5
+    expect_usage_error "--threshold.*'-0.1'" pd-damage --threshold -0.1 run.h5
+    expect_usage_error "--threshold.*'nan'" pd-damage --threshold nan run.h5
+    expect_usage_error "--threshold.*'abc'" pd-damage --threshold abc run.h5
+}
+
+# ------------------------------------------------------------ bad inputs
+
+@test "a missing file is a runtime error naming it" {
+    expect_runtime_error "nosuch\.h5" pd-damage nosuch.h5
+    expect_runtime_error "nosuch\.h5" pd-damage -n nosuch.h5
+    [ ! -e nosuch.h5 ]
+    assert_no_temp .
+}
+
+@test "an empty file is a runtime error, and it stays as it was" {
+    make_bad_inputs
+    expect_runtime_error "empty\.h5.*empty" pd-damage empty.h5
+    [ ! -s empty.h5 ]
+    assert_no_temp .
+}
+
+@test "a text file is a runtime error: not HDF5" {
+    make_bad_inputs
+    expect_runtime_error "text\.h5.*not an HDF5 file" pd-damage text.h5
+    assert_equal "$(cat text.h5)" "this is not HDF5"
+    assert_no_temp .
+}
+
+@test "a directory as input is a runtime error" {
+    make_bad_inputs
+    expect_runtime_error "adir.*directory" pd-damage adir
+    expect_runtime_error "adir.*directory" pd-damage -n adir
+}
+
+@test "an HDF5 file that is not pd-h5 is a runtime error, left unchanged" {
+    make_bad_inputs
+    before=$(digest plain.h5)
+    expect_runtime_error "plain\.h5.*not a pd-h5 file" pd-damage plain.h5
+    assert_equal "$(digest plain.h5)" "$before"
+    assert_no_temp .
+}
+
+@test "an unknown pd_format_version is a runtime error naming the version" {
+    make_run
+    with_version run.h5 v99.h5 99
+    expect_runtime_error "v99\.h5.*version 99" pd-damage v99.h5 -o out.h5
+    [ ! -e out.h5 ]
+    assert_no_temp .
+}
+
+@test "a model without frames (the wrong stage) is a runtime error, left unchanged" {
+    make_block
+    before=$(digest model.h5)
+    expect_runtime_error "model\.h5.*frames" pd-damage model.h5
+    assert_equal "$(digest model.h5)" "$before"
+    assert_no_temp .
+}
+
+@test "a lattice without bonds is a runtime error" {
+    make_block
+    expect_runtime_error "lattice\.h5.*/bonds" pd-damage -n lattice.h5
+}
+
+@test "a frame whose state has the wrong size is a runtime error" {
+    make_run
+    py "
+with h5py.File(sys.argv[1], 'a') as f:
+    s = f['frames/00000020/state'][:]
+    del f['frames/00000020/state']
+    f['frames/00000020/state'] = s[:-1]" run.h5
+    run -1 --separate-stderr pd-damage run.h5 -o out.h5
+    # the rows of the frames before the bad one are already out
+    assert_line --index 2 --regexp '^10 '
+    output=""
+    assert_one_error "^pd-damage: error: .*00000020/state"
+    [ ! -e out.h5 ]
+    assert_no_temp .
+}
+
+@test "-o naming a directory fails with one error and leaves no temp file" {
+    make_run
+    mkdir out
+    expect_runtime_error "out.*directory" pd-damage run.h5 -o out
+    run -0 ls -A out
+    assert_output ""
+    assert_no_temp .
+}
+
+# ------------------------------------------------------------ damage
+
+@test "damage is in [0,1] and equals the volume-weighted fraction of broken bonds" {
+    make_run
+    pd-damage run.h5 -o out.h5 > table
+    run -0 check_damage out.h5 table
+    assert_output "ok 6 True"
+}
+
+@test "the damage weights partners by their volume V_j" {
+    make_run
+    # give the particles unequal volumes: damage must follow them
+    py "
+with h5py.File(sys.argv[1], 'a') as f:
+    v = f['particles/volume']
+    v[...] = v[:] * (1 + 0.5 * np.sin(np.arange(v.size)))" run.h5
+    pd-damage run.h5 -o out.h5 > table
+    run -0 check_damage out.h5 table
+    assert_output "ok 6 True"
+}
+
+@test "the table has one row per frame under a header; frame 0 is undamaged" {
+    make_run
+    run -0 --separate-stderr pd-damage -n run.h5
+    assert_equal "$stderr" ""
+    assert_line --index 0 "# step time_s broken_bonds mean_damage max_damage n_damage_gt_0.3"
+    assert_equal "${#lines[@]}" 7
+    assert_line --index 1 --regexp '^0 0\.0+e\+00 0 0\.0+ 0\.0+ 0$'
+    assert_line --index 6 --regexp '^50 '
+}
+
+@test "--threshold sets the counted damage level" {
+    make_run
+    pd-damage --threshold 0.05 run.h5 -o out.h5 > table
+    run -0 head -1 table
+    assert_output "# step time_s broken_bonds mean_damage max_damage n_damage_gt_0.05"
+    run -0 check_damage out.h5 table
+    assert_output "ok 6 True"
+}
+
+@test "-o OUT.h5 leaves RUN.h5 unchanged; OUT's history gains a line" {
+    make_run
+    before=$(digest run.h5)
+    pd-damage run.h5 -o out.h5 > /dev/null
+    assert_equal "$(digest run.h5)" "$before"
+    run -0 py "
+f = h5py.File(sys.argv[1], 'r')
+assert not any('damage' in g for g in f['frames'].values())
+print('ok')" run.h5
+    assert_output ok
+    run -0 history out.h5
+    assert_equal "${#lines[@]}" 4
+    assert_line --index 2 --regexp '^pd-run '
+    assert_line --index 3 "pd-damage run.h5 -o out.h5"
+    # everything else travels unchanged
+    run -0 h5_same run.h5 out.h5 'history|/damage$'
+    assert_no_temp .
+}
+
+@test "without -o, RUN.h5 is updated in place through a complete copy" {
+    make_run
+    pd-damage run.h5 > table
+    run -0 check_damage run.h5 table
+    assert_output "ok 6 True"
+    run -0 history run.h5
+    assert_equal "${#lines[@]}" 4
+    assert_line --index 3 "pd-damage run.h5"
+    assert_no_temp .
+}
+
+@test "a second pass replaces the damage field and adds another history line" {
+    make_run
+    pd-damage run.h5 -o once.h5 > /dev/null
+    pd-damage once.h5 -o twice.h5 > /dev/null
+    run -0 h5_same once.h5 twice.h5 'history'
+    run -0 history twice.h5
+    assert_equal "${#lines[@]}" 5
+}
+
+@test "--no-write only prints the table; the file is untouched" {
+    make_run
+    before=$(digest run.h5)
+    run -0 pd-damage --no-write run.h5
+    assert_equal "${#lines[@]}" 7
+    assert_equal "$(digest run.h5)" "$before"
+    assert_no_temp .
+}
+
+@test "stdin to stdout: the file on stdout, the table on stderr" {
+    make_run
+    pd-damage - < run.h5 > out.h5 2> table
+    run -0 check_damage out.h5 table
+    assert_output "ok 6 True"
+}
+
+@test "an undamaged run has zero damage everywhere" {
+    make_block
+    pd-run -q --bulk-modulus "$BULK" --steps 10 --every 5 model.h5 -o r.h5
+    run -0 pd-damage r.h5
+    assert_equal "${#lines[@]}" 4
+    for k in 1 2 3; do
+        assert_line --index $k --regexp '^[0-9]+ [0-9.e+-]+ 0 0\.0+ 0\.0+ 0$'
+    done
+    run -0 check_damage r.h5
+    assert_output "ok 3 False"
+}
+
+@test "-q prints no table but still stores the damage" {
+    make_run
+    run -0 --separate-stderr pd-damage -q run.h5 -o out.h5
+    assert_output ""
+    assert_equal "$stderr" ""
+    run -0 check_damage out.h5
+    assert_output "ok 6 True"
+}

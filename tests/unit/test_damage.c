@@ -1,0 +1,172 @@
+/*
+ * test_damage -- pd_damage (lib/bonds.c), seed 000 eq. 10 as LAMMPS compute
+ * damage/atom: phi_i = 1 - sum_{j intact} V_j / sum_{j in family} V_j.
+ *
+ * Proves: damage is 0 with every bond intact and 1 with every bond broken;
+ * a particle without family has damage 0; on a hand-built family with
+ * unequal volumes the damage is the volume-weighted fraction of broken
+ * bonds (the partial-volume factor nu does not enter); on a lattice cut by
+ * a plane, damage is in [0,1], positive exactly for particles with a bond
+ * across the plane, mirror-symmetric about it, and the broken bits are
+ * twice the pairs across.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pd.h"
+
+static int failures;
+
+#define CHECK(cond, ...)                                                                           \
+    do {                                                                                           \
+        if (!(cond)) {                                                                             \
+            failures++;                                                                            \
+            fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                                   \
+            fprintf(stderr, __VA_ARGS__);                                                          \
+            fputc('\n', stderr);                                                                   \
+        }                                                                                          \
+    } while (0)
+
+static void proved(int before, const char *what)
+{
+    printf("%s: %s\n", failures == before ? "ok" : "FAILED", what);
+}
+
+static void die(const char *what)
+{
+    fprintf(stderr, "%s: %s\n", what, pd_errmsg());
+    exit(1);
+}
+
+/*
+ * Five particles with volumes 1, 2, 3, 4, 5 (x 1e-9 m^3); bonds 0-1, 0-2,
+ * 0-3, 1-2, and particle 4 alone.  Families (sorted):
+ *   0: 1 2 3    1: 0 2    2: 0 1    3: 0    4: -
+ */
+static void hand_built(pd_particles **pp, pd_bonds **bp)
+{
+    pd_particles *p = pd_particles_new(5);
+    for (int i = 0; i < 5; i++) {
+        p->x[0][i] = i;
+        p->x[1][i] = p->x[2][i] = 0;
+        p->volume[i] = (i + 1) * 1e-9;
+        p->density[i] = 1000;
+        p->radius[i] = 0.5;
+        p->material[i] = 1;
+        p->id[i] = i + 1;
+    }
+    p->spacing = 1;
+    static const int64_t offset[6] = {0, 3, 5, 7, 8, 8};
+    static const int32_t neighbor[8] = {1, 2, 3, 0, 2, 0, 1, 0};
+    pd_bonds *b = pd_bonds_alloc(5, 8);
+    if (b == NULL)
+        die("alloc");
+    memcpy(b->offset, offset, sizeof offset);
+    memcpy(b->neighbor, neighbor, sizeof neighbor);
+    for (int k = 0; k < 8; k++) {
+        b->length[k] = 1;
+        b->vfactor[k] = k % 2 ? 0.5 : 1.0; /* must not matter */
+    }
+    memset(b->intact, 0xff, (size_t)pd_bits_words(8) * sizeof(uint64_t));
+    b->horizon = 3;
+    *pp = p;
+    *bp = b;
+}
+
+static void test_hand_built(void)
+{
+    int f0 = failures;
+    pd_particles *p;
+    pd_bonds *b;
+    hand_built(&p, &b);
+    double d[5];
+    pd_damage(p, b, b->intact, d);
+    for (int i = 0; i < 5; i++)
+        CHECK(d[i] == 0, "intact: damage[%d] = %g", i, d[i]);
+
+    /* break 0-2 in both families: bond 1 (0->2) and bond 5 (2->0) */
+    pd_bond_break(b->intact, 1);
+    pd_bond_break(b->intact, 5);
+    pd_damage(p, b, b->intact, d);
+    const double *V = p->volume;
+    double want[5] = {V[2] / (V[1] + V[2] + V[3]), 0, V[0] / (V[0] + V[1]), 0, 0};
+    for (int i = 0; i < 5; i++)
+        CHECK(fabs(d[i] - want[i]) <= 1e-15, "one bond broken: damage[%d] = %.17g, expected %.17g",
+              i, d[i], want[i]);
+    CHECK(fabs(d[0] - 1.0 / 3.0) <= 1e-15 && fabs(d[2] - 1.0 / 3.0) <= 1e-15,
+          "3/(2+3+4) and 1/(1+2)");
+
+    /* break 0-3 too: particle 3 loses its only bond */
+    pd_bond_break(b->intact, 2);
+    pd_bond_break(b->intact, 7);
+    pd_damage(p, b, b->intact, d);
+    CHECK(fabs(d[0] - (V[2] + V[3]) / (V[1] + V[2] + V[3])) <= 1e-15, "damage[0] = 7/9");
+    CHECK(d[3] == 1, "no intact bond: damage 1");
+    CHECK(d[4] == 0, "no family: damage 0");
+
+    /* everything broken */
+    memset(b->intact, 0, (size_t)pd_bits_words(8) * sizeof(uint64_t));
+    pd_damage(p, b, b->intact, d);
+    for (int i = 0; i < 4; i++)
+        CHECK(d[i] == 1, "all broken: damage[%d] = %g", i, d[i]);
+    CHECK(d[4] == 0, "no family: damage 0 even when all is broken");
+    pd_bonds_free(b);
+    pd_particles_free(p);
+    proved(f0, "damage: 0 intact, 1 all broken, 0 without family, volume-weighted fraction");
+}
+
+static void test_plane_cut(void)
+{
+    int f0 = failures;
+    const double h = 1e-3;
+    pd_region r;
+    if (pd_region_parse(PD_REGION_BOX, "0,0.0091,0,0.0061,0,0.0061", &r) != PD_OK)
+        die("region");
+    pd_lattice_params lp = {h, 2200, 1, 0, 1};
+    pd_particles *p = NULL;
+    pd_bonds *b = NULL;
+    if (pd_lattice_make(&r, 1, &lp, &p) != PD_OK || pd_bonds_build(p, 3.0001 * h, &b) != PD_OK)
+        die("model");
+    /* cut every bond crossing the plane x = 4.5 h */
+    const double cut = 4.5 * h;
+    int64_t across = 0;
+    char *has_cut = calloc((size_t)p->n, 1);
+    for (int64_t i = 0; i < p->n; i++)
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            int64_t j = b->neighbor[k];
+            if ((p->x[0][i] < cut) != (p->x[0][j] < cut)) {
+                pd_bond_break(b->intact, k);
+                has_cut[i] = 1;
+                across++;
+            }
+        }
+    CHECK(pd_bits_count_broken(b->intact, b->count) == across && across % 2 == 0,
+          "broken bits are both copies of each pair");
+    double *d = malloc((size_t)p->n * sizeof(double));
+    pd_damage(p, b, b->intact, d);
+    for (int64_t i = 0; i < p->n; i++) {
+        CHECK(d[i] >= 0 && d[i] <= 1, "damage out of [0,1]");
+        CHECK((d[i] > 0) == has_cut[i], "particle %lld: damage %g", (long long)i, d[i]);
+        /* the mirror image about the plane: x -> 9h - x */
+        for (int64_t j = 0; j < p->n; j++)
+            if (fabs(p->x[0][j] - (9 * h - p->x[0][i])) < 1e-9 && p->x[1][j] == p->x[1][i] &&
+                p->x[2][j] == p->x[2][i])
+                CHECK(fabs(d[j] - d[i]) <= 1e-15, "damage not mirror-symmetric");
+    }
+    free(d);
+    free(has_cut);
+    pd_bonds_free(b);
+    pd_particles_free(p);
+    proved(f0, "a plane cut: damage in [0,1], positive exactly next to the cut, symmetric");
+}
+
+int main(void)
+{
+    test_hand_built();
+    test_plane_cut();
+    if (failures)
+        fprintf(stderr, "test_damage: %d failures\n", failures);
+    return failures != 0;
+}
