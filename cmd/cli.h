@@ -8,6 +8,7 @@
 #define PD_CLI_H
 
 #include <getopt.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -52,6 +53,30 @@ static inline int common_option(int c, char **argv, void (*usage)(FILE *), int *
         return option_error(argv);
     }
     return -1;
+}
+
+/* On SIGINT, SIGTERM, SIGHUP or SIGPIPE: remove the temporary output, then
+ * die of the signal as before.  A signal ignored at start (nohup, a
+ * background job's SIGINT) stays ignored. */
+static void remove_temps_and_die(int sig)
+{
+    pd_remove_temps();
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+static inline void remove_temps_on_signal(void)
+{
+    const int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
+    for (size_t k = 0; k < sizeof sigs / sizeof sigs[0]; k++) {
+        struct sigaction old, sa;
+        if (sigaction(sigs[k], NULL, &old) == 0 && old.sa_handler == SIG_IGN)
+            continue;
+        sa.sa_handler = remove_temps_and_die;
+        sigemptyset(&sa.sa_mask);
+        sa.sa_flags = 0;
+        sigaction(sigs[k], &sa, NULL);
+    }
 }
 
 /* A runtime or data error from libpd: one line on stderr, exit status 1. */

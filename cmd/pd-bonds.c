@@ -105,6 +105,7 @@ int main(int argc, char **argv)
         return rc;
     }
     pd_h5_debug(o.debug);
+    remove_temps_on_signal();
 
     pd_file *in = NULL;
     pd_particles *p = NULL;

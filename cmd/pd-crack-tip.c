@@ -98,6 +98,7 @@ int main(int argc, char **argv)
     if (rc)
         return rc;
     pd_h5_debug(o.debug);
+    remove_temps_on_signal();
 
     pd_file *f = NULL;
     pd_particles *p = NULL;

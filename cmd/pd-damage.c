@@ -103,6 +103,7 @@ int main(int argc, char **argv)
         return rc;
     }
     pd_h5_debug(o.debug);
+    remove_temps_on_signal();
 
     pd_file *f = NULL;
     pd_status s = o.no_write ? pd_file_open(o.input, &f)

@@ -205,6 +205,7 @@ int main(int argc, char **argv)
     if (rc)
         return rc;
     pd_h5_debug(o.debug);
+    remove_temps_on_signal();
 
     char *name = output_name(&o);
     if (name == NULL) {

@@ -174,6 +174,7 @@ int main(int argc, char **argv)
         return rc;
     }
     pd_h5_debug(o.debug);
+    remove_temps_on_signal();
 
     pd_particles *p = NULL;
     if (pd_lattice_make(o.regions, o.nregions, &o.lp, &p) != PD_OK) {

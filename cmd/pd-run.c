@@ -349,6 +349,7 @@ int main(int argc, char **argv)
     if (rc)
         return rc;
     pd_h5_debug(o.debug);
+    remove_temps_on_signal();
     if (o.sc.threads > 0)
         omp_set_num_threads(o.sc.threads);
     o.sc.threads = omp_get_max_threads();

@@ -24,6 +24,35 @@
 #include "h5util.h"
 #include "pd.h"
 
+/* Temporary files being written, for pd_remove_temps() in a signal
+ * handler: plain slots, set and cleared by the one thread that opens and
+ * closes files. */
+#define MAX_TEMPS 16
+static char *volatile temps[MAX_TEMPS];
+
+static void temp_register(char *path)
+{
+    for (int k = 0; k < MAX_TEMPS; k++)
+        if (temps[k] == NULL) {
+            temps[k] = path;
+            return;
+        }
+}
+
+static void temp_forget(const char *path)
+{
+    for (int k = 0; k < MAX_TEMPS; k++)
+        if (temps[k] == path)
+            temps[k] = NULL;
+}
+
+void pd_remove_temps(void)
+{
+    for (int k = 0; k < MAX_TEMPS; k++)
+        if (temps[k] != NULL)
+            unlink(temps[k]); /* async-signal-safe */
+}
+
 static const unsigned char hdf5_signature[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
 
 /* Read all of a stream into memory. */
@@ -103,6 +132,7 @@ static void file_free(pd_file *f)
 {
     if (f == NULL)
         return;
+    temp_forget(f->tmp);
     free(f->name);
     free(f->path);
     free(f->tmp);
@@ -248,6 +278,7 @@ static pd_status make_temp(const char *path, char **tmp)
     close(fd);
     free(copy);
     free(base);
+    temp_register(t);
     *tmp = t;
     return PD_OK;
 }

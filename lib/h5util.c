@@ -155,11 +155,24 @@ pd_status pd_h5_write_attr_doubles(hid_t loc, const char *name, const double *v,
     return s;
 }
 
+hid_t pd_h5_create_group(hid_t loc, const char *name)
+{
+    hid_t gcpl = H5Pcreate(H5P_GROUP_CREATE);
+    H5Pset_obj_track_times(gcpl, 0);
+    hid_t g = H5Gcreate2(loc, name, H5P_DEFAULT, gcpl, H5P_DEFAULT);
+    H5Pclose(gcpl);
+    return g;
+}
+
 pd_status pd_h5_write_data(hid_t loc, const char *name, hid_t filetype, hid_t memtype, int rank,
                            const hsize_t *dims, const void *data)
 {
     hid_t sp = H5Screate_simple(rank, dims, NULL);
-    hid_t d = H5Dcreate2(loc, name, filetype, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    /* no modification times: the same input gives the same bytes */
+    hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_obj_track_times(dcpl, 0);
+    hid_t d = H5Dcreate2(loc, name, filetype, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    H5Pclose(dcpl);
     pd_status s = PD_OK;
     hsize_t total = 1;
     for (int r = 0; r < rank; r++)

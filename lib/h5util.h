@@ -27,6 +27,8 @@ pd_status pd_h5_read_attr_double(hid_t loc, const char *name, double *out);
 pd_status pd_h5_write_attr_string(hid_t loc, const char *name, const char *value);
 pd_status pd_h5_write_attr_int(hid_t loc, const char *name, int64_t value);
 pd_status pd_h5_write_attr_doubles(hid_t loc, const char *name, const double *v, int n);
+/* A group without modification times (reproducible bytes). */
+hid_t pd_h5_create_group(hid_t loc, const char *name);
 pd_status pd_h5_write_data(hid_t loc, const char *name, hid_t filetype, hid_t memtype, int rank,
                            const hsize_t *dims, const void *data);
 

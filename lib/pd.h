@@ -255,6 +255,10 @@ pd_status pd_file_close(pd_file *f);
 /* Abandon a file being written: remove the temporary, free. */
 void pd_file_abort(pd_file *f);
 
+/* Remove the temporary files of outputs still being written: for a signal
+ * handler (async-signal-safe), so that a killed program leaves nothing. */
+void pd_remove_temps(void);
+
 /* Root attributes: format, version, units, history.  `history` of a new
  * file starts from `from` (may be NULL) and gets `cmdline` appended. */
 pd_status pd_write_header(pd_file *f, const pd_file *from, const char *cmdline);

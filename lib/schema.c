@@ -65,6 +65,31 @@ pd_status pd_append_history(pd_file *f, const char *cmdline)
 
 static const pd_h5_form F64_N3 = {H5T_FLOAT, 8, 2, {0, 3}};
 
+static int cmp_int64(const void *a, const void *b)
+{
+    int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Ids are the particles' stable names: no two may be equal. */
+static pd_status check_unique_ids(const char *fn, const pd_particles *p)
+{
+    int64_t *ids = malloc((size_t)p->n * sizeof(int64_t));
+    if (ids == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory checking ids");
+    memcpy(ids, p->id, (size_t)p->n * sizeof(int64_t));
+    qsort(ids, (size_t)p->n, sizeof *ids, cmp_int64);
+    pd_status s = PD_OK;
+    for (int64_t i = 1; i < p->n; i++)
+        if (ids[i] == ids[i - 1]) {
+            s = pd_fail(PD_ERR_FORMAT, "'%s': particle id %lld appears twice", fn,
+                        (long long)ids[i]);
+            break;
+        }
+    free(ids);
+    return s;
+}
+
 pd_status pd_read_particles(const pd_file *f, pd_particles **out)
 {
     const char *fn = f->name;
@@ -153,6 +178,8 @@ pd_status pd_read_particles(const pd_file *f, pd_particles **out)
             s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has id %lld (ids start at 1)", fn,
                         (long long)i, (long long)p->id[i]);
     }
+    if (s == PD_OK)
+        s = check_unique_ids(fn, p);
     if (s != PD_OK) {
         pd_particles_free(p);
         return s;
@@ -163,7 +190,7 @@ pd_status pd_read_particles(const pd_file *f, pd_particles **out)
 
 pd_status pd_write_particles(pd_file *f, const pd_particles *p)
 {
-    hid_t g = H5Gcreate2(f->fid, "/particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    hid_t g = pd_h5_create_group(f->fid, "/particles");
     if (g < 0)
         return pd_fail(PD_ERR_IO, "cannot create /particles");
     size_t n = (size_t)p->n;
@@ -274,20 +301,33 @@ static pd_status check_bonds(const char *fn, const pd_bonds *b)
                 return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has volume factor %g", fn,
                                (long long)k, b->vfactor[k]);
         }
-    pd_status s = PD_OK;
-#pragma omp parallel for schedule(dynamic, 4096)
+    /* the first bad row, found in parallel; the message is made here, in
+     * the calling thread, whose error message the caller reads */
+    int64_t bad = b->n;
+#pragma omp parallel for schedule(dynamic, 4096) reduction(min : bad)
     for (int64_t i = 0; i < b->n; i++) {
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
             int64_t back;
-            int32_t j = b->neighbor[k];
-            if (!has_partner(b, j, (int32_t)i, &back) ||
+            if (!has_partner(b, b->neighbor[k], (int32_t)i, &back) ||
                 pd_bond_intact(b->intact, k) != pd_bond_intact(b->intact, back)) {
-#pragma omp critical
-                s = pd_fail(PD_ERR_FORMAT,
-                            "'%s': bonds are not symmetric (%lld-%lld has no matching %lld-%lld)",
-                            fn, (long long)i, (long long)j, (long long)j, (long long)i);
+                bad = i < bad ? i : bad;
                 break;
             }
+        }
+    }
+    pd_status s = PD_OK;
+    for (int64_t k = bad < b->n ? b->offset[bad] : 0; bad < b->n && k < b->offset[bad + 1]; k++) {
+        int64_t back, j = b->neighbor[k];
+        if (!has_partner(b, j, (int32_t)bad, &back)) {
+            s = pd_fail(PD_ERR_FORMAT, "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)",
+                        fn, (long long)bad, (long long)j, (long long)j, (long long)bad);
+            break;
+        }
+        if (pd_bond_intact(b->intact, k) != pd_bond_intact(b->intact, back)) {
+            s = pd_fail(PD_ERR_FORMAT,
+                        "'%s': bond %lld-%lld is broken on one side only (state bits differ)", fn,
+                        (long long)bad, (long long)j);
+            break;
         }
     }
     return s;
@@ -374,7 +414,7 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
 
 pd_status pd_write_bonds(pd_file *f, const pd_bonds *b)
 {
-    hid_t g = H5Gcreate2(f->fid, "/bonds", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    hid_t g = pd_h5_create_group(f->fid, "/bonds");
     if (g < 0)
         return pd_fail(PD_ERR_IO, "cannot create /bonds");
     int64_t *nb64 = malloc((size_t)(b->count ? b->count : 1) * sizeof(int64_t));
@@ -415,7 +455,7 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
 {
     if (pd_h5_has_link(f->fid, "/scene"))
         H5Ldelete(f->fid, "/scene", H5P_DEFAULT);
-    hid_t g = H5Gcreate2(f->fid, "/scene", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    hid_t g = pd_h5_create_group(f->fid, "/scene");
     if (g < 0)
         return pd_fail(PD_ERR_IO, "cannot create /scene");
     pd_status s = PD_OK;
@@ -468,14 +508,14 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
                          int64_t nbonds)
 {
     if (!pd_h5_has_link(f->fid, "/frames")) {
-        hid_t g = H5Gcreate2(f->fid, "/frames", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+        hid_t g = pd_h5_create_group(f->fid, "/frames");
         if (g < 0)
             return pd_fail(PD_ERR_IO, "cannot create /frames");
         H5Gclose(g);
     }
     char path[64];
     snprintf(path, sizeof path, "/frames/%08lld", (long long)fi->step);
-    hid_t g = H5Gcreate2(f->fid, path, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    hid_t g = pd_h5_create_group(f->fid, path);
     if (g < 0)
         return pd_fail(PD_ERR_IO, "cannot create frame %s", path);
     size_t n = (size_t)p->n;

@@ -204,9 +204,35 @@ with h5py.File(sys.argv[1], 'a') as f:
     s = f['bonds/state'][:]
     s[0] &= 0xfe              # break bond 0 on one side only
     f['bonds/state'][...] = s" model.h5
-    # one thread: see the report on check_bonds in lib/schema.c (with more
-    # threads the message is at times "unknown error")
-    expect_runtime_error "symmetric" pd-run --threads 1 --c 1e21 --steps 1 model.h5 -o r.h5
+    # the check runs on every thread; the message must still reach stderr
+    for t in 1 2; do
+        expect_runtime_error "bond 0-[0-9]+ is broken on one side only" \
+            pd-run --threads $t --c 1e21 --steps 1 model.h5 -o r.h5
+    done
+}
+
+@test "a family missing its mirror bond is a runtime error" {
+    make_block
+    # drop the partner of particle 0's first bond from that partner's family
+    py "
+import numpy as np
+with h5py.File(sys.argv[1], 'a') as f:
+    off = f['bonds/offset'][:]; nb = f['bonds/neighbor'][:]
+    j = nb[off[0]]
+    k = off[j] + int(np.nonzero(nb[off[j]:off[j + 1]] == 0)[0][0])
+    nb[k] = nb[k - 1] if k > off[j] else nb[k + 1]
+    f['bonds/neighbor'][...] = nb" model.h5
+    expect_runtime_error "not (symmetric|sorted)|itself" pd-run --threads 2 --c 1e21 --steps 1 model.h5 -o r.h5
+}
+
+@test "two particles with the same id are refused" {
+    make_block
+    py "
+with h5py.File(sys.argv[1], 'a') as f:
+    ids = f['particles/id'][:]
+    ids[1] = ids[0]
+    f['particles/id'][...] = ids" model.h5
+    expect_runtime_error "id [0-9]+ appears twice" pd-run --c 1e21 --steps 1 model.h5 -o r.h5
 }
 
 @test "a missing --scene file is a runtime error naming it" {
@@ -565,4 +591,22 @@ print('ok')" t1.h5
     run -0 --separate-stderr pd-run -q --bulk-modulus "$BULK" --steps 3 model.h5 -o r.h5
     assert_equal "$stderr" ""
     assert_output ""
+}
+
+@test "a run killed by SIGTERM or SIGHUP leaves no temporary file and no output" {
+    make_block
+    for sig in TERM HUP; do
+        pd-run --c 1e21 --steps 100000000 -q model.h5 -o "killed.h5" &
+        pid=$!
+        # wait until the temporary output exists, then kill
+        for _ in $(seq 100); do
+            compgen -G ".killed.h5.tmp.*" >/dev/null && break
+            sleep 0.1
+        done
+        kill -s "$sig" "$pid"
+        run wait "$pid"
+        [ "$status" -gt 128 ]
+        [ ! -e killed.h5 ]
+        assert_no_temp .
+    done
 }
