@@ -91,16 +91,23 @@ pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_h
         int64_t k = b->offset[i + 1] - (h->offset[i + 1] - h->offset[i]);
         for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++, k++) {
             int32_t j = b->neighbor[k];
-            int64_t back = lower_bound(b->neighbor, b->offset[j], b->offset[j + 1], (int32_t)i);
             h->neighbor[q] = j;
             h->length[q] = b->length[k];
             /* (c V_j) nu in the order LAMMPS peri/pmb multiplies them */
             h->w_ij[q] = c * p->volume[j] * b->vfactor[k];
-            h->w_ji[q] = c * p->volume[i] * b->vfactor[back];
             if (pd_bond_intact(b->intact, k))
                 __atomic_fetch_or(&h->intact[q >> 6], UINT64_C(1) << (q & 63), __ATOMIC_RELAXED);
         }
     }
+    /* the mirror j-i of each bond: rows i meet the entries below the
+     * diagonal of row j in ascending order, so a cursor per row finds it */
+    for (int64_t j = 0; j < n; j++)
+        h->cursor[j] = b->offset[j];
+    for (int64_t i = 0; i < n; i++)
+        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
+            int64_t back = h->cursor[h->neighbor[q]]++;
+            h->w_ji[q] = c * p->volume[i] * b->vfactor[back];
+        }
     h->block = span;
     h->nblocks = (n + span - 1) / span;
     return PD_OK;

@@ -255,23 +255,6 @@ static uint8_t *words_to_bytes(const uint64_t *words, int64_t count)
     return bytes;
 }
 
-static int has_partner(const pd_bonds *b, int64_t j, int32_t i, int64_t *where)
-{
-    int64_t lo = b->offset[j], hi = b->offset[j + 1] - 1;
-    while (lo <= hi) {
-        int64_t mid = lo + (hi - lo) / 2;
-        if (b->neighbor[mid] == i) {
-            *where = mid;
-            return 1;
-        }
-        if (b->neighbor[mid] < i)
-            lo = mid + 1;
-        else
-            hi = mid - 1;
-    }
-    return 0;
-}
-
 /* Check the CSR structure; families must be sorted and symmetric with equal
  * state on both sides. */
 static pd_status check_bonds(const char *fn, const pd_bonds *b)
@@ -301,35 +284,40 @@ static pd_status check_bonds(const char *fn, const pd_bonds *b)
                 return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has volume factor %g", fn,
                                (long long)k, b->vfactor[k]);
         }
-    /* the first bad row, found in parallel; the message is made here, in
-     * the calling thread, whose error message the caller reads */
-    int64_t bad = b->n;
-#pragma omp parallel for schedule(dynamic, 4096) reduction(min : bad)
-    for (int64_t i = 0; i < b->n; i++) {
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            int64_t back;
-            if (!has_partner(b, b->neighbor[k], (int32_t)i, &back) ||
-                pd_bond_intact(b->intact, k) != pd_bond_intact(b->intact, back)) {
-                bad = i < bad ? i : bad;
+    /* Symmetry in one walk: row i meets its partners j < i in ascending i
+     * for each j, so the mirror of bond i-j is the next unmatched entry
+     * above the diagonal in j's row. */
+    int64_t *next = malloc((size_t)(b->n > 0 ? b->n : 1) * sizeof(int64_t));
+    if (next == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory checking bonds");
+    for (int64_t j = 0; j < b->n; j++) {
+        next[j] = b->offset[j];
+        while (next[j] < b->offset[j + 1] && b->neighbor[next[j]] < j)
+            next[j]++;
+    }
+    pd_status s = PD_OK;
+    for (int64_t i = 0; i < b->n && s == PD_OK; i++)
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1] && b->neighbor[k] < i; k++) {
+            int64_t j = b->neighbor[k], q = next[j]++;
+            if (q >= b->offset[j + 1] || b->neighbor[q] != i) {
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)", fn,
+                            (long long)i, (long long)j, (long long)j, (long long)i);
+                break;
+            }
+            if (pd_bond_intact(b->intact, k) != pd_bond_intact(b->intact, q)) {
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': bond %lld-%lld is broken on one side only (state bits differ)",
+                            fn, (long long)j, (long long)i);
                 break;
             }
         }
-    }
-    pd_status s = PD_OK;
-    for (int64_t k = bad < b->n ? b->offset[bad] : 0; bad < b->n && k < b->offset[bad + 1]; k++) {
-        int64_t back, j = b->neighbor[k];
-        if (!has_partner(b, j, (int32_t)bad, &back)) {
+    for (int64_t j = 0; j < b->n && s == PD_OK; j++)
+        if (next[j] != b->offset[j + 1])
             s = pd_fail(PD_ERR_FORMAT, "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)",
-                        fn, (long long)bad, (long long)j, (long long)j, (long long)bad);
-            break;
-        }
-        if (pd_bond_intact(b->intact, k) != pd_bond_intact(b->intact, back)) {
-            s = pd_fail(PD_ERR_FORMAT,
-                        "'%s': bond %lld-%lld is broken on one side only (state bits differ)", fn,
-                        (long long)bad, (long long)j);
-            break;
-        }
-    }
+                        fn, (long long)j, (long long)b->neighbor[next[j]],
+                        (long long)b->neighbor[next[j]], (long long)j);
+    free(next);
     return s;
 }
 
