@@ -352,7 +352,7 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
     memcpy(b->offset, offset, (size_t)(n + 1) * sizeof(int64_t));
     free(offset);
     const char *names[3] = {"/bonds/neighbor", "/bonds/length", "/bonds/volume_factor"};
-    pd_h5_form forms[3] = {{H5T_INTEGER, 8, 1, {(hsize_t)count, 0}},
+    pd_h5_form forms[3] = {{H5T_INTEGER, 4, 1, {(hsize_t)count, 0}},
                            {H5T_FLOAT, 8, 1, {(hsize_t)count, 0}},
                            {H5T_FLOAT, 8, 1, {(hsize_t)count, 0}}};
     hid_t types[3] = {H5T_NATIVE_INT32, H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE};
@@ -405,22 +405,19 @@ pd_status pd_write_bonds(pd_file *f, const pd_bonds *b)
     hid_t g = pd_h5_create_group(f->fid, "/bonds");
     if (g < 0)
         return pd_fail(PD_ERR_IO, "cannot create /bonds");
-    int64_t *nb64 = malloc((size_t)(b->count ? b->count : 1) * sizeof(int64_t));
     uint8_t *bytes = words_to_bytes(b->intact, b->count);
-    if (nb64 == NULL || bytes == NULL) {
-        free(nb64);
+    if (bytes == NULL) {
         free(bytes);
         H5Gclose(g);
         return pd_fail(PD_ERR_NOMEM, "out of memory");
     }
-    for (int64_t k = 0; k < b->count; k++)
-        nb64[k] = b->neighbor[k];
     hsize_t dn[1] = {(hsize_t)b->n + 1}, db[1] = {(hsize_t)b->count},
             ds[1] = {(hsize_t)((b->count + 7) / 8)};
     pd_status s;
     if ((s = pd_h5_write_data(g, "offset", H5T_STD_I64LE, H5T_NATIVE_INT64, 1, dn, b->offset)) ==
             PD_OK &&
-        (s = pd_h5_write_data(g, "neighbor", H5T_STD_I64LE, H5T_NATIVE_INT64, 1, db, nb64)) ==
+        (s = pd_h5_write_data(g, "neighbor", H5T_STD_I32LE, H5T_NATIVE_INT32, 1, db,
+                              b->neighbor)) ==
             PD_OK &&
         (s = pd_h5_write_data(g, "length", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, db,
                               b->length)) == PD_OK &&
@@ -430,7 +427,6 @@ pd_status pd_write_bonds(pd_file *f, const pd_bonds *b)
             PD_OK &&
         (s = pd_h5_write_attr_doubles(g, "horizon", &b->horizon, 1)) == PD_OK)
         s = pd_h5_write_attr_int(g, "count", b->count);
-    free(nb64);
     free(bytes);
     H5Gclose(g);
     return s;

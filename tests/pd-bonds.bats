@@ -25,7 +25,7 @@ off, nb = b['offset'][:], b['neighbor'][:]
 length, nu = b['length'][:], b['volume_factor'][:]
 delta = float(b.attrs['horizon'])
 n = x.shape[0]
-assert off.dtype == np.int64 and nb.dtype == np.int64
+assert off.dtype == np.int64 and nb.dtype == np.int32
 assert off.shape == (n + 1,) and off[0] == 0 and off[-1] == nb.size
 assert np.all(np.diff(off) >= 0)
 assert length.shape == nb.shape and nu.shape == nb.shape
