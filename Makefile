@@ -55,7 +55,7 @@ bin/%: cmd/%.c lib/libpd.a lib/pd.h
 	@mkdir -p bin
 	$(CC) $(PD_CFLAGS) $(CFLAGS) -o $@ $< lib/libpd.a $(PD_LIBS)
 
-bin/test-%: tests/unit/%.c lib/libpd.a lib/pd.h
+bin/test-%: tests/unit/%.c tests/unit/check.h lib/libpd.a lib/pd.h
 	@mkdir -p bin
 	$(CC) $(PD_CFLAGS) $(CFLAGS) -o $@ $< lib/libpd.a $(PD_LIBS)
 

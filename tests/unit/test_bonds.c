@@ -16,30 +16,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "check.h"
 #include "pd.h"
 
-static int failures;
-
-#define CHECK(cond, ...)                                                                           \
-    do {                                                                                           \
-        if (!(cond)) {                                                                             \
-            failures++;                                                                            \
-            fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                                   \
-            fprintf(stderr, __VA_ARGS__);                                                          \
-            fputc('\n', stderr);                                                                   \
-        }                                                                                          \
-    } while (0)
-
-static void proved(int before, const char *what)
-{
-    printf("%s: %s\n", failures == before ? "ok" : "FAILED", what);
-}
-
-static void die(const char *what)
-{
-    fprintf(stderr, "%s: %s\n", what, pd_errmsg());
-    exit(1);
-}
 
 /* A box of (m+1)^3 lattice sites of spacing h, origin at 0. */
 static pd_particles *cube(int m, double h, double perturb, unsigned long seed)

@@ -15,30 +15,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "check.h"
 #include "pd.h"
 
-static int failures;
-
-#define CHECK(cond, ...)                                                                           \
-    do {                                                                                           \
-        if (!(cond)) {                                                                             \
-            failures++;                                                                            \
-            fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                                   \
-            fprintf(stderr, __VA_ARGS__);                                                          \
-            fputc('\n', stderr);                                                                   \
-        }                                                                                          \
-    } while (0)
-
-static void proved(int before, const char *what)
-{
-    printf("%s: %s\n", failures == before ? "ok" : "FAILED", what);
-}
-
-static void die(const char *what)
-{
-    fprintf(stderr, "%s: %s\n", what, pd_errmsg());
-    exit(1);
-}
 
 /*
  * Five particles with volumes 1, 2, 3, 4, 5 (x 1e-9 m^3); bonds 0-1, 0-2,
