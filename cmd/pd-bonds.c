@@ -111,6 +111,7 @@ int main(int argc, char **argv)
     pd_particles *p = NULL;
     if (pd_file_open(o.input, &in) != PD_OK || pd_read_particles(in, &p) != PD_OK) {
         pd_file_close(in);
+        free(cmdline);
         return fail();
     }
     if (o.horizon < p->spacing) {
@@ -118,6 +119,7 @@ int main(int argc, char **argv)
                 o.horizon, p->spacing);
         pd_particles_free(p);
         pd_file_close(in);
+        free(cmdline);
         return 1;
     }
     pd_bonds *b = NULL;

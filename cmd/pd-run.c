@@ -80,6 +80,17 @@ static int positive(const char *opt, const char *arg, double *out)
     return 0;
 }
 
+/* The strings read from the scene file, freed at exit. */
+static char **scene_strings;
+static int scene_count;
+
+static void free_scene_strings(void)
+{
+    for (int k = 0; k < scene_count; k++)
+        free(scene_strings[k]);
+    free(scene_strings);
+}
+
 /* argv with the scene file's options first, then the command line's (so the
  * command line wins); the --scene option itself is dropped. */
 static int expand_scene(int argc, char **argv, int *nargc, char ***nargv)
@@ -99,6 +110,9 @@ static int expand_scene(int argc, char **argv, int *nargc, char ***nargv)
     char **sv = NULL;
     if (scene && pd_scene_args(scene, &sc, &sv) != PD_OK)
         return fail();
+    scene_strings = sv;
+    scene_count = sc;
+    atexit(free_scene_strings);
     char **v = malloc((size_t)(argc + sc + 1) * sizeof *v);
     if (v == NULL)
         return 1;
@@ -106,7 +120,6 @@ static int expand_scene(int argc, char **argv, int *nargc, char ***nargv)
     v[n++] = argv[0];
     for (int k = 0; k < sc; k++)
         v[n++] = sv[k];
-    free(sv);
     for (int k = 1; k < argc; k++) {
         if (strcmp(argv[k], "--scene") == 0) {
             k++;
@@ -372,6 +385,9 @@ int main(int argc, char **argv)
     if (!o.has_dt) {
         if (!isfinite(sc->dt_stable)) {
             fprintf(stderr, PROG ": error: no bonds, so no stable time step; give --dt\n");
+            pd_bonds_free(b);
+            pd_particles_free(p);
+            pd_file_close(in);
             return 1;
         }
         sc->dt = sc->safety * sc->dt_stable;
