@@ -52,8 +52,9 @@ void pd_half_free(pd_half_bonds *h)
     free(h->offset);
     free(h->neighbor);
     free(h->length);
+    if (h->w_ji != h->w_ij)
+        free(h->w_ji);
     free(h->w_ij);
-    free(h->w_ji);
     free(h->intact);
     free(h->cursor);
 }
@@ -103,11 +104,19 @@ pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_h
      * diagonal of row j in ascending order, so a cursor per row finds it */
     for (int64_t j = 0; j < n; j++)
         h->cursor[j] = b->offset[j];
+    int same = 1;
     for (int64_t i = 0; i < n; i++)
         for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
             int64_t back = h->cursor[h->neighbor[q]]++;
             h->w_ji[q] = c * p->volume[i] * b->vfactor[back];
+            same &= h->w_ji[q] == h->w_ij[q];
         }
+    /* equal volumes and radii (any pd-lattice body): one weight per bond,
+     * one stream less for the kernel to read */
+    if (same) {
+        free(h->w_ji);
+        h->w_ji = h->w_ij;
+    }
     h->block = span;
     h->nblocks = (n + span - 1) / span;
     return PD_OK;

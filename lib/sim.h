@@ -29,7 +29,8 @@ typedef struct {
     int32_t *neighbor; /* j > i, ascending                               */
     double *length;    /* |xi|, m                                        */
     double *w_ij;      /* c V_j nu_ij: force density on i per stretch    */
-    double *w_ji;      /* c V_i nu_ji: force density on j per stretch    */
+    double *w_ji;      /* c V_i nu_ji: force density on j per stretch
+                          (the same array as w_ij when they are equal)   */
     uint64_t *intact;  /* mu per bond                                    */
     int64_t block;     /* rows per block (>= the largest j - i)          */
     int64_t nblocks;
