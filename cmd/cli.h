@@ -79,6 +79,28 @@ static inline void remove_temps_on_signal(void)
     }
 }
 
+/* The next of the program's own options: getopt_long with the common ones
+ * handled here.  Returns -1 at the end of the options, or when an option
+ * was wrong, with *status set to the exit status (2). */
+static inline int next_option(int argc, char **argv, const char *shortopts,
+                              const struct option *longopts, void (*usage)(FILE *), int *debug,
+                              int *status)
+{
+    opterr = 0;
+    for (;;) {
+        int c = getopt_long(argc, argv, shortopts, longopts, NULL);
+        if (c == -1)
+            return -1;
+        int rc = common_option(c, argv, usage, debug);
+        if (rc < 0)
+            return c;
+        if (rc > 0) {
+            *status = rc;
+            return -1;
+        }
+    }
+}
+
 /* A runtime or data error from libpd: one line on stderr, exit status 1. */
 static inline int fail(void)
 {

@@ -57,15 +57,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->output = "-";
-    int c;
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, "o:qhV", longopts, NULL)) != -1) {
-        int rc = common_option(c, argv, usage, &o->debug);
-        if (rc >= 0) {
-            if (rc > 0)
-                return rc;
-            continue;
-        }
+    int c, status = 0;
+    while ((c = next_option(argc, argv, "o:qhV", longopts, usage, &o->debug, &status)) != -1) {
         switch (c) {
         case OPT_HORIZON:
             if (!pd_parse_double(optarg, &o->horizon) || !(o->horizon > 0))
@@ -85,6 +78,8 @@ static int parse_options(int argc, char **argv, struct options *o)
             return option_error(argv);
         }
     }
+    if (status)
+        return status;
     if (!o->has_horizon)
         return usage_error("--horizon is required", NULL);
     if (optind != argc - 1)

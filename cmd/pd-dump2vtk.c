@@ -56,15 +56,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
-    int c;
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, "o:qhV", longopts, NULL)) != -1) {
-        int rc = common_option(c, argv, usage, &o->debug);
-        if (rc >= 0) {
-            if (rc > 0)
-                return rc;
-            continue;
-        }
+    int c, status = 0;
+    while ((c = next_option(argc, argv, "o:qhV", longopts, usage, &o->debug, &status)) != -1) {
         switch (c) {
         case 'o':
             o->dir = optarg;
@@ -79,6 +72,8 @@ static int parse_options(int argc, char **argv, struct options *o)
             return option_error(argv);
         }
     }
+    if (status)
+        return status;
     if (optind != argc - 1)
         return usage_error(optind < argc ? "give exactly one RUN.h5" : "missing RUN.h5", NULL);
     o->input = argv[optind];

@@ -88,16 +88,9 @@ static int parse_options(int argc, char **argv, struct options *o)
     o->lp.material = 1;
     o->lp.seed = 1;
     o->output = "-";
-    int c;
+    int c, rc, status = 0;
     int64_t iv;
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, "o:qhV", longopts, NULL)) != -1) {
-        int rc = common_option(c, argv, usage, &o->debug);
-        if (rc >= 0) {
-            if (rc > 0)
-                return rc;
-            continue;
-        }
+    while ((c = next_option(argc, argv, "o:qhV", longopts, usage, &o->debug, &status)) != -1) {
         switch (c) {
         case OPT_BOX:
             if ((rc = add_region(o, PD_REGION_BOX, optarg, 0)))
@@ -149,6 +142,8 @@ static int parse_options(int argc, char **argv, struct options *o)
             return option_error(argv);
         }
     }
+    if (status)
+        return status;
     if (optind < argc)
         return usage_error("unexpected argument", argv[optind]);
     if (!o->has_spacing)

@@ -164,17 +164,10 @@ static int parse_options(int argc, char **argv, struct options *o)
     o->output = "-";
     o->sc.model = PD_MODEL_PMB;
     o->sc.safety = 0.8;
-    int c;
+    int c, rc, status = 0;
     int64_t iv;
     double ind[8];
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, "o:qhV", longopts, NULL)) != -1) {
-        int rc = common_option(c, argv, usage, &o->debug);
-        if (rc >= 0) {
-            if (rc > 0)
-                return rc;
-            continue;
-        }
+    while ((c = next_option(argc, argv, "o:qhV", longopts, usage, &o->debug, &status)) != -1) {
         switch (c) {
         case OPT_MODEL:
             if (strcmp(optarg, "pmb") != 0)
@@ -272,6 +265,8 @@ static int parse_options(int argc, char **argv, struct options *o)
             return option_error(argv);
         }
     }
+    if (status)
+        return status;
     if (!o->has_steps)
         return usage_error("--steps is required", NULL);
     if (!o->has_c && !o->has_k)
