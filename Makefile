@@ -51,7 +51,7 @@ lib/libpd.a: $(LIB_OBJ)
 	rm -f $@
 	ar rcs $@ $^
 
-bin/%: cmd/%.c lib/libpd.a lib/pd.h
+bin/%: cmd/%.c cmd/cli.h lib/libpd.a lib/pd.h
 	@mkdir -p bin
 	$(CC) $(PD_CFLAGS) $(CFLAGS) -o $@ $< lib/libpd.a $(PD_LIBS)
 

@@ -67,6 +67,9 @@ static void remove_temps_and_die(int sig)
 
 static inline void remove_temps_on_signal(void)
 {
+    /* past a file-size limit (ulimit -f) a write fails with EFBIG and is
+     * reported like a full disk, instead of killing the program */
+    signal(SIGXFSZ, SIG_IGN);
     const int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
     for (size_t k = 0; k < sizeof sigs / sizeof sigs[0]; k++) {
         struct sigaction old, sa;

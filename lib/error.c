@@ -27,6 +27,15 @@ pd_status pd_fail(pd_status st, const char *fmt, ...)
 
 void pd_h5_debug(int on)
 {
+    /* No HDF5 clean-up at exit: after a failed write (a full disk) HDF5
+     * cannot close the file, and its exit handler would crash trying again;
+     * pd closes or abandons every file itself.  Only effective before the
+     * library's first use, which is why every program calls this first. */
+    static int once;
+    if (!once) {
+        H5dont_atexit();
+        once = 1;
+    }
     if (on)
         H5Eset_auto2(H5E_DEFAULT, (H5E_auto2_t)H5Eprint2, stderr);
     else

@@ -39,7 +39,8 @@ const char *pd_errmsg(void);
 pd_status pd_fail(pd_status st, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 
-/* Switch HDF5's own error printing on (debug) or off (default). */
+/* Switch HDF5's own error printing on (debug) or off (default).  Call it
+ * before any other pd function that touches files. */
 void pd_h5_debug(int on);
 
 /* ------------------------------------------------------ physics constants */

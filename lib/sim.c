@@ -130,18 +130,41 @@ pd_status pd_sim_setup(pd_sim *sim)
     return s;
 }
 
-/* Half a kick: v += dt/(2 rho) f. */
-static void half_kick(pd_sim *sim)
+/* Half a kick: v += dt/(2 rho) f.  Returns 1 when some velocity is not
+ * finite (a NaN or Inf in the forces or positions spreads to it). */
+static int half_kick(pd_sim *sim)
 {
     const double half = 0.5 * sim->sc.dt;
     const double *rho = sim->p->density;
-#pragma omp parallel for schedule(static)
+    int bad = 0;
+#pragma omp parallel for schedule(static) reduction(| : bad)
     for (int64_t i = 0; i < sim->n; i++) {
         const double dtfm = half / rho[i];
         sim->v[0][i] += dtfm * sim->f[0][i];
         sim->v[1][i] += dtfm * sim->f[1][i];
         sim->v[2][i] += dtfm * sim->f[2][i];
+        bad |= !isfinite(sim->v[0][i] + sim->v[1][i] + sim->v[2][i]);
     }
+    return bad;
+}
+
+/* The numerical guard: name the first particle whose state is not finite. */
+static pd_status not_finite(const pd_sim *sim)
+{
+    for (int64_t i = 0; i < sim->n; i++) {
+        const char *what = NULL;
+        for (int d = 0; d < 3 && what == NULL; d++)
+            what = !isfinite(sim->f[d][i])   ? "force"
+                   : !isfinite(sim->y[d][i]) ? "position"
+                   : !isfinite(sim->v[d][i]) ? "velocity"
+                                             : NULL;
+        if (what)
+            return pd_fail(PD_ERR_UNSTABLE,
+                           "the %s of particle %lld (id %lld) is not finite at step %lld: the time "
+                           "step may be too large for the bonds or the contact stiffness",
+                           what, (long long)i, (long long)sim->p->id[i], (long long)sim->step);
+    }
+    return pd_fail(PD_ERR_UNSTABLE, "the state is not finite at step %lld", (long long)sim->step);
 }
 
 pd_status pd_sim_step(pd_sim *sim)
@@ -162,9 +185,9 @@ pd_status pd_sim_step(pd_sim *sim)
     if (s != PD_OK)
         return s;
     t0 = pd_wtime();
-    half_kick(sim);
+    int bad = half_kick(sim);
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
-    return PD_OK;
+    return bad ? not_finite(sim) : PD_OK;
 }
 
 const char *pd_sim_effects(const pd_sim *sim)

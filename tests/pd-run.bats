@@ -610,3 +610,36 @@ print('ok')" t1.h5
         assert_no_temp .
     done
 }
+
+@test "a run that goes non-finite stops naming the step, keeps the frames before" {
+    make_block
+    # no failure (bonds that break would free the particles) and twenty times
+    # the stable step: the indented lattice blows up within a hundred steps
+    run --separate-stderr pd-run --bulk-modulus "$BULK" \
+        --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --dt 5e-6 --force-dt \
+        --steps 2000 --every 5 -q model.h5 -o r.h5
+    [ "$status" -eq 1 ]
+    [ "$(printf '%s\n' "$stderr" | wc -l)" -eq 1 ]
+    [[ "$stderr" =~ ^pd-run:\ error:\ the\ (force|position|velocity)\ of\ particle\ [0-9]+\ \(id\ [0-9]+\)\ is\ not\ finite\ at\ step\ ([0-9]+):.*time\ step ]]
+    bad=${BASH_REMATCH[2]}
+    # every frame in the file is finite and comes before the bad step
+    py "
+import numpy as np
+with h5py.File(sys.argv[1]) as f:
+    steps = [f['frames'][k].attrs['step'] for k in f['frames']]
+    assert steps and max(steps) < int(sys.argv[2]), (steps, sys.argv[2])
+    for k in f['frames']:
+        assert np.isfinite(f['frames'][k]['displacement'][:]).all()
+        assert np.isfinite(f['frames'][k]['velocity'][:]).all()" r.h5 "$bad"
+    assert_no_temp .
+}
+
+@test "a full disk (a file-size limit) is one error, no output and no temporary file" {
+    make_block
+    run --separate-stderr bash -c 'ulimit -f 200; exec pd-run --c 1e21 --steps 1 -q model.h5 -o full.h5'
+    [ "$status" -eq 1 ]
+    [ "$(printf '%s\n' "$stderr" | wc -l)" -eq 1 ]
+    [[ "$stderr" =~ ^pd-run:\ error:.*(disk\ full|cannot\ write) ]]
+    [ ! -e full.h5 ]
+    assert_no_temp .
+}
