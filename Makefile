@@ -26,6 +26,8 @@ PD_LIBS    = $(shell pkg-config --libs hdf5 gsl 2>/dev/null) -fopenmp -lm
 ifeq ($(SANITIZE),1)
 PD_CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer
 PD_LIBS   += -fsanitize=address,undefined
+# tests that cannot run with the sanitizers (valgrind) skip themselves
+export PD_SANITIZE = 1
 endif
 
 PROGRAMS   = $(patsubst cmd/%.c,%,$(wildcard cmd/pd-*.c))

@@ -3,7 +3,7 @@
 # Run as root (CI and `make check`/`make demo` on a fresh machine); as another
 # user it only reports what is missing.
 set -e
-pkgs="build-essential pkg-config libhdf5-dev libgsl-dev hdf5-tools bats bats-assert bats-support
+pkgs="build-essential pkg-config valgrind libhdf5-dev libgsl-dev hdf5-tools bats bats-assert bats-support
 python3 python3-numpy python3-h5py python3-meshio lammps openmpi-bin gnuplot-nox groff-base time"
 missing=""
 for p in $pkgs; do
