@@ -37,7 +37,7 @@ BIN        = $(addprefix bin/,$(PROGRAMS))
 UNIT_SRC   = $(wildcard tests/unit/*.c)
 UNIT_BIN   = $(UNIT_SRC:tests/unit/%.c=bin/test-%)
 
-.PHONY: all check test unit bats deps demo bench install uninstall clean
+.PHONY: all check test unit bats deps demo bench fuzz install uninstall clean
 
 all: $(BIN) lib/libpd.a
 
@@ -85,6 +85,20 @@ demo: deps
 bench: deps
 	$(MAKE) all
 	sh share/bench.sh
+
+# The readers under libFuzzer (clang), AddressSanitizer and UBSan for
+# FUZZ_SECONDS; tests/fuzz/fuzz_readers.c says what is fuzzed.  OpenMP is
+# left out of this build (its pragmas are ignored).
+FUZZ_SECONDS ?= 60
+FUZZ_CC      ?= clang
+fuzz:
+	@sh share/install-deps.sh clang libclang-rt-14-dev
+	@mkdir -p bin tests/fuzz/corpus
+	$(FUZZ_CC) -std=c11 -D_POSIX_C_SOURCE=200809L -g -O1 -Wno-unknown-pragmas \
+	    -fsanitize=fuzzer,address,undefined -fno-math-errno -Ilib \
+	    $(shell pkg-config --cflags hdf5 gsl) -o bin/fuzz-readers tests/fuzz/fuzz_readers.c \
+	    $(LIB_SRC) $(shell pkg-config --libs hdf5 gsl) -lm
+	bin/fuzz-readers -max_total_time=$(FUZZ_SECONDS) -timeout=10 tests/fuzz/corpus
 
 install: all
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR) $(DESTDIR)$(PCDIR) \

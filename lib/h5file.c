@@ -170,6 +170,33 @@ static pd_status check_signature(const char *name, const unsigned char *buf, siz
     return PD_OK;
 }
 
+pd_status pd_file_open_memory(const void *buf, size_t len, const char *name, pd_file **out)
+{
+    pd_file *f = file_new(name);
+    unsigned char *copy = malloc(len ? len : 1);
+    if (f == NULL || copy == NULL) {
+        file_free(f);
+        free(copy);
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    memcpy(copy, buf, len);
+    f->image = copy;
+    pd_status s = check_signature(f->name, copy, len);
+    if (s == PD_OK && (f->fid = open_image(copy, len, H5F_ACC_RDONLY)) < 0)
+        s = pd_fail(PD_ERR_FORMAT, "cannot open '%s' as HDF5 (damaged or truncated?)", f->name);
+    f->readonly = 1;
+    if (s == PD_OK)
+        s = check_header(f);
+    if (s != PD_OK) {
+        if (f->fid >= 0)
+            H5Fclose(f->fid);
+        file_free(f);
+        return s;
+    }
+    *out = f;
+    return PD_OK;
+}
+
 pd_status pd_file_open(const char *path, pd_file **out)
 {
     pd_file *f = file_new(path);

@@ -242,6 +242,9 @@ typedef struct pd_file pd_file;
 
 /* Open for reading; path "-" reads the whole of stdin as an HDF5 image. */
 pd_status pd_file_open(const char *path, pd_file **out);
+/* Open an HDF5 file image held in memory (copied), e.g. for a fuzzer;
+ * `name` is used in messages. */
+pd_status pd_file_open_memory(const void *buf, size_t len, const char *name, pd_file **out);
 /* Create for writing; "-" builds the file in memory and streams it to stdout
  * at close.  Otherwise the file is written under a temporary name beside
  * `path` and renamed when pd_file_close() succeeds. */

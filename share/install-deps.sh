@@ -1,12 +1,13 @@
 #!/bin/sh
-# Install the Debian 12 packages pd needs, when some are missing.
+# Install the Debian 12 packages pd needs, when some are missing; packages
+# given as arguments are needed too (make fuzz: clang and its libFuzzer).
 # Run as root (CI and `make check`/`make demo` on a fresh machine); as another
 # user it only reports what is missing.
 set -e
 pkgs="build-essential pkg-config valgrind libhdf5-dev libgsl-dev hdf5-tools bats bats-assert bats-support
 python3 python3-numpy python3-h5py python3-meshio lammps openmpi-bin gnuplot-nox groff-base time"
 missing=""
-for p in $pkgs; do
+for p in $pkgs "$@"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" ||
         missing="$missing $p"
 done

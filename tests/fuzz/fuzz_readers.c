@@ -1,0 +1,341 @@
+/*
+ * fuzz_readers -- a libFuzzer target for the pd-h5 readers of libpd.
+ *
+ * Fuzzing raw HDF5 bytes would mostly exercise HDF5's own parser; what pd
+ * must get right is what it does with a well-formed HDF5 file whose
+ * contents are wrong.  So the input is a recipe of edits to a small valid
+ * run file (a 4x4x4 block with bonds and one frame): each edit picks a
+ * dataset or attribute and overwrites an element with raw bytes (NaN, Inf,
+ * huge, negative), truncates or extends it, changes its type or rank, or
+ * drops it.  The edited file is built in memory and handed to every reader
+ * (particles, bonds, frames, damage, history).  A reader may refuse the
+ * file -- that is the point -- but must never crash, hang or read out of
+ * bounds (AddressSanitizer and UndefinedBehaviorSanitizer watch).
+ *
+ * Build and run: make fuzz [FUZZ_SECONDS=60]  (clang with libFuzzer).
+ */
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <hdf5.h>
+
+#include "pd.h"
+
+enum { T_F64, T_F32, T_I64, T_I32, T_U8, T_COUNT };
+
+static const size_t type_size[T_COUNT] = {8, 4, 8, 4, 1};
+
+typedef struct {
+    const char *path; /* dataset path, or "group@attribute" */
+    int type;
+    int rank;
+    hsize_t dims[2];
+    unsigned char *data;
+    int present;
+} field;
+
+#define MAX_FIELDS 24
+static field base[MAX_FIELDS];
+static int nbase;
+
+static double get(const field *f, size_t k)
+{
+    const unsigned char *p = f->data + k * type_size[f->type];
+    switch (f->type) {
+    case T_F64: { double v; memcpy(&v, p, 8); return v; }
+    case T_F32: { float v; memcpy(&v, p, 4); return v; }
+    case T_I64: { int64_t v; memcpy(&v, p, 8); return (double)v; }
+    case T_I32: { int32_t v; memcpy(&v, p, 4); return v; }
+    default: return *p;
+    }
+}
+
+static void put(field *f, size_t k, double v)
+{
+    unsigned char *p = f->data + k * type_size[f->type];
+    switch (f->type) {
+    case T_F64: memcpy(p, &v, 8); break;
+    case T_F32: { float x = (float)v; memcpy(p, &x, 4); break; }
+    case T_I64: { int64_t x = (v > -9e18 && v < 9e18) ? (int64_t)v : 0; memcpy(p, &x, 8); break; }
+    case T_I32: { int32_t x = (v > -2e9 && v < 2e9) ? (int32_t)v : 0; memcpy(p, &x, 4); break; }
+    default: *p = (unsigned char)(v >= 0 && v < 256 ? v : 0);
+    }
+}
+
+static size_t count(const field *f)
+{
+    return f->rank == 2 ? f->dims[0] * f->dims[1] : f->dims[0];
+}
+
+static void add(const char *path, int type, int rank, hsize_t d0, hsize_t d1, const void *src)
+{
+    field *f = &base[nbase++];
+    f->path = path;
+    f->type = type;
+    f->rank = rank;
+    f->dims[0] = d0;
+    f->dims[1] = d1;
+    f->present = 1;
+    size_t bytes = count(f) * type_size[type];
+    f->data = malloc(bytes ? bytes : 1);
+    memcpy(f->data, src, bytes);
+}
+
+/* The valid run file the edits start from. */
+static void build_base(void)
+{
+    pd_region box;
+    pd_region_parse(PD_REGION_BOX, "0,3,0,3,0,3", &box);
+    pd_lattice_params lp = {1.0, 1000.0, 1, 0.0, 1};
+    pd_particles *p;
+    pd_bonds *b;
+    if (pd_lattice_make(&box, 1, &lp, &p) != PD_OK || pd_bonds_build(p, 2.0001, &b) != PD_OK)
+        abort();
+    size_t n = (size_t)p->n, nb = (size_t)b->count, ns = (nb + 7) / 8;
+    double *pos = malloc(n * 3 * sizeof(double)), *vel = malloc(n * 3 * sizeof(double));
+    unsigned char *bits = malloc(ns);
+    for (size_t i = 0; i < n; i++)
+        for (int d = 0; d < 3; d++) {
+            pos[3 * i + d] = p->x[d][i];
+            vel[3 * i + d] = 0.1 * (double)d;
+        }
+    for (size_t k = 0; k < ns; k++)
+        bits[k] = (unsigned char)(b->intact[k / 8] >> (8 * (k % 8)));
+    double spacing = 1.0, horizon = 2.0001, t = 0.5;
+    int64_t version = PD_FORMAT_VERSION, dim = 3, step = 7;
+    add("/particles/position", T_F64, 2, n, 3, pos);
+    add("/particles/volume", T_F64, 1, n, 0, p->volume);
+    add("/particles/density", T_F64, 1, n, 0, p->density);
+    add("/particles/radius", T_F64, 1, n, 0, p->radius);
+    add("/particles/material", T_I32, 1, n, 0, p->material);
+    add("/particles/id", T_I64, 1, n, 0, p->id);
+    add("/bonds/offset", T_I64, 1, n + 1, 0, b->offset);
+    add("/bonds/neighbor", T_I32, 1, nb, 0, b->neighbor);
+    add("/bonds/length", T_F64, 1, nb, 0, b->length);
+    add("/bonds/volume_factor", T_F64, 1, nb, 0, b->vfactor);
+    add("/bonds/state", T_U8, 1, ns, 0, bits);
+    add("/frames/00000007/displacement", T_F64, 2, n, 3, vel);
+    add("/frames/00000007/velocity", T_F64, 2, n, 3, vel);
+    add("/frames/00000007/state", T_U8, 1, ns, 0, bits);
+    add("/frames/00000007/damage", T_F64, 1, n, 0, p->volume);
+    add("/@pd_format_version", T_I64, 1, 1, 0, &version);
+    add("/particles@spacing", T_F64, 1, 1, 0, &spacing);
+    add("/particles@dimension", T_I64, 1, 1, 0, &dim);
+    add("/bonds@horizon", T_F64, 1, 1, 0, &horizon);
+    add("/frames/00000007@step", T_I64, 1, 1, 0, &step);
+    add("/frames/00000007@time", T_F64, 1, 1, 0, &t);
+    free(pos);
+    free(vel);
+    free(bits);
+    pd_bonds_free(b);
+    pd_particles_free(p);
+}
+
+static hid_t h5type(int t)
+{
+    static const hid_t *types[T_COUNT] = {&H5T_NATIVE_DOUBLE_g, &H5T_NATIVE_FLOAT_g,
+                                          &H5T_NATIVE_INT64_g, &H5T_NATIVE_INT32_g,
+                                          &H5T_NATIVE_UCHAR_g};
+    return *types[t];
+}
+
+/* Apply one 12-byte edit to the working copy. */
+static void edit(field *w, int nw, const uint8_t *op)
+{
+    field *f = &w[op[0] % nw];
+    uint32_t index;
+    memcpy(&index, op + 2, 4);
+    size_t m = count(f);
+    switch (op[1] % 6) {
+    case 0: /* overwrite an element with raw bytes (NaN, Inf, huge, negative) */
+        if (m > 0) {
+            size_t es = type_size[f->type], k = index % m;
+            unsigned char raw[8] = {0};
+            memcpy(raw, op + 6, 6);
+            raw[6] = op[6] ^ op[7];
+            raw[7] = op[7] | (op[11] & 0xf0);
+            memcpy(f->data + k * es, raw + (8 - es), es);
+        }
+        break;
+    case 1: { /* resize the first dimension */
+        hsize_t d0 = index % (f->dims[0] + 3);
+        size_t old = count(f), es = type_size[f->type];
+        f->dims[0] = d0;
+        size_t now = count(f);
+        unsigned char *nd = calloc(now ? now : 1, es);
+        memcpy(nd, f->data, (now < old ? now : old) * es);
+        free(f->data);
+        f->data = nd;
+        break;
+    }
+    case 2: { /* change the type, keeping the values where they fit */
+        int t = op[6] % T_COUNT;
+        size_t m2 = count(f);
+        unsigned char *nd = calloc(m2 ? m2 : 1, type_size[t]);
+        field g = *f;
+        g.type = t;
+        g.data = nd;
+        for (size_t k = 0; k < m2; k++)
+            put(&g, k, get(f, k));
+        free(f->data);
+        *f = g;
+        break;
+    }
+    case 3: /* drop it */
+        f->present = 0;
+        break;
+    case 4: /* change the rank (same elements) */
+        if (f->rank == 2) {
+            f->dims[0] *= f->dims[1];
+            f->rank = 1;
+        } else if (f->dims[0] % 3 == 0) {
+            f->dims[0] /= 3;
+            f->dims[1] = 3;
+            f->rank = 2;
+        } else if (f->dims[0] % 2 == 0) {
+            f->dims[0] /= 2;
+            f->dims[1] = 2;
+            f->rank = 2;
+        }
+        break;
+    default: /* a typed value: index-th element set to a small signed number */
+        if (m > 0)
+            put(f, index % m, (double)(int16_t)(op[6] | op[7] << 8) * 0.5);
+    }
+}
+
+static void write_field(hid_t fid, const field *f)
+{
+    char path[128];
+    snprintf(path, sizeof path, "%s", f->path);
+    char *at = strchr(path, '@');
+    hsize_t dims[2] = {f->dims[0], f->dims[1]};
+    hid_t sp = (at && count(f) == 1) ? H5Screate(H5S_SCALAR) : H5Screate_simple(f->rank, dims, NULL);
+    if (at) {
+        *at = '\0';
+        hid_t loc = H5Oopen(fid, path, H5P_DEFAULT);
+        if (loc >= 0) {
+            hid_t a = H5Acreate2(loc, at + 1, h5type(f->type), sp, H5P_DEFAULT, H5P_DEFAULT);
+            if (a >= 0) {
+                H5Awrite(a, h5type(f->type), f->data);
+                H5Aclose(a);
+            }
+            H5Oclose(loc);
+        }
+    } else {
+        hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
+        H5Pset_create_intermediate_group(lcpl, 1);
+        hid_t d = H5Dcreate2(fid, path, h5type(f->type), sp, lcpl, H5P_DEFAULT, H5P_DEFAULT);
+        if (d >= 0) {
+            if (count(f) > 0)
+                H5Dwrite(d, h5type(f->type), H5S_ALL, H5S_ALL, H5P_DEFAULT, f->data);
+            H5Dclose(d);
+        }
+        H5Pclose(lcpl);
+    }
+    H5Sclose(sp);
+}
+
+/* The edited file as an HDF5 image; *len its size. */
+static void *image_of(const field *w, int nw, size_t *len)
+{
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    H5Pset_fapl_core(fapl, 1 << 16, 0);
+    hid_t fid = H5Fcreate("fuzz", H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+    H5Pclose(fapl);
+    hid_t t = H5Tcopy(H5T_C_S1);
+    H5Tset_size(t, H5T_VARIABLE);
+    hid_t sp = H5Screate(H5S_SCALAR);
+    const char *fmt = PD_FORMAT;
+    hid_t a = H5Acreate2(fid, "pd_format", t, sp, H5P_DEFAULT, H5P_DEFAULT);
+    H5Awrite(a, t, &fmt);
+    H5Aclose(a);
+    H5Sclose(sp);
+    H5Tclose(t);
+    for (int pass = 0; pass < 2; pass++) /* datasets (and groups) first, then attributes */
+        for (int k = 0; k < nw; k++)
+            if (w[k].present && (strchr(w[k].path, '@') != NULL) == pass)
+                write_field(fid, &w[k]);
+    H5Fflush(fid, H5F_SCOPE_GLOBAL);
+    ssize_t size = H5Fget_file_image(fid, NULL, 0);
+    void *img = size > 0 ? malloc((size_t)size) : NULL;
+    if (img)
+        H5Fget_file_image(fid, img, (size_t)size);
+    H5Fclose(fid);
+    *len = size > 0 ? (size_t)size : 0;
+    return img;
+}
+
+/* Every reader on the file; errors are expected, crashes are not. */
+static void read_all(const void *img, size_t len)
+{
+    pd_file *f = NULL;
+    if (pd_file_open_memory(img, len, "fuzz.h5", &f) != PD_OK)
+        return;
+    char *hist = NULL;
+    if (pd_read_history(f, &hist) == PD_OK)
+        free(hist);
+    pd_particles *p = NULL;
+    pd_bonds *b = NULL;
+    uint64_t *intact = NULL;
+    if (pd_read_particles(f, &p) == PD_OK) {
+        int64_t nf = 0;
+        char **names = NULL;
+        if (pd_read_bonds(f, p, &b) == PD_OK) {
+            double *dmg = malloc((size_t)p->n * sizeof(double));
+            pd_damage(p, b, b->intact, dmg);
+            free(dmg);
+            pd_bonds_free(b);
+            b = NULL;
+        }
+        if (pd_list_frames(f, &nf, &names) == PD_OK) {
+            double *d[3], *v[3], *dmg = malloc((size_t)p->n * sizeof(double));
+            for (int k = 0; k < 3; k++) {
+                d[k] = malloc((size_t)p->n * sizeof(double));
+                v[k] = malloc((size_t)p->n * sizeof(double));
+            }
+            for (int64_t k = 0; k < nf; k++) {
+                pd_frame_info fi;
+                pd_read_frame_info(f, names[k], &fi);
+                pd_read_frame_vectors(f, names[k], p->n, d, v);
+                pd_read_frame_damage(f, p, names[k], &b, &intact, dmg);
+            }
+            for (int k = 0; k < 3; k++) {
+                free(d[k]);
+                free(v[k]);
+            }
+            free(dmg);
+            pd_frames_free_list(nf, names);
+        }
+    }
+    free(intact);
+    pd_bonds_free(b);
+    pd_particles_free(p);
+    pd_file_close(f);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    if (nbase == 0) {
+        pd_h5_debug(0);
+        build_base();
+    }
+    field w[MAX_FIELDS];
+    for (int k = 0; k < nbase; k++) {
+        w[k] = base[k];
+        size_t bytes = count(&base[k]) * type_size[base[k].type];
+        w[k].data = malloc(bytes ? bytes : 1);
+        memcpy(w[k].data, base[k].data, bytes);
+    }
+    for (size_t at = 0; at + 12 <= size && at < 12 * 16; at += 12)
+        edit(w, nbase, data + at);
+    size_t len = 0;
+    void *img = image_of(w, nbase, &len);
+    if (img)
+        read_all(img, len);
+    free(img);
+    for (int k = 0; k < nbase; k++)
+        free(w[k].data);
+    return 0;
+}
