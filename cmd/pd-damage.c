@@ -125,14 +125,14 @@ int main(int argc, char **argv)
     FILE *table = (o.output && strcmp(o.output, "-") == 0) ? stderr : stdout;
     if (o.quiet)
         table = NULL;
-    if (s == PD_OK && table)
-        fprintf(table, "# step time_s broken_bonds mean_damage max_damage n_damage_gt_%g\n",
-                o.threshold);
     for (int64_t k = 0; k < nframes && s == PD_OK; k++) {
         pd_frame_info fi;
         if ((s = pd_read_frame_info(f, names[k], &fi)) != PD_OK ||
             (s = pd_read_frame_state(f, names[k], b->count, intact)) != PD_OK)
             break;
+        if (k == 0 && table) /* only once a frame is known to be readable */
+            fprintf(table, "# step time_s broken_bonds mean_damage max_damage n_damage_gt_%g\n",
+                    o.threshold);
         pd_damage(p, b, intact, damage);
         double sum = 0, max = 0;
         int64_t above = 0;

@@ -1,0 +1,118 @@
+#!/usr/bin/env bats
+# The corpus of broken pd-h5 files in tests/fixtures/broken (made by
+# tests/fixtures/make-broken.py from a small valid run, one thing wrong in
+# each): every reader refuses each file with exit 1 and exactly this one
+# line, naming the file and what is wrong.  The same readers are fuzzed by
+# `make fuzz`.
+
+load test_helper
+
+FIXTURES=$BATS_TEST_DIRNAME/fixtures/broken
+
+setup() {
+    cd "$FIXTURES"
+}
+
+# refused FILE MESSAGE: pd-damage, pd-dump2vtk and pd-crack-tip all exit 1
+# with "PROG: error: MESSAGE" and nothing else on stderr; pd-dump2vtk writes
+# no collection (.pvd), which it writes last, only for a complete export.
+# (Rows or .vtu files of the frames before a bad frame may remain.)
+refused() {
+    local file=$1 msg=$2 out=$BATS_TEST_TMPDIR/out
+    for prog in pd-damage pd-crack-tip pd-dump2vtk; do
+        case $prog in
+        pd-damage) run --separate-stderr pd-damage -n "$file" ;;
+        pd-crack-tip) run --separate-stderr pd-crack-tip "$file" ;;
+        pd-dump2vtk) run --separate-stderr pd-dump2vtk -q "$file" -o "$out/vtk" ;;
+        esac
+        [ "$status" -eq 1 ] && [ "$stderr" = "$prog: error: $msg" ] ||
+            { echo "$prog: $status: $stderr"; return 1; }
+    done
+    ! compgen -G "$out/vtk/*.pvd" >/dev/null || { echo "a .pvd was written"; return 1; }
+}
+
+# refused_by_run FILE MESSAGE: pd-run too (for what a model carries).
+refused_by_run() {
+    refused "$@" || return 1
+    run --separate-stderr pd-run --c 1e3 --steps 1 -q "$1" -o "$BATS_TEST_TMPDIR/r.h5"
+    [ "$status" -eq 1 ] && [ "$stderr" = "pd-run: error: $2" ] &&
+        [ ! -e "$BATS_TEST_TMPDIR/r.h5" ] || { echo "pd-run: $status: $stderr"; return 1; }
+}
+
+@test "unknown format version" {
+    refused_by_run version-99.h5 "'version-99.h5': pd-h5 format version 99, this pd reads version 1"
+}
+
+@test "HDF5 without pd_format" {
+    refused_by_run no-format.h5 "'no-format.h5' is an HDF5 file but not a pd-h5 file (no pd_format)"
+}
+
+@test "volume stored as int32" {
+    refused_by_run volume-int32.h5 "'volume-int32.h5': dataset '/particles/volume' is int32, expected float64"
+}
+
+@test "positions of shape (N,2)" {
+    refused_by_run position-n2.h5 "'position-n2.h5': dataset '/particles/position' has 2 entries along axis 1, expected 3"
+}
+
+@test "density shorter than the positions" {
+    refused_by_run density-short.h5 "'density-short.h5': dataset '/particles/density' has 26 entries along axis 0, expected 27"
+}
+
+@test "a volume that is NaN" {
+    refused_by_run volume-nan.h5 "'volume-nan.h5': particle 0 has volume nan"
+}
+
+@test "two particles with the same id" {
+    refused_by_run id-duplicate.h5 "'id-duplicate.h5': particle id 1 appears twice"
+}
+
+@test "an id of 0" {
+    refused_by_run id-zero.h5 "'id-zero.h5': particle 0 has id 0 (ids start at 1)"
+}
+
+@test "CSR offsets that decrease" {
+    refused_by_run offset-decreasing.h5 "'offset-decreasing.h5': /bonds/offset decreases at row 2"
+}
+
+@test "offsets declaring more bonds than memory holds" {
+    refused_by_run offset-huge.h5 "'offset-huge.h5': /bonds/offset declares 1152921504606846976 bonds, more than memory"
+}
+
+@test "a neighbour index out of range" {
+    refused_by_run neighbor-out-of-range.h5 "'neighbor-out-of-range.h5': bond 0 points to particle 1000000 of 27"
+}
+
+@test "a particle bonded to itself" {
+    refused_by_run neighbor-self.h5 "'neighbor-self.h5': particle 0 is bonded to itself"
+}
+
+@test "a bond broken on one side only" {
+    refused_by_run state-one-side.h5 "'state-one-side.h5': bond 0-1 is broken on one side only (state bits differ)"
+}
+
+@test "a negative bond length" {
+    refused_by_run length-negative.h5 "'length-negative.h5': bond 0 has length -1"
+}
+
+@test "a partial-volume factor of 2" {
+    refused_by_run vfactor-two.h5 "'vfactor-two.h5': bond 0 has volume factor 2"
+}
+
+@test "a run without bonds (the wrong stage)" {
+    refused_by_run no-bonds.h5 "'no-bonds.h5' has no /bonds (run pd-bonds first)"
+}
+
+@test "a frame without its step" {
+    refused frame-no-step.h5 "'frame-no-step.h5': frame '00000001' has no step attribute"
+}
+
+@test "a frame whose state is too short" {
+    refused frame-state-short.h5 "'frame-state-short.h5': dataset '/frames/00000001/state' has 31 entries along axis 0, expected 32"
+}
+
+@test "every file of the corpus has a test here" {
+    for f in *.h5; do
+        grep -q "${f%.h5}.h5" "$BATS_TEST_FILENAME" || { echo "no test for $f"; return 1; }
+    done
+}
