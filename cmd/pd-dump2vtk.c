@@ -219,8 +219,8 @@ int main(int argc, char **argv)
     if (s == PD_OK && (s = pd_read_particles(f, &p)) == PD_OK &&
         (s = pd_list_frames(f, &nframes, &frames)) == PD_OK &&
         (s = frame_data_alloc(&d, p->n)) == PD_OK) {
-        files = calloc((size_t)nframes, sizeof *files);
-        times = calloc((size_t)nframes, sizeof *times);
+        files = calloc((size_t)(nframes ? nframes : 1), sizeof *files);
+        times = calloc((size_t)(nframes ? nframes : 1), sizeof *times);
         if (files == NULL || times == NULL)
             s = pd_fail(PD_ERR_NOMEM, "out of memory");
     }

@@ -299,6 +299,32 @@ static char *scene_text(const pd_scene *s)
     return t;
 }
 
+/* The steps that get a frame: 0, every, 2 every, ... and the last; only
+ * the last with --every 0. */
+static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds *b,
+                             const pd_scene *sc)
+{
+    int64_t cap = sc->every > 0 ? sc->steps / sc->every + 2 : 1, m = 0;
+    int64_t *steps = malloc((size_t)cap * sizeof *steps);
+    double *times = malloc((size_t)cap * sizeof *times);
+    if (steps == NULL || times == NULL) {
+        free(steps);
+        free(times);
+        return pd_fail(PD_ERR_NOMEM, "out of memory planning %lld frames", (long long)cap);
+    }
+    if (sc->every > 0)
+        for (int64_t n = 0; n <= sc->steps; n += sc->every)
+            steps[m++] = n;
+    if (m == 0 || steps[m - 1] != sc->steps)
+        steps[m++] = sc->steps;
+    for (int64_t k = 0; k < m; k++)
+        times[k] = (double)steps[k] * sc->dt;
+    pd_status s = pd_plan_frames(out, p->n, b->count, m, steps, times);
+    free(steps);
+    free(times);
+    return s;
+}
+
 static void progress(int64_t step, int64_t steps, double elapsed)
 {
     int width = 30, done = steps ? (int)((double)width * (double)step / (double)steps) : width;
@@ -413,6 +439,12 @@ int main(int argc, char **argv)
         s = pd_write_bonds(out, b);
     if (s == PD_OK)
         s = pd_write_scene(out, sc, pd_sim_effects(sim), text ? text : "");
+    /* every frame laid out now, then the file under its final name: a run
+     * killed at any moment leaves it readable with its complete frames */
+    if (s == PD_OK)
+        s = plan_frames(out, p, b, sc);
+    if (s == PD_OK)
+        s = pd_file_publish(out);
     free(cmdline);
     free(text);
     pd_file_close(in);

@@ -470,6 +470,15 @@ pd_status pd_file_close(pd_file *f)
     }
     if (H5Fclose(f->fid) < 0)
         s = pd_fail(PD_ERR_IO, "cannot write '%s' (disk full?)", f->path);
+    if (f->published) { /* already under its final name: make it durable */
+        int fd = open(f->path, O_RDONLY);
+        if (s == PD_OK && fd >= 0 && fsync(fd) != 0)
+            s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", f->path, strerror(errno));
+        if (fd >= 0)
+            close(fd);
+        file_free(f);
+        return s;
+    }
     if (s == PD_OK) {
         int fd = open(f->tmp, O_RDONLY);
         if (fd >= 0) {
@@ -492,7 +501,27 @@ void pd_file_abort(pd_file *f)
         return;
     if (f->fid >= 0)
         H5Fclose(f->fid);
-    if (f->tmp)
+    if (f->tmp && !f->published)
         unlink(f->tmp);
     file_free(f);
+}
+
+pd_status pd_file_publish(pd_file *f)
+{
+    if (f->to_stdout || f->published || f->tmp == NULL)
+        return PD_OK;
+    if (H5Fflush(f->fid, H5F_SCOPE_GLOBAL) < 0)
+        return pd_fail(PD_ERR_IO, "cannot write '%s' (disk full?)", f->path);
+    int fd = open(f->tmp, O_RDONLY);
+    int ok = fd >= 0 && fsync(fd) == 0;
+    if (fd >= 0)
+        close(fd);
+    if (!ok)
+        return pd_fail(PD_ERR_IO, "cannot write '%s': %s", f->path, strerror(errno));
+    if (rename(f->tmp, f->path) != 0)
+        return pd_fail(PD_ERR_IO, "cannot rename the output to '%s': %s", f->path,
+                       strerror(errno));
+    temp_forget(f->tmp);
+    f->published = 1;
+    return PD_OK;
 }

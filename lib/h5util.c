@@ -155,6 +155,45 @@ pd_status pd_h5_write_attr_doubles(hid_t loc, const char *name, const double *v,
     return s;
 }
 
+pd_status pd_h5_update_attr(hid_t loc, const char *name, hid_t memtype, const void *value)
+{
+    hid_t a = H5Aopen(loc, name, H5P_DEFAULT);
+    pd_status s = PD_OK;
+    if (a < 0 || H5Awrite(a, memtype, value) < 0)
+        s = pd_fail(PD_ERR_IO, "cannot write attribute '%s'", name);
+    if (a >= 0)
+        H5Aclose(a);
+    return s;
+}
+
+pd_status pd_h5_write_into(hid_t loc, const char *name, hid_t memtype, const void *data)
+{
+    hid_t d = H5Dopen2(loc, name, H5P_DEFAULT);
+    pd_status s = PD_OK;
+    if (d < 0 || H5Dwrite(d, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
+        s = pd_fail(PD_ERR_IO, "cannot write dataset '%s' (disk full?)", name);
+    if (d >= 0)
+        H5Dclose(d);
+    return s;
+}
+
+pd_status pd_h5_reserve_data(hid_t loc, const char *name, hid_t filetype, int rank,
+                             const hsize_t *dims)
+{
+    hid_t sp = H5Screate_simple(rank, dims, NULL);
+    hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_obj_track_times(dcpl, 0);
+    H5Pset_alloc_time(dcpl, H5D_ALLOC_TIME_EARLY);
+    H5Pset_fill_time(dcpl, H5D_FILL_TIME_NEVER);
+    hid_t d = H5Dcreate2(loc, name, filetype, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    H5Pclose(dcpl);
+    H5Sclose(sp);
+    if (d < 0)
+        return pd_fail(PD_ERR_IO, "cannot create dataset '%s' (disk full?)", name);
+    H5Dclose(d);
+    return PD_OK;
+}
+
 hid_t pd_h5_create_group(hid_t loc, const char *name)
 {
     hid_t gcpl = H5Pcreate(H5P_GROUP_CREATE);

@@ -17,6 +17,7 @@ struct pd_file {
     unsigned char *image; /* stdin or update image kept alive      */
     int to_stdout;
     int readonly;
+    int published;        /* renamed to `path` while still open    */
 };
 
 int pd_h5_has_attr(hid_t loc, const char *name);
@@ -27,6 +28,13 @@ pd_status pd_h5_read_attr_double(hid_t loc, const char *name, double *out);
 pd_status pd_h5_write_attr_string(hid_t loc, const char *name, const char *value);
 pd_status pd_h5_write_attr_int(hid_t loc, const char *name, int64_t value);
 pd_status pd_h5_write_attr_doubles(hid_t loc, const char *name, const double *v, int n);
+/* Write an existing attribute in place (no change to the file's layout). */
+pd_status pd_h5_update_attr(hid_t loc, const char *name, hid_t memtype, const void *value);
+/* Write a whole existing dataset in place. */
+pd_status pd_h5_write_into(hid_t loc, const char *name, hid_t memtype, const void *data);
+/* A dataset with its storage allocated now, to be written in place later. */
+pd_status pd_h5_reserve_data(hid_t loc, const char *name, hid_t filetype, int rank,
+                             const hsize_t *dims);
 /* A group without modification times (reproducible bytes). */
 hid_t pd_h5_create_group(hid_t loc, const char *name);
 pd_status pd_h5_write_data(hid_t loc, const char *name, hid_t filetype, hid_t memtype, int rank,

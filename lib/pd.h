@@ -256,7 +256,13 @@ pd_status pd_file_update(const char *inpath, const char *outpath, pd_file **out)
 /* Close: flush, publish (rename or stream), free.  On failure the temporary
  * file is removed. */
 pd_status pd_file_close(pd_file *f);
-/* Abandon a file being written: remove the temporary, free. */
+/* Put a file being written under its final name now, while it stays open
+ * (after flushing it): for a run whose frames are laid out in advance and
+ * then only filled in (pd_plan_frames), so that a killed run leaves a
+ * readable file.  No-op for stdout. */
+pd_status pd_file_publish(pd_file *f);
+/* Abandon a file being written: remove the temporary (a published file
+ * stays, with what it holds), free. */
 void pd_file_abort(pd_file *f);
 
 /* Remove the temporary files of outputs still being written: for a signal
@@ -286,11 +292,18 @@ typedef struct {
     int64_t broken;    /* broken bonds (pairs) */
 } pd_frame_info;
 
+/* Lay out every frame a run will write (steps[k] at times[k]) before the
+ * first step, so that writing them later changes no structure of the file;
+ * see schema.c on crash safety. */
+pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
+                         const int64_t *steps, const double *times);
+/* Write a frame (into its place when planned), then mark it complete. */
 pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
                          double *const y[3], double *const v[3],
                          const uint64_t *intact, int64_t nbonds);
-/* Number of frames and their names in step order; caller frees with
- * pd_frames_free_list. */
+/* Number of complete frames and their names in step order (none, from a
+ * run killed before its first frame, is not an error; no /frames is);
+ * caller frees with pd_frames_free_list. */
 pd_status pd_list_frames(const pd_file *f, int64_t *nframes, char ***names);
 void pd_frames_free_list(int64_t nframes, char **names);
 pd_status pd_read_frame_info(const pd_file *f, const char *name, pd_frame_info *fi);

@@ -487,50 +487,117 @@ static pd_status frame_path(const char *name, const char *field, char *buf, size
     return PD_OK;
 }
 
+/* Crash safety.  A run lays out all its frames at the start
+ * (pd_plan_frames): groups, datasets with their storage allocated, and
+ * attributes, each frame marked complete = 0.  Writing a frame then changes
+ * no structure of the file: it writes the datasets and attributes in place,
+ * flushes, and only then sets complete = 1 and flushes again.  A run killed
+ * at any moment (SIGKILL included) leaves a file whose structure was
+ * complete before the first step, and whose complete frames are whole;
+ * readers list only complete frames. */
+
+static void frame_name(int64_t step, char *buf, size_t len)
+{
+    snprintf(buf, len, "/frames/%08lld", (long long)step);
+}
+
+pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
+                         const int64_t *steps, const double *times)
+{
+    hid_t root = pd_h5_create_group(f->fid, "/frames");
+    if (root < 0)
+        return pd_fail(PD_ERR_IO, "cannot create /frames");
+    H5Gclose(root);
+    hsize_t d2[2] = {(hsize_t)n, 3}, ds[1] = {(hsize_t)((nbonds + 7) / 8)};
+    pd_status s = PD_OK;
+    for (int64_t k = 0; k < nframes && s == PD_OK; k++) {
+        char path[64];
+        frame_name(steps[k], path, sizeof path);
+        hid_t g = pd_h5_create_group(f->fid, path);
+        if (g < 0)
+            return pd_fail(PD_ERR_IO, "cannot create frame %s (disk full?)", path);
+        double zero = 0;
+        if ((s = pd_h5_reserve_data(g, "displacement", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
+            (s = pd_h5_reserve_data(g, "velocity", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
+            (s = pd_h5_reserve_data(g, "state", H5T_STD_U8LE, 1, ds)) == PD_OK &&
+            (s = pd_h5_write_attr_int(g, "step", steps[k])) == PD_OK &&
+            (s = pd_h5_write_attr_doubles(g, "time", &times[k], 1)) == PD_OK &&
+            (s = pd_h5_write_attr_doubles(g, "kinetic_energy", &zero, 1)) == PD_OK &&
+            (s = pd_h5_write_attr_int(g, "broken_bonds", 0)) == PD_OK)
+            s = pd_h5_write_attr_int(g, "complete", 0);
+        H5Gclose(g);
+    }
+    return s;
+}
+
 pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
                          double *const y[3], double *const v[3], const uint64_t *intact,
                          int64_t nbonds)
 {
-    if (!pd_h5_has_link(f->fid, "/frames")) {
-        hid_t g = pd_h5_create_group(f->fid, "/frames");
-        if (g < 0)
-            return pd_fail(PD_ERR_IO, "cannot create /frames");
-        H5Gclose(g);
-    }
     char path[64];
-    snprintf(path, sizeof path, "/frames/%08lld", (long long)fi->step);
-    hid_t g = pd_h5_create_group(f->fid, path);
+    frame_name(fi->step, path, sizeof path);
+    if (!pd_h5_has_link(f->fid, path)) { /* not laid out: lay out this one */
+        pd_status s = PD_OK;
+        if (!pd_h5_has_link(f->fid, "/frames")) {
+            hid_t root = pd_h5_create_group(f->fid, "/frames");
+            if (root < 0)
+                return pd_fail(PD_ERR_IO, "cannot create /frames");
+            H5Gclose(root);
+        }
+        hid_t g = pd_h5_create_group(f->fid, path);
+        if (g < 0)
+            return pd_fail(PD_ERR_IO, "cannot create frame %s", path);
+        H5Gclose(g);
+        hsize_t d2[2] = {(hsize_t)p->n, 3}, ds[1] = {(hsize_t)((nbonds + 7) / 8)};
+        g = H5Gopen2(f->fid, path, H5P_DEFAULT);
+        double zero = 0;
+        if ((s = pd_h5_reserve_data(g, "displacement", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
+            (s = pd_h5_reserve_data(g, "velocity", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
+            (s = pd_h5_reserve_data(g, "state", H5T_STD_U8LE, 1, ds)) == PD_OK &&
+            (s = pd_h5_write_attr_int(g, "step", fi->step)) == PD_OK &&
+            (s = pd_h5_write_attr_doubles(g, "time", &fi->time, 1)) == PD_OK &&
+            (s = pd_h5_write_attr_doubles(g, "kinetic_energy", &zero, 1)) == PD_OK &&
+            (s = pd_h5_write_attr_int(g, "broken_bonds", 0)) == PD_OK)
+            s = pd_h5_write_attr_int(g, "complete", 0);
+        H5Gclose(g);
+        if (s != PD_OK)
+            return s;
+    }
+    hid_t g = H5Gopen2(f->fid, path, H5P_DEFAULT);
     if (g < 0)
-        return pd_fail(PD_ERR_IO, "cannot create frame %s", path);
+        return pd_fail(PD_ERR_IO, "cannot open frame %s", path);
     size_t n = (size_t)p->n;
     double *buf = malloc((n ? n : 1) * 3 * sizeof(double));
     uint8_t *bytes = words_to_bytes(intact, nbonds);
     pd_status s = PD_OK;
     if (buf == NULL || bytes == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory writing a frame");
-    hsize_t d2[2] = {n, 3}, ds[1] = {(hsize_t)((nbonds + 7) / 8)};
     if (s == PD_OK) {
         for (size_t i = 0; i < n; i++)
             for (int d = 0; d < 3; d++)
                 buf[3 * i + d] = y[d][i] - p->x[d][i];
-        s = pd_h5_write_data(g, "displacement", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 2, d2, buf);
+        s = pd_h5_write_into(g, "displacement", H5T_NATIVE_DOUBLE, buf);
     }
     if (s == PD_OK) {
         for (size_t i = 0; i < n; i++)
             for (int d = 0; d < 3; d++)
                 buf[3 * i + d] = v[d][i];
-        s = pd_h5_write_data(g, "velocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 2, d2, buf);
+        s = pd_h5_write_into(g, "velocity", H5T_NATIVE_DOUBLE, buf);
     }
+    if (s == PD_OK && nbonds > 0)
+        s = pd_h5_write_into(g, "state", H5T_NATIVE_UINT8, bytes);
     if (s == PD_OK)
-        s = pd_h5_write_data(g, "state", H5T_STD_U8LE, H5T_NATIVE_UINT8, 1, ds, bytes);
+        s = pd_h5_update_attr(g, "kinetic_energy", H5T_NATIVE_DOUBLE, &fi->kinetic);
     if (s == PD_OK)
-        s = pd_h5_write_attr_int(g, "step", fi->step);
+        s = pd_h5_update_attr(g, "broken_bonds", H5T_NATIVE_INT64, &fi->broken);
+    /* the frame whole on disk first, then marked complete */
+    if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
+        s = pd_fail(PD_ERR_IO, "cannot write frame %s (disk full?)", path);
+    int64_t one = 1;
     if (s == PD_OK)
-        s = pd_h5_write_attr_doubles(g, "time", &fi->time, 1);
-    if (s == PD_OK)
-        s = pd_h5_write_attr_doubles(g, "kinetic_energy", &fi->kinetic, 1);
-    if (s == PD_OK)
-        s = pd_h5_write_attr_int(g, "broken_bonds", fi->broken);
+        s = pd_h5_update_attr(g, "complete", H5T_NATIVE_INT64, &one);
+    if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
+        s = pd_fail(PD_ERR_IO, "cannot write frame %s (disk full?)", path);
     free(buf);
     free(bytes);
     H5Gclose(g);
@@ -558,9 +625,13 @@ static herr_t collect_frame(hid_t g, const char *name, const H5L_info_t *info, v
         fl->st = pd_fail(PD_ERR_FORMAT, "'%s': /frames/%s is not a group", fl->file, name);
         return 1;
     }
-    int64_t step;
+    int64_t step, complete = 1;
     pd_status s = pd_h5_read_attr_int(fg, "step", &step);
+    if (s == PD_OK && pd_h5_has_attr(fg, "complete"))
+        s = pd_h5_read_attr_int(fg, "complete", &complete);
     H5Gclose(fg);
+    if (s == PD_OK && complete != 1)
+        return 0; /* laid out, not (yet) written: not a frame */
     if (s != PD_OK) {
         fl->st = pd_fail(PD_ERR_FORMAT, "'%s': frame '%s' has no step attribute", fl->file, name);
         return 1;
@@ -604,9 +675,9 @@ pd_status pd_list_frames(const pd_file *f, int64_t *nframes, char ***names)
         free(fl.v);
         return fl.st;
     }
-    if (fl.n == 0) {
+    if (fl.n == 0) { /* a run killed before its first frame: none yet */
         free(fl.v);
-        return pd_fail(PD_ERR_FORMAT, "'%s' has no frames", f->name);
+        return PD_OK;
     }
     qsort(fl.v, (size_t)fl.n, sizeof *fl.v, cmp_frame);
     char **out = malloc((size_t)fl.n * sizeof *out);

@@ -593,21 +593,53 @@ print('ok')" t1.h5
     assert_output ""
 }
 
-@test "a run killed by SIGTERM or SIGHUP leaves no temporary file and no output" {
+@test "a run killed by SIGTERM or SIGHUP before its first step leaves nothing behind" {
     make_block
     for sig in TERM HUP; do
-        pd-run --c 1e21 --steps 100000000 -q model.h5 -o "killed.h5" &
+        # a long run on a slow pipe: killed while the model is being written
+        pd-run --c 1e21 --steps 100000000 --every 1 -q model.h5 -o "killed.h5" &
         pid=$!
-        # wait until the temporary output exists, then kill
         for _ in $(seq 100); do
             compgen -G ".killed.h5.tmp.*" >/dev/null && break
-            sleep 0.1
+            sleep 0.05
         done
         kill -s "$sig" "$pid"
         run wait "$pid"
         [ "$status" -gt 128 ]
         [ ! -e killed.h5 ]
         assert_no_temp .
+    done
+}
+
+@test "SIGKILL at 20 random moments: the output is either absent or readable with whole frames" {
+    make_block
+    py "
+import numpy as np
+with h5py.File('model.h5') as f:
+    print(len(f['particles/id']))" >/dev/null
+    for k in $(seq 20); do
+        rm -f k.h5
+        pd-run "${RUN_OPTS[@]}" --steps 3000 --every 20 --threads 1 -q model.h5 -o k.h5 &
+        pid=$!
+        sleep "$(awk -v s="$RANDOM" 'BEGIN { srand(s); printf "%.3f", rand() * 1.5 }')"
+        kill -9 "$pid" 2>/dev/null || true
+        wait "$pid" || true
+        rm -f .k.h5.tmp.* # a kill before the file was published leaves its temporary
+        [ -e k.h5 ] || continue
+        # every pd reader takes it, and lists only whole frames
+        run -0 pd-damage -n k.h5
+        run -0 pd-crack-tip k.h5
+        run -0 pd-dump2vtk -q k.h5 -o "vtk$k"
+        py "
+import numpy as np
+with h5py.File(sys.argv[1]) as f:
+    frames = [g for g in f['frames'].values() if g.attrs['complete'] == 1]
+    steps = sorted(g.attrs['step'] for g in frames)
+    assert steps == list(range(0, 20 * len(steps), 20)), steps   # a prefix of the plan
+    for g in frames:
+        assert np.isfinite(g['displacement'][:]).all() and np.isfinite(g['velocity'][:]).all()
+    d = f['frames'][max(f['frames'], key=lambda n: f['frames'][n].attrs['step'])]
+    print(len(steps), 'frames')" k.h5
     done
 }
 
@@ -622,15 +654,17 @@ print('ok')" t1.h5
     [ "$(printf '%s\n' "$stderr" | wc -l)" -eq 1 ]
     [[ "$stderr" =~ ^pd-run:\ error:\ the\ (force|position|velocity)\ of\ particle\ [0-9]+\ \(id\ [0-9]+\)\ is\ not\ finite\ at\ step\ ([0-9]+):.*time\ step ]]
     bad=${BASH_REMATCH[2]}
-    # every frame in the file is finite and comes before the bad step
+    # every complete frame in the file is finite and comes before the bad step
     py "
 import numpy as np
 with h5py.File(sys.argv[1]) as f:
-    steps = [f['frames'][k].attrs['step'] for k in f['frames']]
+    done = [g for g in f['frames'].values() if g.attrs['complete'] == 1]
+    steps = [g.attrs['step'] for g in done]
     assert steps and max(steps) < int(sys.argv[2]), (steps, sys.argv[2])
-    for k in f['frames']:
-        assert np.isfinite(f['frames'][k]['displacement'][:]).all()
-        assert np.isfinite(f['frames'][k]['velocity'][:]).all()" r.h5 "$bad"
+    for g in done:
+        assert np.isfinite(g['displacement'][:]).all()
+        assert np.isfinite(g['velocity'][:]).all()" r.h5 "$bad"
+    run -0 pd-damage -n r.h5
     assert_no_temp .
 }
 
