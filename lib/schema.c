@@ -501,32 +501,42 @@ static void frame_name(int64_t step, char *buf, size_t len)
     snprintf(buf, len, "/frames/%08lld", (long long)step);
 }
 
+/* One frame's group, datasets (storage allocated) and attributes, not yet
+ * complete. */
+static pd_status lay_out_frame(pd_file *f, int64_t n, int64_t nbonds, int64_t step, double time)
+{
+    if (!pd_h5_has_link(f->fid, "/frames")) {
+        hid_t root = pd_h5_create_group(f->fid, "/frames");
+        if (root < 0)
+            return pd_fail(PD_ERR_IO, "cannot create /frames");
+        H5Gclose(root);
+    }
+    char path[64];
+    frame_name(step, path, sizeof path);
+    hid_t g = pd_h5_create_group(f->fid, path);
+    if (g < 0)
+        return pd_fail(PD_ERR_IO, "cannot create frame %s (disk full?)", path);
+    hsize_t d2[2] = {(hsize_t)n, 3}, ds[1] = {(hsize_t)((nbonds + 7) / 8)};
+    double zero = 0;
+    pd_status s;
+    if ((s = pd_h5_reserve_data(g, "displacement", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "velocity", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "state", H5T_STD_U8LE, 1, ds)) == PD_OK &&
+        (s = pd_h5_write_attr_int(g, "step", step)) == PD_OK &&
+        (s = pd_h5_write_attr_doubles(g, "time", &time, 1)) == PD_OK &&
+        (s = pd_h5_write_attr_doubles(g, "kinetic_energy", &zero, 1)) == PD_OK &&
+        (s = pd_h5_write_attr_int(g, "broken_bonds", 0)) == PD_OK)
+        s = pd_h5_write_attr_int(g, "complete", 0);
+    H5Gclose(g);
+    return s;
+}
+
 pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
                          const int64_t *steps, const double *times)
 {
-    hid_t root = pd_h5_create_group(f->fid, "/frames");
-    if (root < 0)
-        return pd_fail(PD_ERR_IO, "cannot create /frames");
-    H5Gclose(root);
-    hsize_t d2[2] = {(hsize_t)n, 3}, ds[1] = {(hsize_t)((nbonds + 7) / 8)};
     pd_status s = PD_OK;
-    for (int64_t k = 0; k < nframes && s == PD_OK; k++) {
-        char path[64];
-        frame_name(steps[k], path, sizeof path);
-        hid_t g = pd_h5_create_group(f->fid, path);
-        if (g < 0)
-            return pd_fail(PD_ERR_IO, "cannot create frame %s (disk full?)", path);
-        double zero = 0;
-        if ((s = pd_h5_reserve_data(g, "displacement", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
-            (s = pd_h5_reserve_data(g, "velocity", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
-            (s = pd_h5_reserve_data(g, "state", H5T_STD_U8LE, 1, ds)) == PD_OK &&
-            (s = pd_h5_write_attr_int(g, "step", steps[k])) == PD_OK &&
-            (s = pd_h5_write_attr_doubles(g, "time", &times[k], 1)) == PD_OK &&
-            (s = pd_h5_write_attr_doubles(g, "kinetic_energy", &zero, 1)) == PD_OK &&
-            (s = pd_h5_write_attr_int(g, "broken_bonds", 0)) == PD_OK)
-            s = pd_h5_write_attr_int(g, "complete", 0);
-        H5Gclose(g);
-    }
+    for (int64_t k = 0; k < nframes && s == PD_OK; k++)
+        s = lay_out_frame(f, n, nbonds, steps[k], times[k]);
     return s;
 }
 
@@ -537,29 +547,7 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
     char path[64];
     frame_name(fi->step, path, sizeof path);
     if (!pd_h5_has_link(f->fid, path)) { /* not laid out: lay out this one */
-        pd_status s = PD_OK;
-        if (!pd_h5_has_link(f->fid, "/frames")) {
-            hid_t root = pd_h5_create_group(f->fid, "/frames");
-            if (root < 0)
-                return pd_fail(PD_ERR_IO, "cannot create /frames");
-            H5Gclose(root);
-        }
-        hid_t g = pd_h5_create_group(f->fid, path);
-        if (g < 0)
-            return pd_fail(PD_ERR_IO, "cannot create frame %s", path);
-        H5Gclose(g);
-        hsize_t d2[2] = {(hsize_t)p->n, 3}, ds[1] = {(hsize_t)((nbonds + 7) / 8)};
-        g = H5Gopen2(f->fid, path, H5P_DEFAULT);
-        double zero = 0;
-        if ((s = pd_h5_reserve_data(g, "displacement", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
-            (s = pd_h5_reserve_data(g, "velocity", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
-            (s = pd_h5_reserve_data(g, "state", H5T_STD_U8LE, 1, ds)) == PD_OK &&
-            (s = pd_h5_write_attr_int(g, "step", fi->step)) == PD_OK &&
-            (s = pd_h5_write_attr_doubles(g, "time", &fi->time, 1)) == PD_OK &&
-            (s = pd_h5_write_attr_doubles(g, "kinetic_energy", &zero, 1)) == PD_OK &&
-            (s = pd_h5_write_attr_int(g, "broken_bonds", 0)) == PD_OK)
-            s = pd_h5_write_attr_int(g, "complete", 0);
-        H5Gclose(g);
+        pd_status s = lay_out_frame(f, p->n, nbonds, fi->step, fi->time);
         if (s != PD_OK)
             return s;
     }
