@@ -24,10 +24,11 @@
 
 struct options {
     pd_scene sc;
-    int has_c, has_k, has_dt, has_steps, force_dt, has_status;
+    int has_c, has_k, has_dt, has_steps, force_dt, has_status, has_output;
     int64_t status_every;
     const char *input;
     const char *output;
+    const char *restart; /* --restart RUN.h5: go on from its last frame */
     int quiet, timing, debug;
 };
 
@@ -35,6 +36,7 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "Usage: " PROG " [OPTION]... --steps N INPUT [-o FILE]\n"
+            "  or:  " PROG " --restart RUN.h5 --steps N [--every N] [-o FILE]\n"
             "Integrate a peridynamic model (pd-h5 with /bonds); INPUT '-' is stdin.\n"
             "\n"
             "Model:\n"
@@ -58,6 +60,10 @@ static void usage(FILE *out)
             "  --force-dt            run a --dt above the stable step anyway\n"
             "  --every N             a frame every N steps; 0 = only the last (default 0)\n"
             "Other:\n"
+            "  --restart RUN.h5      go on from the last complete frame of RUN.h5 for N\n"
+            "                        more steps, with its scene (only --steps, --every,\n"
+            "                        --threads, --status, --timing, -q, -o may be given);\n"
+            "                        RUN.h5 is updated unless -o names another file\n"
             "  --scene FILE          read options from FILE ('option value' lines);\n"
             "                        the command line overrides it\n"
             "  --threads N           OpenMP threads (default: all cores)\n"
@@ -93,9 +99,24 @@ static void free_scene_strings(void)
 
 /* argv with the scene file's options first, then the command line's (so the
  * command line wins); the --scene option itself is dropped. */
+/* May a --restart command line give this option?  Only what changes
+ * neither the physics nor the steps already taken. */
+static int restart_safe(const char *arg)
+{
+    static const char *safe[] = {"--restart", "--steps", "--every", "--threads", "--status",
+                                 "--timing",  "-q",      "--quiet", "-o",        "--output",
+                                 "--debug",   NULL};
+    for (int k = 0; safe[k]; k++) {
+        size_t len = strlen(safe[k]);
+        if (strncmp(arg, safe[k], len) == 0 && (arg[len] == '\0' || arg[len] == '='))
+            return 1;
+    }
+    return strncmp(arg, "-o", 2) == 0; /* -oFILE */
+}
+
 static int expand_scene(int argc, char **argv, int *nargc, char ***nargv)
 {
-    const char *scene = NULL;
+    const char *scene = NULL, *restart = NULL;
     for (int k = 1; k < argc; k++) {
         if (strcmp(argv[k], "--") == 0)
             break;
@@ -105,10 +126,45 @@ static int expand_scene(int argc, char **argv, int *nargc, char ***nargv)
             scene = argv[k + 1];
         } else if (strncmp(argv[k], "--scene=", 8) == 0)
             scene = argv[k] + 8;
+        else if (strcmp(argv[k], "--restart") == 0 && k + 1 < argc)
+            restart = argv[k + 1];
+        else if (strncmp(argv[k], "--restart=", 10) == 0)
+            restart = argv[k] + 10;
+    }
+    char *text = NULL;
+    if (restart) {
+        /* the scene goes on: the run's own options first, and only safe
+         * ones from the command line */
+        for (int k = 1; k < argc; k++)
+            if (argv[k][0] == '-' && argv[k][1] != '\0' && !restart_safe(argv[k]))
+                return usage_error("--restart goes on with the scene of the run; this option "
+                                   "would change it:",
+                                   argv[k]);
+            else if (argv[k][0] == '-' && (strcmp(argv[k], "--restart") == 0 ||
+                                            strcmp(argv[k], "--steps") == 0 ||
+                                            strcmp(argv[k], "--every") == 0 ||
+                                            strcmp(argv[k], "--threads") == 0 ||
+                                            strcmp(argv[k], "--status") == 0 ||
+                                            strcmp(argv[k], "-o") == 0 ||
+                                            strcmp(argv[k], "--output") == 0))
+                k++; /* its value */
+        pd_file *f = NULL;
+        pd_status st = pd_file_open(restart, &f);
+        if (st == PD_OK)
+            st = pd_read_scene_options(f, &text);
+        pd_file_close(f);
+        if (st != PD_OK)
+            return fail();
     }
     int sc = 0;
     char **sv = NULL;
-    if (scene && pd_scene_args(scene, &sc, &sv) != PD_OK)
+    pd_status st = PD_OK;
+    if (text)
+        st = pd_scene_args_text(text, restart, &sc, &sv);
+    else if (scene)
+        st = pd_scene_args(scene, &sc, &sv);
+    free(text);
+    if (st != PD_OK)
         return fail();
     scene_strings = sv;
     scene_count = sc;
@@ -139,7 +195,7 @@ static int parse_options(int argc, char **argv, struct options *o)
 {
     enum { OPT_MODEL = 256, OPT_C, OPT_K, OPT_FAILURE, OPT_CONTACT, OPT_SKIN, OPT_INDENTER,
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
-           OPT_TIMING };
+           OPT_TIMING, OPT_RESTART };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -156,6 +212,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"threads", required_argument, 0, OPT_THREADS},
         {"status", required_argument, 0, OPT_STATUS},
         {"timing", no_argument, 0, OPT_TIMING},
+        {"restart", required_argument, 0, OPT_RESTART},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -257,6 +314,10 @@ static int parse_options(int argc, char **argv, struct options *o)
             break;
         case 'o':
             o->output = optarg;
+            o->has_output = 1;
+            break;
+        case OPT_RESTART:
+            o->restart = optarg;
             break;
         case 'q':
             o->quiet = 1;
@@ -271,6 +332,14 @@ static int parse_options(int argc, char **argv, struct options *o)
         return usage_error("--steps is required", NULL);
     if (!o->has_c && !o->has_k)
         return usage_error("give the stiffness: --c or --bulk-modulus", NULL);
+    if (o->restart) { /* the run file is the input and, without -o, the output */
+        if (optind < argc)
+            return usage_error("--restart takes no INPUT besides RUN.h5:", argv[optind]);
+        o->input = o->restart;
+        if (!o->has_output)
+            o->output = o->restart;
+        return 0;
+    }
     if (optind != argc - 1)
         return usage_error(optind < argc ? "give exactly one INPUT" : "missing INPUT (a file or '-')",
                            NULL);
@@ -294,15 +363,17 @@ static char *scene_text(const pd_scene *s)
         p += sprintf(p, "indenter sphere,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
                      s->ind_center[0], s->ind_center[1], s->ind_center[2], s->ind_radius, s->ind_k,
                      s->ind_velocity[0], s->ind_velocity[1], s->ind_velocity[2]);
-    sprintf(p, "dt %.17g\nsteps %lld\nevery %lld\n", s->dt, (long long)s->steps,
-            (long long)s->every);
+    p += sprintf(p, "dt %.17g\nsteps %lld\nevery %lld\n", s->dt, (long long)s->steps,
+                 (long long)s->every);
+    if (s->dt > s->dt_stable)
+        sprintf(p, "force-dt\n");
     return t;
 }
 
-/* The steps that get a frame: 0, every, 2 every, ... and the last; only
- * the last with --every 0. */
+/* The steps after `first` that get a frame: 0, every, 2 every, ... and
+ * the last; only the last with --every 0 (and 0 itself for a new run). */
 static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds *b,
-                             const pd_scene *sc)
+                             const pd_scene *sc, int64_t first)
 {
     int64_t cap = sc->every > 0 ? sc->steps / sc->every + 2 : 1, m = 0;
     int64_t *steps = malloc((size_t)cap * sizeof *steps);
@@ -314,14 +385,45 @@ static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds
     }
     if (sc->every > 0)
         for (int64_t n = 0; n <= sc->steps; n += sc->every)
-            steps[m++] = n;
-    if (m == 0 || steps[m - 1] != sc->steps)
+            if (n > first || (n == 0 && first == 0))
+                steps[m++] = n;
+    if ((m == 0 || steps[m - 1] != sc->steps) && (sc->steps > first || first == 0))
         steps[m++] = sc->steps;
     for (int64_t k = 0; k < m; k++)
         times[k] = (double)steps[k] * sc->dt;
     pd_status s = pd_plan_frames(out, p->n, b->count, m, steps, times);
     free(steps);
     free(times);
+    return s;
+}
+
+/* The state at the last complete frame of a run: its step, the restart
+ * slot, the frame's velocities and bond states. */
+static pd_status load_restart(pd_file *f, const pd_particles *p, const pd_bonds *b,
+                              int64_t *step, pd_restart *r, double *v[3], uint64_t **bits)
+{
+    int64_t nframes = 0;
+    char **names = NULL;
+    pd_status s = pd_list_frames(f, &nframes, &names);
+    if (s == PD_OK && nframes == 0)
+        s = pd_fail(PD_ERR_FORMAT, "the run has no complete frame to restart from");
+    pd_frame_info fi;
+    if (s == PD_OK)
+        s = pd_read_frame_info(f, names[nframes - 1], &fi);
+    for (int d = 0; d < 3 && s == PD_OK; d++)
+        if ((v[d] = malloc((size_t)p->n * sizeof(double))) == NULL)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory");
+    if (s == PD_OK && (*bits = calloc((size_t)pd_bits_words(b->count) + 1, 8)) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory");
+    if (s == PD_OK)
+        s = pd_read_frame_vectors(f, names[nframes - 1], p->n, NULL, v);
+    if (s == PD_OK)
+        s = pd_read_frame_state(f, names[nframes - 1], b->count, *bits);
+    if (s == PD_OK)
+        s = pd_read_restart(f, p->n, fi.step, r);
+    if (s == PD_OK)
+        *step = fi.step;
+    pd_frames_free_list(nframes, names);
     return s;
 }
 
@@ -351,8 +453,19 @@ static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds
     double t0 = pd_wtime();
     pd_frame_info fi = {pd_sim_stepno(sim), pd_sim_time(sim), pd_sim_kinetic(sim),
                         pd_sim_broken(sim)};
-    pd_status s = pd_write_frame(out, p, &fi, pd_sim_positions(sim), pd_sim_velocities(sim),
-                                 pd_sim_intact(sim), b->count);
+    /* what a restart needs, then the frame (marked complete last) */
+    pd_restart r = {{NULL}, {NULL}, NULL, {NULL}, 0};
+    double *const *yb = pd_sim_contact_positions(sim, &r.contact_builds);
+    for (int d = 0; d < 3; d++) {
+        r.position[d] = pd_sim_positions(sim)[d];
+        r.force[d] = pd_sim_forces(sim)[d];
+        r.contact_position[d] = yb ? yb[d] : NULL;
+    }
+    r.s0 = (double *)pd_sim_s0(sim);
+    pd_status s = pd_write_restart(out, p->n, fi.step, &r);
+    if (s == PD_OK)
+        s = pd_write_frame(out, p, &fi, pd_sim_positions(sim), pd_sim_velocities(sim),
+                           pd_sim_intact(sim), b->count);
     *t_out += pd_wtime() - t0;
     return s;
 }
@@ -370,33 +483,85 @@ static void print_timing(const pd_sim *sim, double wall, double output)
                 wall > 0 ? 100.0 * t[k] / wall : 0.0);
 }
 
+/* Free what main holds. */
+struct held {
+    pd_file *in, *out;
+    pd_particles *p;
+    pd_bonds *b;
+    pd_sim *sim;
+    pd_restart r;
+    double *v0[3];
+    uint64_t *bits0;
+    char *cmdline, *text;
+};
+
+static void release(struct held *h)
+{
+    if (h->out != h->in)
+        pd_file_close(h->in);
+    pd_sim_free(h->sim);
+    pd_bonds_free(h->b);
+    pd_particles_free(h->p);
+    pd_restart_free(&h->r);
+    for (int d = 0; d < 3; d++)
+        free(h->v0[d]);
+    free(h->bits0);
+    free(h->cmdline);
+    free(h->text);
+}
+
 int main(int argc, char **argv)
 {
+    pd_h5_debug(0); /* before any file is opened (a --restart reads its scene) */
+    struct held h;
+    memset(&h, 0, sizeof h);
+    h.cmdline = pd_join_argv(argc, argv);
     int nargc = 0;
     char **nargv = NULL;
     int rc = expand_scene(argc, argv, &nargc, &nargv);
-    if (rc)
+    if (rc) {
+        free(h.cmdline);
         return rc;
+    }
     struct options o;
     rc = parse_options(nargc, nargv, &o);
     free(nargv);
-    if (rc)
+    if (rc == 0 && o.restart) { /* the steps to add must be said */
+        int given = 0;
+        for (int k = 1; k < argc; k++)
+            given |= strcmp(argv[k], "--steps") == 0 || strncmp(argv[k], "--steps=", 8) == 0;
+        if (!given)
+            rc = usage_error("--restart needs --steps N, the steps to add", NULL);
+    }
+    if (rc) {
+        free(h.cmdline);
         return rc;
+    }
     pd_h5_debug(o.debug);
     remove_temps_on_signal();
     if (o.sc.threads > 0)
         omp_set_num_threads(o.sc.threads);
     o.sc.threads = omp_get_max_threads();
+    const int restart = o.restart != NULL;
 
-    pd_file *in = NULL;
-    pd_particles *p = NULL;
-    pd_bonds *b = NULL;
-    if (pd_file_open(o.input, &in) != PD_OK || pd_read_particles(in, &p) != PD_OK ||
-        pd_read_bonds(in, p, &b) != PD_OK) {
-        pd_file_close(in);
-        pd_particles_free(p);
+    /* a restart updates the run (through a copy renamed over it) */
+    pd_status s = restart ? pd_file_update(o.restart, o.output, &h.in)
+                          : pd_file_open(o.input, &h.in);
+    if (s == PD_OK)
+        s = pd_read_particles(h.in, &h.p);
+    if (s == PD_OK)
+        s = pd_read_bonds(h.in, h.p, &h.b);
+    if (s != PD_OK) {
+        if (restart)
+            pd_file_abort(h.in);
+        else
+            pd_file_close(h.in);
+        h.in = NULL;
+        release(&h);
         return fail();
     }
+    pd_particles *p = h.p;
+    pd_bonds *b = h.b;
     pd_scene *sc = &o.sc;
     if (o.has_k)
         sc->c = pd_pmb_c_from_bulk(sc->bulk_modulus, b->horizon);
@@ -406,9 +571,9 @@ int main(int argc, char **argv)
     if (!o.has_dt) {
         if (!isfinite(sc->dt_stable)) {
             fprintf(stderr, PROG ": error: no bonds, so no stable time step; give --dt\n");
-            pd_bonds_free(b);
-            pd_particles_free(p);
-            pd_file_close(in);
+            if (restart)
+                pd_file_abort(h.in), h.in = NULL;
+            release(&h);
             return 1;
         }
         sc->dt = sc->safety * sc->dt_stable;
@@ -417,73 +582,95 @@ int main(int argc, char **argv)
                 PROG ": error: --dt %g s exceeds the stable time step %g s (seed 004 eq. 46); "
                      "use --force-dt to run anyway\n",
                 sc->dt, sc->dt_stable);
-        pd_bonds_free(b);
-        pd_particles_free(p);
-        pd_file_close(in);
+        if (restart)
+            pd_file_abort(h.in), h.in = NULL;
+        release(&h);
         return 1;
     }
-    int64_t status_every = o.has_status ? o.status_every : (sc->steps >= 10 ? sc->steps / 10 : 1);
+    int64_t first = 0; /* the step the run starts from */
+    if (restart) {
+        s = load_restart(h.in, p, b, &first, &h.r, h.v0, &h.bits0);
+        sc->steps += first; /* --steps N more */
+    }
+    int64_t todo = sc->steps - first;
+    int64_t status_every = o.has_status ? o.status_every : (todo >= 10 ? todo / 10 : 1);
 
-    pd_sim *sim = NULL;
-    pd_status s = pd_sim_new(p, b, sc, &sim);
-    char *cmdline = pd_join_argv(argc, argv);
-    char *text = scene_text(sc);
-    pd_file *out = NULL;
     if (s == PD_OK)
-        s = pd_file_create(o.output, &out);
+        s = pd_sim_new(p, b, sc, &h.sim);
+    if (s == PD_OK && restart)
+        s = pd_sim_restore(h.sim, first, &h.r, h.v0, h.bits0);
+    h.text = scene_text(sc);
+    if (s == PD_OK && restart) {
+        /* the same file goes on: unfinished frames out, the scene and the
+         * history say what was added */
+        h.out = h.in;
+        s = pd_drop_incomplete_frames(h.out);
+        if (s == PD_OK)
+            s = pd_append_history(h.out, h.cmdline ? h.cmdline : PROG);
+    } else if (s == PD_OK) {
+        s = pd_file_create(o.output, &h.out);
+        if (s == PD_OK)
+            s = pd_write_header(h.out, h.in, h.cmdline ? h.cmdline : PROG);
+        if (s == PD_OK)
+            s = pd_write_particles(h.out, p);
+        if (s == PD_OK)
+            s = pd_write_bonds(h.out, b);
+    }
     if (s == PD_OK)
-        s = pd_write_header(out, in, cmdline ? cmdline : PROG);
-    if (s == PD_OK)
-        s = pd_write_particles(out, p);
-    if (s == PD_OK)
-        s = pd_write_bonds(out, b);
-    if (s == PD_OK)
-        s = pd_write_scene(out, sc, pd_sim_effects(sim), text ? text : "");
+        s = pd_write_scene(h.out, sc, pd_sim_effects(h.sim), h.text ? h.text : "");
     /* every frame laid out now, then the file under its final name: a run
      * killed at any moment leaves it readable with its complete frames */
     if (s == PD_OK)
-        s = plan_frames(out, p, b, sc);
+        s = plan_frames(h.out, p, b, sc, first);
     if (s == PD_OK)
-        s = pd_file_publish(out);
-    free(cmdline);
-    free(text);
-    pd_file_close(in);
+        s = pd_plan_restart(h.out, p->n, sc->has_failure, sc->has_contact);
+    if (s == PD_OK)
+        s = pd_file_publish(h.out);
+    if (!restart) {
+        pd_file_close(h.in);
+        h.in = NULL;
+    }
     if (s != PD_OK) {
-        pd_file_abort(out);
-        pd_sim_free(sim);
-        pd_bonds_free(b);
-        pd_particles_free(p);
+        pd_file_abort(h.out ? h.out : h.in); /* h.in: a restart's copy */
+        h.in = h.out = NULL;
+        release(&h);
         return fail();
     }
+    pd_sim *sim = h.sim;
+    pd_file *out = h.out;
     int tty = isatty(STDERR_FILENO) && !o.quiet;
     if (!o.quiet)
         fprintf(stderr,
                 PROG ": %lld particles, %lld bonds; effects: %s\n" PROG
-                     ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps\n",
+                     ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
                 (long long)p->n, (long long)(b->count / 2), pd_sim_effects(sim), sc->dt,
-                sc->dt_stable, (long long)sc->steps);
+                sc->dt_stable, (long long)todo, restart ? " more" : "");
+    if (!o.quiet && restart)
+        fprintf(stderr, PROG ": going on from step %lld of '%s'\n", (long long)first, o.restart);
 
     double t_output = 0, t_start = pd_wtime(), t_shown = 0;
-    s = pd_sim_setup(sim);
-    if (s == PD_OK && sc->every > 0)
-        s = write_frame(out, p, b, sim, &t_output);
-    for (int64_t n = 1; n <= sc->steps && s == PD_OK; n++) {
+    if (!restart) {
+        s = pd_sim_setup(sim);
+        if (s == PD_OK && sc->every > 0)
+            s = write_frame(out, p, b, sim, &t_output);
+    }
+    for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
         s = pd_sim_step(sim);
         if (s != PD_OK)
             break;
-        if ((n % status_every == 0 || n == sc->steps) && !o.quiet)
+        if (((n - first) % status_every == 0 || n == sc->steps) && !o.quiet)
             status_line(sim, sc->steps, tty);
         if ((sc->every > 0 && n % sc->every == 0) || n == sc->steps)
             s = write_frame(out, p, b, sim, &t_output);
         if (tty) {
             double now = pd_wtime();
             if (now - t_shown > 0.2 || n == sc->steps) {
-                progress(n, sc->steps, now - t_start);
+                progress(n - first, todo, now - t_start);
                 t_shown = now;
             }
         }
     }
-    if (s == PD_OK && sc->steps == 0 && sc->every == 0)
+    if (s == PD_OK && !restart && sc->steps == 0 && sc->every == 0)
         s = write_frame(out, p, b, sim, &t_output);
     double wall = pd_wtime() - t_start;
     if (tty)
@@ -497,15 +684,14 @@ int main(int argc, char **argv)
             s = c;
     } else
         pd_file_abort(out);
+    h.in = h.out = NULL;
     if (s == PD_OK && !o.quiet)
         fprintf(stderr, PROG ": %lld steps in %.3f s (%.3g bond updates/s), contact list builds %lld\n",
-                (long long)sc->steps, wall,
-                wall > 0 ? (double)b->count * (double)sc->steps / wall : 0.0,
+                (long long)todo, wall,
+                wall > 0 ? (double)b->count * (double)todo / wall : 0.0,
                 (long long)pd_sim_contact_builds(sim));
     if (s == PD_OK && o.timing)
         print_timing(sim, wall, t_output);
-    pd_sim_free(sim);
-    pd_bonds_free(b);
-    pd_particles_free(p);
+    release(&h);
     return s == PD_OK ? 0 : fail();
 }

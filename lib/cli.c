@@ -37,11 +37,26 @@ static char *trim(char *s)
     return s;
 }
 
+static pd_status scene_stream(FILE *in, const char *path, int *argc, char ***argv);
+
 pd_status pd_scene_args(const char *path, int *argc, char ***argv)
 {
     FILE *in = fopen(path, "r");
     if (in == NULL)
         return pd_fail(PD_ERR_IO, "cannot open scene '%s': %s", path, strerror(errno));
+    return scene_stream(in, path, argc, argv);
+}
+
+pd_status pd_scene_args_text(const char *text, const char *name, int *argc, char ***argv)
+{
+    FILE *in = fmemopen((void *)text, strlen(text), "r");
+    if (in == NULL)
+        return pd_fail(PD_ERR_NOMEM, "cannot read the scene of '%s'", name);
+    return scene_stream(in, name, argc, argv);
+}
+
+static pd_status scene_stream(FILE *in, const char *path, int *argc, char ***argv)
+{
     int n = 0, cap = 16;
     char **v = malloc((size_t)cap * sizeof *v);
     char line[4096];

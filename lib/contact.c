@@ -190,6 +190,25 @@ static pd_status contact_force(pd_sim *sim, void *state)
     return PD_OK;
 }
 
+pd_status pd_contact_restore(pd_sim *sim, void *state, double *const yb[3], int64_t builds)
+{
+    /* the list as it was built: from the positions of the last build */
+    contact_list *cl = state;
+    double *y[3] = {sim->y[0], sim->y[1], sim->y[2]};
+    for (int d = 0; d < 3; d++)
+        sim->y[d] = yb[d];
+    pd_status s = contact_build(sim, cl);
+    for (int d = 0; d < 3; d++)
+        sim->y[d] = y[d];
+    sim->contact_builds = builds;
+    return s;
+}
+
+double *const *pd_contact_positions(void *state)
+{
+    return ((contact_list *)state)->ybuild;
+}
+
 const pd_effect pd_effect_contact = {"contact", PD_T_CONTACT, contact_init, contact_force,
                                      contact_free};
 

@@ -231,6 +231,25 @@ int64_t pd_sim_broken(const pd_sim *sim);      /* broken bonds (pairs) */
 double pd_sim_max_damage(const pd_sim *sim);
 int64_t pd_sim_contact_builds(const pd_sim *sim);
 const double *pd_sim_timers(const pd_sim *sim); /* seconds per pd_timer */
+/* What a run needs beyond a frame to go on bit for bit (pd-run --restart):
+ * exact positions, the force densities of the last step, s0 (with failure)
+ * and the positions at the contact list's last build (with contact). */
+typedef struct {
+    double *position[3];         /* current positions y, m            */
+    double *force[3];            /* force densities, N/m^3            */
+    double *s0;                  /* NULL without failure              */
+    double *contact_position[3]; /* NULL without a contact list yet   */
+    int64_t contact_builds;
+} pd_restart;
+
+double *const *pd_sim_forces(const pd_sim *sim);
+const double *pd_sim_s0(const pd_sim *sim);
+/* Positions at the last contact-list build (NULL if none), and the count. */
+double *const *pd_sim_contact_positions(const pd_sim *sim, int64_t *builds);
+/* Put the run at `step` with the state of a restart slot, the frame's
+ * velocities and bond states. */
+pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double *const v[3],
+                         const uint64_t *intact);
 /* Views of the state (current positions y, velocities v), SoA. */
 double *const *pd_sim_positions(const pd_sim *sim);
 double *const *pd_sim_velocities(const pd_sim *sim);
@@ -283,6 +302,8 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
 pd_status pd_write_bonds(pd_file *f, const pd_bonds *b);
 pd_status pd_write_scene(pd_file *f, const pd_scene *s, const char *effects,
                          const char *options_text);
+/* The resolved options of a run (/scene/options); caller frees. */
+pd_status pd_read_scene_options(const pd_file *f, char **text);
 
 /* Frames. */
 typedef struct {
@@ -297,6 +318,14 @@ typedef struct {
  * see schema.c on crash safety. */
 pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
                          const int64_t *steps, const double *times);
+/* Restart slots (see schema.c): lay out, write (in turn), read the one of
+ * `step` (arrays allocated; pd_restart_free). */
+pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact);
+pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart *r);
+pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart *r);
+void pd_restart_free(pd_restart *r);
+/* Remove frames laid out but never completed. */
+pd_status pd_drop_incomplete_frames(pd_file *f);
 /* Write a frame (into its place when planned), then mark it complete. */
 pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
                          double *const y[3], double *const v[3],
@@ -369,6 +398,8 @@ char *pd_join_argv(int argc, char **argv);
 pd_status pd_scene_args(const char *path, int *argc, char ***argv);
 /* Physical memory of this machine, bytes (a large guess if unknown). */
 double pd_memory_bytes(void);
+/* The same from a scene's text (the /scene/options of a run). */
+pd_status pd_scene_args_text(const char *text, const char *name, int *argc, char ***argv);
 /* Wall clock, s. */
 double pd_wtime(void);
 /* Peak resident memory of this process, bytes (0 if unknown). */

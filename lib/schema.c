@@ -812,3 +812,217 @@ pd_status pd_read_frame_damage(const pd_file *f, const pd_particles *p, const ch
     pd_damage(p, *b, *intact, damage);
     return PD_OK;
 }
+
+/* ------------------------------------------------------------ restart */
+
+/* Two restart slots, /restart/0 and /restart/1, laid out with the frames
+ * and written in turn, each after its frame's data and before the frame is
+ * marked complete: the slot of the last complete frame is always whole (the
+ * other slot may be half written when a run is killed). */
+
+static const char *restart_fields[4] = {"position", "force", "s0", "contact_position"};
+
+pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact)
+{
+    if (pd_h5_has_link(f->fid, "/restart"))
+        return PD_OK;
+    hid_t root = pd_h5_create_group(f->fid, "/restart");
+    if (root < 0)
+        return pd_fail(PD_ERR_IO, "cannot create /restart");
+    H5Gclose(root);
+    hsize_t d2[2] = {(hsize_t)n, 3}, d1[1] = {(hsize_t)n};
+    pd_status s = PD_OK;
+    for (int k = 0; k < 2 && s == PD_OK; k++) {
+        char path[32];
+        snprintf(path, sizeof path, "/restart/%d", k);
+        hid_t g = pd_h5_create_group(f->fid, path);
+        if (g < 0)
+            return pd_fail(PD_ERR_IO, "cannot create %s", path);
+        if ((s = pd_h5_reserve_data(g, "position", H5T_IEEE_F64LE, 2, d2)) == PD_OK)
+            s = pd_h5_reserve_data(g, "force", H5T_IEEE_F64LE, 2, d2);
+        if (s == PD_OK && has_s0)
+            s = pd_h5_reserve_data(g, "s0", H5T_IEEE_F64LE, 1, d1);
+        if (s == PD_OK && has_contact)
+            s = pd_h5_reserve_data(g, "contact_position", H5T_IEEE_F64LE, 2, d2);
+        if (s == PD_OK && (s = pd_h5_write_attr_int(g, "step", -1)) == PD_OK &&
+            (s = pd_h5_write_attr_int(g, "contact_builds", 0)) == PD_OK)
+            s = pd_h5_write_attr_int(g, "complete", 0);
+        H5Gclose(g);
+    }
+    return s;
+}
+
+static void slot_info(hid_t fid, int k, int64_t *step, int64_t *complete)
+{
+    char path[32];
+    snprintf(path, sizeof path, "/restart/%d", k);
+    *step = -1;
+    *complete = 0;
+    hid_t g = pd_h5_has_link(fid, path) ? H5Gopen2(fid, path, H5P_DEFAULT) : -1;
+    if (g < 0)
+        return;
+    if (pd_h5_read_attr_int(g, "step", step) != PD_OK ||
+        pd_h5_read_attr_int(g, "complete", complete) != PD_OK)
+        *complete = 0;
+    H5Gclose(g);
+}
+
+/* Interleave SoA arrays into (n,3). */
+static void interleave(double *buf, double *const x[3], int64_t n)
+{
+    for (int64_t i = 0; i < n; i++)
+        for (int d = 0; d < 3; d++)
+            buf[3 * i + d] = x[d][i];
+}
+
+pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart *r)
+{
+    int64_t st[2], done[2];
+    slot_info(f->fid, 0, &st[0], &done[0]);
+    slot_info(f->fid, 1, &st[1], &done[1]);
+    int k = !done[0] ? 0 : !done[1] ? 1 : (st[0] <= st[1] ? 0 : 1);
+    char path[32];
+    snprintf(path, sizeof path, "/restart/%d", k);
+    hid_t g = H5Gopen2(f->fid, path, H5P_DEFAULT);
+    if (g < 0)
+        return pd_fail(PD_ERR_IO, "'%s' has no %s", f->name, path);
+    double *buf = malloc((size_t)(n > 0 ? n : 1) * 3 * sizeof(double));
+    int64_t zero = 0, one = 1;
+    pd_status s = buf ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory writing restart data");
+    if (s == PD_OK)
+        s = pd_h5_update_attr(g, "complete", H5T_NATIVE_INT64, &zero);
+    if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
+        s = pd_fail(PD_ERR_IO, "cannot write restart data (disk full?)");
+    if (s == PD_OK) {
+        interleave(buf, r->position, n);
+        s = pd_h5_write_into(g, "position", H5T_NATIVE_DOUBLE, buf);
+    }
+    if (s == PD_OK) {
+        interleave(buf, r->force, n);
+        s = pd_h5_write_into(g, "force", H5T_NATIVE_DOUBLE, buf);
+    }
+    if (s == PD_OK && r->s0)
+        s = pd_h5_write_into(g, "s0", H5T_NATIVE_DOUBLE, r->s0);
+    if (s == PD_OK && r->contact_position[0]) {
+        interleave(buf, r->contact_position, n);
+        s = pd_h5_write_into(g, "contact_position", H5T_NATIVE_DOUBLE, buf);
+    }
+    if (s == PD_OK)
+        s = pd_h5_update_attr(g, "step", H5T_NATIVE_INT64, &step);
+    if (s == PD_OK)
+        s = pd_h5_update_attr(g, "contact_builds", H5T_NATIVE_INT64, &r->contact_builds);
+    if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
+        s = pd_fail(PD_ERR_IO, "cannot write restart data (disk full?)");
+    if (s == PD_OK)
+        s = pd_h5_update_attr(g, "complete", H5T_NATIVE_INT64, &one);
+    free(buf);
+    H5Gclose(g);
+    return s;
+}
+
+void pd_restart_free(pd_restart *r)
+{
+    for (int d = 0; d < 3; d++) {
+        free(r->position[d]);
+        free(r->force[d]);
+        free(r->contact_position[d]);
+    }
+    free(r->s0);
+    memset(r, 0, sizeof *r);
+}
+
+pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart *r)
+{
+    memset(r, 0, sizeof *r);
+    int k = -1;
+    for (int q = 0; q < 2; q++) {
+        int64_t st, done;
+        slot_info(f->fid, q, &st, &done);
+        if (done == 1 && st == step)
+            k = q;
+    }
+    if (k < 0)
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no restart data for step %lld", f->name,
+                       (long long)step);
+    char group[32];
+    snprintf(group, sizeof group, "/restart/%d", k);
+    pd_status s = PD_OK;
+    for (int fld = 0; fld < 4 && s == PD_OK; fld++) {
+        char path[64];
+        snprintf(path, sizeof path, "%s/%s", group, restart_fields[fld]);
+        if (!pd_h5_has_link(f->fid, path)) {
+            if (fld < 2)
+                s = pd_fail(PD_ERR_FORMAT, "'%s' has no %s", f->name, path);
+            continue;
+        }
+        int vec = fld != 2;
+        pd_h5_form form = {H5T_FLOAT, 8, vec ? 2 : 1, {(hsize_t)n, vec ? 3 : 0}};
+        double *buf = NULL;
+        s = pd_h5_read_data(f->fid, f->name, path, &form, H5T_NATIVE_DOUBLE, sizeof(double),
+                            (void **)&buf, NULL);
+        if (s != PD_OK)
+            break;
+        if (!vec) {
+            r->s0 = buf;
+            continue;
+        }
+        double **dst = fld == 0 ? r->position : fld == 1 ? r->force : r->contact_position;
+        for (int d = 0; d < 3 && s == PD_OK; d++) {
+            dst[d] = malloc((size_t)n * sizeof(double));
+            if (dst[d] == NULL)
+                s = pd_fail(PD_ERR_NOMEM, "out of memory reading restart data");
+            else
+                for (int64_t i = 0; i < n; i++)
+                    dst[d][i] = buf[3 * i + d];
+        }
+        free(buf);
+    }
+    if (s == PD_OK) {
+        hid_t g = H5Gopen2(f->fid, group, H5P_DEFAULT);
+        s = pd_h5_read_attr_int(g, "contact_builds", &r->contact_builds);
+        H5Gclose(g);
+    }
+    if (s != PD_OK)
+        pd_restart_free(r);
+    return s;
+}
+
+/* Frames laid out but never completed (by a run that was killed or ended
+ * early) go, so that a restart can lay out its own. */
+pd_status pd_drop_incomplete_frames(pd_file *f)
+{
+    if (!pd_h5_has_link(f->fid, "/frames"))
+        return PD_OK;
+    hid_t g = H5Gopen2(f->fid, "/frames", H5P_DEFAULT);
+    H5G_info_t info;
+    H5Gget_info(g, &info);
+    pd_status s = PD_OK;
+    for (hsize_t k = info.nlinks; k-- > 0 && s == PD_OK;) {
+        char name[64];
+        if (H5Lget_name_by_idx(g, ".", H5_INDEX_NAME, H5_ITER_INC, k, name, sizeof name,
+                               H5P_DEFAULT) < 0)
+            continue;
+        hid_t fg = H5Gopen2(g, name, H5P_DEFAULT);
+        int64_t complete = 1;
+        if (fg >= 0 && pd_h5_has_attr(fg, "complete"))
+            pd_h5_read_attr_int(fg, "complete", &complete);
+        if (fg >= 0)
+            H5Gclose(fg);
+        if (complete != 1 && H5Ldelete(g, name, H5P_DEFAULT) < 0)
+            s = pd_fail(PD_ERR_IO, "cannot remove the unfinished frame %s", name);
+    }
+    H5Gclose(g);
+    return s;
+}
+
+pd_status pd_read_scene_options(const pd_file *f, char **text)
+{
+    if (!pd_h5_has_link(f->fid, "/scene"))
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no /scene (not made by pd-run?)", f->name);
+    hid_t g = H5Gopen2(f->fid, "/scene", H5P_DEFAULT);
+    pd_status s = pd_h5_read_attr_string(g, "options", text);
+    H5Gclose(g);
+    if (s != PD_OK)
+        return pd_fail(PD_ERR_FORMAT, "'%s': /scene has no options", f->name);
+    return PD_OK;
+}

@@ -259,3 +259,69 @@ const uint64_t *pd_sim_intact(const pd_sim *sim)
     }
     return sim->intact;
 }
+
+/* The state of the effect `e`, or NULL when it is not declared. */
+static void *effect_state(const pd_sim *sim, const pd_effect *e)
+{
+    for (int k = 0; k < sim->neffects; k++)
+        if (sim->effects[k] == e)
+            return sim->state[k];
+    return NULL;
+}
+
+double *const *pd_sim_forces(const pd_sim *sim)
+{
+    return sim->f;
+}
+
+const double *pd_sim_s0(const pd_sim *sim)
+{
+    return sim->sc.has_failure ? sim->s0 : NULL;
+}
+
+double *const *pd_sim_contact_positions(const pd_sim *sim, int64_t *builds)
+{
+    void *st = effect_state(sim, &pd_effect_contact);
+    *builds = sim->contact_builds;
+    return st && sim->contact_builds > 0 ? pd_contact_positions(st) : NULL;
+}
+
+pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double *const v[3],
+                         const uint64_t *intact)
+{
+    size_t bytes = (size_t)sim->n * sizeof(double);
+    for (int d = 0; d < 3; d++) {
+        memcpy(sim->y[d], r->position[d], bytes);
+        memcpy(sim->v[d], v[d], bytes);
+        memcpy(sim->f[d], r->force[d], bytes);
+    }
+    if (sim->sc.has_failure) {
+        if (r->s0 == NULL)
+            return pd_fail(PD_ERR_FORMAT, "the restart data have no s0, the scene has failure");
+        memcpy(sim->s0, r->s0, bytes);
+    }
+    /* the run's bond bits from the frame's: rebuild the half bonds' */
+    memcpy(sim->intact, intact, (size_t)pd_bits_words(sim->b->count) * sizeof(uint64_t));
+    pd_half_bonds *h = &sim->half;
+    for (int64_t w = 0; w < pd_bits_words(h->count); w++)
+        h->intact[w] = 0;
+    for (int64_t i = 0; i < sim->n; i++) {
+        int64_t q = h->offset[i];
+        for (int64_t k = sim->b->offset[i]; k < sim->b->offset[i + 1]; k++)
+            if (sim->b->neighbor[k] > i) {
+                if (pd_bond_intact(intact, k))
+                    h->intact[q >> 6] |= UINT64_C(1) << (q & 63);
+                q++;
+            }
+    }
+    sim->intact_stale = 0;
+    sim->step = step;
+    sim->time = (double)step * sim->sc.dt;
+    void *cs = effect_state(sim, &pd_effect_contact);
+    if (cs && r->contact_builds > 0) {
+        if (r->contact_position[0] == NULL)
+            return pd_fail(PD_ERR_FORMAT, "the restart data have no contact list positions");
+        return pd_contact_restore(sim, cs, r->contact_position, r->contact_builds);
+    }
+    return PD_OK;
+}

@@ -76,6 +76,9 @@ struct pd_sim {
     int64_t contact_builds;
 };
 
+pd_status pd_contact_restore(pd_sim *sim, void *state, double *const yb[3], int64_t builds);
+double *const *pd_contact_positions(void *state);
+
 extern const pd_effect pd_effect_pmb;
 extern const pd_effect pd_effect_pmb_failure;
 extern const pd_effect pd_effect_contact;

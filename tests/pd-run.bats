@@ -490,7 +490,7 @@ print(h.decode() if isinstance(h, bytes) else h)" r.h5
 
 @test "the model travels unchanged into the run file" {
     make_run
-    run -0 h5_same model.h5 run.h5 'history|^/frames|^/scene'
+    run -0 h5_same model.h5 run.h5 'history|^/frames|^/scene|^/restart'
 }
 
 # ------------------------------------------------------------ physics
@@ -676,4 +676,72 @@ with h5py.File(sys.argv[1]) as f:
     [[ "$stderr" =~ ^pd-run:\ error:.*(disk\ full|cannot\ write) ]]
     [ ! -e full.h5 ]
     assert_no_temp .
+}
+
+# same_frame A B STEP: the frame STEP of A and of B bit for bit
+same_frame() {
+    py "
+import numpy as np
+with h5py.File(sys.argv[1]) as a, h5py.File(sys.argv[2]) as b:
+    k = '%08d' % int(sys.argv[3])
+    for d in ('displacement', 'velocity', 'state'):
+        x, y = a['frames'][k][d][:], b['frames'][k][d][:]
+        assert x.dtype == y.dtype and np.array_equal(x.view(np.uint8), y.view(np.uint8)), (k, d)
+    assert a['frames'][k].attrs['complete'] == b['frames'][k].attrs['complete'] == 1" "$@"
+}
+
+@test "--restart: 2N steps in one run equal N steps and N more, bit for bit" {
+    make_block
+    pd-run "${RUN_OPTS[@]}" --steps 120 --every 30 --threads 2 -q model.h5 -o full.h5
+    pd-run "${RUN_OPTS[@]}" --steps 60 --every 30 --threads 2 -q model.h5 -o run.h5
+    run --separate-stderr pd-run --restart run.h5 --steps 60 --threads 2
+    [ "$status" -eq 0 ]
+    [[ "$stderr" =~ going\ on\ from\ step\ 60 ]]
+    for step in 90 120; do same_frame full.h5 run.h5 "$step"; done
+    py "
+with h5py.File(sys.argv[1]) as f:
+    assert f['scene'].attrs['steps'] == 120, f['scene'].attrs['steps']
+    assert '--restart run.h5 --steps 60' in f.attrs['history'].splitlines()[-1]
+    assert sorted(f['frames']) == ['%08d' % s for s in (0, 30, 60, 90, 120)], sorted(f['frames'])" run.h5
+    assert_no_temp .
+}
+
+@test "--restart after SIGKILL goes on from the last complete frame to the uninterrupted result" {
+    make_block
+    pd-run "${RUN_OPTS[@]}" --steps 3000 --every 100 --threads 2 -q model.h5 -o full.h5
+    for k in 1 2 3; do
+        rm -f k.h5 .k.h5.tmp.*
+        pd-run "${RUN_OPTS[@]}" --steps 3000 --every 100 --threads 2 -q model.h5 -o k.h5 &
+        pid=$!
+        sleep "0.$((3 * k))"
+        kill -9 "$pid" 2>/dev/null || true
+        wait "$pid" || true
+        rm -f .k.h5.tmp.*
+        [ -e k.h5 ] || continue
+        last=$(py "
+with h5py.File(sys.argv[1]) as f:
+    done = [g.attrs['step'] for g in f['frames'].values() if g.attrs['complete'] == 1]
+    print(max(done) if done else -1)" k.h5)
+        [ "$last" -ge 0 ] || continue
+        run -0 pd-run --restart k.h5 --steps $((3000 - last)) --threads 1 -q
+        same_frame full.h5 k.h5 3000
+    done
+}
+
+@test "--restart refuses what would change the scene, and needs --steps" {
+    make_block
+    pd-run "${RUN_OPTS[@]}" --steps 20 --every 10 -q model.h5 -o run.h5
+    cp run.h5 before.h5
+    for opt in "--dt 1e-8" "--c 1e21" "--contact" "--failure 0.001,0.25" "--safety 0.5" \
+        "--indenter sphere,0,0,0,1,1,0,0,0" "--scene x.scene"; do
+        # shellcheck disable=SC2086 # opt holds an option and its value
+        expect_usage_error "--restart goes on with the scene" pd-run --restart run.h5 --steps 5 $opt
+    done
+    expect_usage_error "--restart needs --steps" pd-run --restart run.h5
+    cmp run.h5 before.h5
+    # -o: the continued run goes elsewhere, RUN.h5 stays as it was
+    run -0 pd-run --restart run.h5 --steps 10 -q -o more.h5
+    cmp run.h5 before.h5
+    run -0 pd-damage -n more.h5
+    assert_line --partial "30 "
 }
