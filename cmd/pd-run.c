@@ -370,10 +370,11 @@ static char *scene_text(const pd_scene *s)
     return t;
 }
 
-/* The steps after `first` that get a frame: 0, every, 2 every, ... and
- * the last; only the last with --every 0 (and 0 itself for a new run). */
+/* The steps after `first` that get a frame: every, 2 every, ... and the
+ * last; only the last with --every 0; and step 0 itself in a new run
+ * (`fresh`), not in a restart (even from step 0, whose frame exists). */
 static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds *b,
-                             const pd_scene *sc, int64_t first)
+                             const pd_scene *sc, int64_t first, int fresh)
 {
     int64_t cap = sc->every > 0 ? sc->steps / sc->every + 2 : 1, m = 0;
     int64_t *steps = malloc((size_t)cap * sizeof *steps);
@@ -385,9 +386,9 @@ static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds
     }
     if (sc->every > 0)
         for (int64_t n = 0; n <= sc->steps; n += sc->every)
-            if (n > first || (n == 0 && first == 0))
+            if (n > first || (n == 0 && fresh))
                 steps[m++] = n;
-    if ((m == 0 || steps[m - 1] != sc->steps) && (sc->steps > first || first == 0))
+    if ((m == 0 || steps[m - 1] != sc->steps) && (sc->steps > first || fresh))
         steps[m++] = sc->steps;
     for (int64_t k = 0; k < m; k++)
         times[k] = (double)steps[k] * sc->dt;
@@ -621,7 +622,7 @@ int main(int argc, char **argv)
     /* every frame laid out now, then the file under its final name: a run
      * killed at any moment leaves it readable with its complete frames */
     if (s == PD_OK)
-        s = plan_frames(h.out, p, b, sc, first);
+        s = plan_frames(h.out, p, b, sc, first, !restart);
     if (s == PD_OK)
         s = pd_plan_restart(h.out, p->n, sc->has_failure, sc->has_contact);
     if (s == PD_OK)

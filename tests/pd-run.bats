@@ -745,3 +745,11 @@ with h5py.File(sys.argv[1]) as f:
     run -0 pd-damage -n more.h5
     assert_line --partial "30 "
 }
+
+@test "--restart from step 0 (a run killed after its first frame)" {
+    make_block
+    pd-run "${RUN_OPTS[@]}" --steps 40 --every 20 --threads 2 -q model.h5 -o full.h5
+    pd-run "${RUN_OPTS[@]}" --steps 0 --every 20 --threads 2 -q model.h5 -o run.h5
+    run -0 pd-run --restart run.h5 --steps 40 --threads 2 -q
+    for step in 20 40; do same_frame full.h5 run.h5 "$step"; done
+}
