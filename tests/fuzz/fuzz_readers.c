@@ -8,9 +8,10 @@
  * dataset or attribute and overwrites an element with raw bytes (NaN, Inf,
  * huge, negative), truncates or extends it, changes its type or rank, or
  * drops it.  The edited file is built in memory and handed to every reader
- * (particles, bonds, frames, damage, history).  A reader may refuse the
- * file -- that is the point -- but must never crash, hang or read out of
- * bounds (AddressSanitizer and UndefinedBehaviorSanitizer watch).
+ * (particles, bonds, frames, damage, restart data, history).  A reader may
+ * refuse the file -- that is the point -- but must never crash, hang or
+ * read out of bounds (AddressSanitizer and UndefinedBehaviorSanitizer
+ * watch).
  *
  * Build and run: make fuzz [FUZZ_SECONDS=60]  (clang with libFuzzer).
  */
@@ -35,7 +36,7 @@ typedef struct {
     int present;
 } field;
 
-#define MAX_FIELDS 24
+#define MAX_FIELDS 32
 static field base[MAX_FIELDS];
 static int nbase;
 
@@ -103,7 +104,7 @@ static void build_base(void)
     for (size_t k = 0; k < ns; k++)
         bits[k] = (unsigned char)(b->intact[k / 8] >> (8 * (k % 8)));
     double spacing = 1.0, horizon = 2.0001, t = 0.5;
-    int64_t version = PD_FORMAT_VERSION, dim = 3, step = 7;
+    int64_t version = PD_FORMAT_VERSION, dim = 3, step = 7, one = 1;
     add("/particles/position", T_F64, 2, n, 3, pos);
     add("/particles/volume", T_F64, 1, n, 0, p->volume);
     add("/particles/density", T_F64, 1, n, 0, p->density);
@@ -119,12 +120,19 @@ static void build_base(void)
     add("/frames/00000007/velocity", T_F64, 2, n, 3, vel);
     add("/frames/00000007/state", T_U8, 1, ns, 0, bits);
     add("/frames/00000007/damage", T_F64, 1, n, 0, p->volume);
+    add("/restart/0/position", T_F64, 2, n, 3, pos);
+    add("/restart/0/force", T_F64, 2, n, 3, vel);
+    add("/restart/0/s0", T_F64, 1, n, 0, p->volume);
+    add("/restart/0/contact_position", T_F64, 2, n, 3, pos);
     add("/@pd_format_version", T_I64, 1, 1, 0, &version);
     add("/particles@spacing", T_F64, 1, 1, 0, &spacing);
     add("/particles@dimension", T_I64, 1, 1, 0, &dim);
     add("/bonds@horizon", T_F64, 1, 1, 0, &horizon);
     add("/frames/00000007@step", T_I64, 1, 1, 0, &step);
     add("/frames/00000007@time", T_F64, 1, 1, 0, &t);
+    add("/restart/0@step", T_I64, 1, 1, 0, &step);
+    add("/restart/0@complete", T_I64, 1, 1, 0, &one);
+    add("/restart/0@contact_builds", T_I64, 1, 1, 0, &one);
     free(pos);
     free(vel);
     free(bits);
@@ -296,10 +304,13 @@ static void read_all(const void *img, size_t len)
                 v[k] = malloc((size_t)p->n * sizeof(double));
             }
             for (int64_t k = 0; k < nf; k++) {
-                pd_frame_info fi;
+                pd_frame_info fi = {0, 0, 0, 0};
                 pd_read_frame_info(f, names[k], &fi);
                 pd_read_frame_vectors(f, names[k], p->n, d, v);
                 pd_read_frame_damage(f, p, names[k], &b, &intact, dmg);
+                pd_restart r;
+                if (pd_read_restart(f, p->n, fi.step, &r) == PD_OK)
+                    pd_restart_free(&r);
             }
             for (int k = 0; k < 3; k++) {
                 free(d[k]);
