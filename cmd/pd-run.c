@@ -593,8 +593,8 @@ int main(int argc, char **argv)
         s = load_restart(h.in, p, b, &first, &h.r, h.v0, &h.bits0);
         sc->steps += first; /* --steps N more */
     }
-    int64_t todo = sc->steps - first;
-    int64_t status_every = o.has_status ? o.status_every : (todo >= 10 ? todo / 10 : 1);
+    int64_t nsteps = sc->steps - first;
+    int64_t status_every = o.has_status ? o.status_every : (nsteps >= 10 ? nsteps / 10 : 1);
 
     if (s == PD_OK)
         s = pd_sim_new(p, b, sc, &h.sim);
@@ -645,7 +645,7 @@ int main(int argc, char **argv)
                 PROG ": %lld particles, %lld bonds; effects: %s\n" PROG
                      ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
                 (long long)p->n, (long long)(b->count / 2), pd_sim_effects(sim), sc->dt,
-                sc->dt_stable, (long long)todo, restart ? " more" : "");
+                sc->dt_stable, (long long)nsteps, restart ? " more" : "");
     if (!o.quiet && restart)
         fprintf(stderr, PROG ": going on from step %lld of '%s'\n", (long long)first, o.restart);
 
@@ -666,7 +666,7 @@ int main(int argc, char **argv)
         if (tty) {
             double now = pd_wtime();
             if (now - t_shown > 0.2 || n == sc->steps) {
-                progress(n - first, todo, now - t_start);
+                progress(n - first, nsteps, now - t_start);
                 t_shown = now;
             }
         }
@@ -688,8 +688,8 @@ int main(int argc, char **argv)
     h.in = h.out = NULL;
     if (s == PD_OK && !o.quiet)
         fprintf(stderr, PROG ": %lld steps in %.3f s (%.3g bond updates/s), contact list builds %lld\n",
-                (long long)todo, wall,
-                wall > 0 ? (double)b->count * (double)todo / wall : 0.0,
+                (long long)nsteps, wall,
+                wall > 0 ? (double)b->count * (double)nsteps / wall : 0.0,
                 (long long)pd_sim_contact_builds(sim));
     if (s == PD_OK && o.timing)
         print_timing(sim, wall, t_output);
