@@ -170,21 +170,21 @@ static pd_status check_signature(const char *name, const unsigned char *buf, siz
     return PD_OK;
 }
 
-pd_status pd_file_open_memory(const void *buf, size_t len, const char *name, pd_file **out)
+/* Open an image read-only, taking ownership of `buf` (freed with the file,
+ * or here on failure); `name` ("-" for stdin) is used in messages. */
+static pd_status open_owned_image(unsigned char *buf, size_t len, const char *name,
+                                  pd_file **out)
 {
     pd_file *f = file_new(name);
-    unsigned char *copy = malloc(len ? len : 1);
-    if (f == NULL || copy == NULL) {
-        file_free(f);
-        free(copy);
+    if (f == NULL) {
+        free(buf);
         return pd_fail(PD_ERR_NOMEM, "out of memory");
     }
-    memcpy(copy, buf, len);
-    f->image = copy;
-    pd_status s = check_signature(f->name, copy, len);
-    if (s == PD_OK && (f->fid = open_image(copy, len, H5F_ACC_RDONLY)) < 0)
-        s = pd_fail(PD_ERR_FORMAT, "cannot open '%s' as HDF5 (damaged or truncated?)", f->name);
+    f->image = buf;
     f->readonly = 1;
+    pd_status s = check_signature(f->name, buf, len);
+    if (s == PD_OK && (f->fid = open_image(buf, len, H5F_ACC_RDONLY)) < 0)
+        s = pd_fail(PD_ERR_FORMAT, "cannot open '%s' as HDF5 (damaged or truncated?)", f->name);
     if (s == PD_OK)
         s = check_header(f);
     if (s != PD_OK) {
@@ -197,51 +197,51 @@ pd_status pd_file_open_memory(const void *buf, size_t len, const char *name, pd_
     return PD_OK;
 }
 
+pd_status pd_file_open_memory(const void *buf, size_t len, const char *name, pd_file **out)
+{
+    unsigned char *copy = malloc(len ? len : 1);
+    if (copy == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    memcpy(copy, buf, len);
+    return open_owned_image(copy, len, name, out);
+}
+
 pd_status pd_file_open(const char *path, pd_file **out)
 {
+    if (strcmp(path, "-") == 0) {
+        unsigned char *buf;
+        size_t len;
+        pd_status s = load_bytes(path, &buf, &len);
+        return s == PD_OK ? open_owned_image(buf, len, path, out) : s;
+    }
     pd_file *f = file_new(path);
     if (f == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory");
     pd_status s;
-    if (strcmp(path, "-") == 0) {
-        unsigned char *buf;
-        size_t len;
-        if ((s = load_bytes(path, &buf, &len)) != PD_OK) {
-            file_free(f);
-            return s;
-        }
-        f->image = buf;
-        if ((s = check_signature(f->name, buf, len)) != PD_OK) {
-            file_free(f);
-            return s;
-        }
-        f->fid = open_image(buf, len, H5F_ACC_RDONLY);
-    } else {
-        struct stat st;
-        if (stat(path, &st) != 0) {
-            s = pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
-            file_free(f);
-            return s;
-        }
-        if (S_ISDIR(st.st_mode)) {
-            file_free(f);
-            return pd_fail(PD_ERR_IO, "cannot open '%s': is a directory", path);
-        }
-        if (st.st_size == 0) {
-            file_free(f);
-            return pd_fail(PD_ERR_FORMAT, "'%s' is empty", path);
-        }
-        if (access(path, R_OK) != 0) {
-            s = pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
-            file_free(f);
-            return s;
-        }
-        if (H5Fis_hdf5(path) <= 0) {
-            file_free(f);
-            return pd_fail(PD_ERR_FORMAT, "'%s' is not an HDF5 file", path);
-        }
-        f->fid = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        s = pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+        file_free(f);
+        return s;
     }
+    if (S_ISDIR(st.st_mode)) {
+        file_free(f);
+        return pd_fail(PD_ERR_IO, "cannot open '%s': is a directory", path);
+    }
+    if (st.st_size == 0) {
+        file_free(f);
+        return pd_fail(PD_ERR_FORMAT, "'%s' is empty", path);
+    }
+    if (access(path, R_OK) != 0) {
+        s = pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+        file_free(f);
+        return s;
+    }
+    if (H5Fis_hdf5(path) <= 0) {
+        file_free(f);
+        return pd_fail(PD_ERR_FORMAT, "'%s' is not an HDF5 file", path);
+    }
+    f->fid = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
     if (f->fid < 0) {
         s = pd_fail(PD_ERR_FORMAT, "cannot open '%s' as HDF5 (damaged or truncated?)", f->name);
         file_free(f);

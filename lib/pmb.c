@@ -96,10 +96,9 @@ pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_h
             h->length[q] = b->length[k];
             /* (c V_j) nu in the order LAMMPS peri/pmb multiplies them */
             h->w_ij[q] = c * p->volume[j] * b->vfactor[k];
-            if (pd_bond_intact(b->intact, k))
-                __atomic_fetch_or(&h->intact[q >> 6], UINT64_C(1) << (q & 63), __ATOMIC_RELAXED);
         }
     }
+    pd_half_set_state(h, b, b->intact);
     /* the mirror j-i of each bond: rows i meet the entries below the
      * diagonal of row j in ascending order, so a cursor per row finds it */
     for (int64_t j = 0; j < n; j++)
@@ -120,6 +119,22 @@ pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_h
     h->block = span;
     h->nblocks = (n + span - 1) / span;
     return PD_OK;
+}
+
+void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact)
+{
+    /* a half bond i-j (j > i) takes the bit of its copy in i's family */
+    for (int64_t w = 0; w < pd_bits_words(h->count); w++)
+        h->intact[w] = 0;
+    for (int64_t i = 0; i < h->n; i++) {
+        int64_t q = h->offset[i];
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
+            if (b->neighbor[k] > i) {
+                if (pd_bond_intact(intact, k))
+                    h->intact[q >> 6] |= UINT64_C(1) << (q & 63);
+                q++;
+            }
+    }
 }
 
 void pd_half_expand(pd_half_bonds *h, const pd_bonds *b, uint64_t *intact)

@@ -63,6 +63,22 @@ pd_status pd_append_history(pd_file *f, const char *cmdline)
 
 /* ------------------------------------------------------------ particles */
 
+/* (n,3) into SoA arrays, and back. */
+static void deinterleave(double *const x[3], const double *buf, int64_t n)
+{
+    for (int64_t i = 0; i < n; i++)
+        for (int d = 0; d < 3; d++)
+            x[d][i] = buf[3 * i + d];
+}
+
+/* Interleave SoA arrays into (n,3). */
+static void interleave(double *buf, double *const x[3], int64_t n)
+{
+    for (int64_t i = 0; i < n; i++)
+        for (int d = 0; d < 3; d++)
+            buf[3 * i + d] = x[d][i];
+}
+
 static const pd_h5_form F64_N3 = {H5T_FLOAT, 8, 2, {0, 3}};
 
 static int cmp_int64(const void *a, const void *b)
@@ -115,9 +131,7 @@ pd_status pd_read_particles(const pd_file *f, pd_particles **out)
         free(pos);
         return pd_fail(PD_ERR_NOMEM, "out of memory for %lld particles", (long long)n);
     }
-    for (int64_t i = 0; i < n; i++)
-        for (int d = 0; d < 3; d++)
-            p->x[d][i] = pos[3 * i + d];
+    deinterleave(p->x, pos, n);
     free(pos);
 
     struct {
@@ -199,9 +213,7 @@ pd_status pd_write_particles(pd_file *f, const pd_particles *p)
         H5Gclose(g);
         return pd_fail(PD_ERR_NOMEM, "out of memory");
     }
-    for (size_t i = 0; i < n; i++)
-        for (int d = 0; d < 3; d++)
-            pos[3 * i + d] = p->x[d][i];
+    interleave(pos, p->x, p->n);
     hsize_t d2[2] = {n, 3}, d1[1] = {n};
     pd_status s;
     if ((s = pd_h5_write_data(g, "position", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 2, d2, pos)) ==
@@ -567,9 +579,7 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
         s = pd_h5_write_into(g, "displacement", H5T_NATIVE_DOUBLE, buf);
     }
     if (s == PD_OK) {
-        for (size_t i = 0; i < n; i++)
-            for (int d = 0; d < 3; d++)
-                buf[3 * i + d] = v[d][i];
+        interleave(buf, v, p->n);
         s = pd_h5_write_into(g, "velocity", H5T_NATIVE_DOUBLE, buf);
     }
     if (s == PD_OK && nbonds > 0)
@@ -733,9 +743,7 @@ pd_status pd_read_frame_vectors(const pd_file *f, const char *name, int64_t n, d
                             (void **)&buf, NULL);
         if (s != PD_OK)
             return s;
-        for (int64_t i = 0; i < n; i++)
-            for (int d = 0; d < 3; d++)
-                dst[k][d][i] = buf[3 * i + d];
+        deinterleave(dst[k], buf, n);
         free(buf);
     }
     return PD_OK;
@@ -867,14 +875,6 @@ static void slot_info(hid_t fid, int k, int64_t *step, int64_t *complete)
     H5Gclose(g);
 }
 
-/* Interleave SoA arrays into (n,3). */
-static void interleave(double *buf, double *const x[3], int64_t n)
-{
-    for (int64_t i = 0; i < n; i++)
-        for (int d = 0; d < 3; d++)
-            buf[3 * i + d] = x[d][i];
-}
-
 pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart *r)
 {
     int64_t st[2], done[2];
@@ -967,14 +967,11 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
             continue;
         }
         double **dst = fld == 0 ? r->position : fld == 1 ? r->force : r->contact_position;
-        for (int d = 0; d < 3 && s == PD_OK; d++) {
-            dst[d] = malloc((size_t)n * sizeof(double));
-            if (dst[d] == NULL)
+        for (int d = 0; d < 3 && s == PD_OK; d++)
+            if ((dst[d] = malloc((size_t)n * sizeof(double))) == NULL)
                 s = pd_fail(PD_ERR_NOMEM, "out of memory reading restart data");
-            else
-                for (int64_t i = 0; i < n; i++)
-                    dst[d][i] = buf[3 * i + d];
-        }
+        if (s == PD_OK)
+            deinterleave(dst, buf, n);
         free(buf);
     }
     if (s == PD_OK) {

@@ -302,18 +302,7 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
     }
     /* the run's bond bits from the frame's: rebuild the half bonds' */
     memcpy(sim->intact, intact, (size_t)pd_bits_words(sim->b->count) * sizeof(uint64_t));
-    pd_half_bonds *h = &sim->half;
-    for (int64_t w = 0; w < pd_bits_words(h->count); w++)
-        h->intact[w] = 0;
-    for (int64_t i = 0; i < sim->n; i++) {
-        int64_t q = h->offset[i];
-        for (int64_t k = sim->b->offset[i]; k < sim->b->offset[i + 1]; k++)
-            if (sim->b->neighbor[k] > i) {
-                if (pd_bond_intact(intact, k))
-                    h->intact[q >> 6] |= UINT64_C(1) << (q & 63);
-                q++;
-            }
-    }
+    pd_half_set_state(&sim->half, sim->b, intact);
     sim->intact_stale = 0;
     sim->step = step;
     sim->time = (double)step * sim->sc.dt;

@@ -39,7 +39,8 @@ typedef struct {
 
 pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h);
 void pd_half_free(pd_half_bonds *h);
-/* Directed state bits (the file's) from the half bonds' bits. */
+/* The half bonds' bits from directed state bits (the file's), and back. */
+void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact);
 void pd_half_expand(pd_half_bonds *h, const pd_bonds *b, uint64_t *intact);
 
 /* Hot loops are compiled for AVX-512, AVX2 and the baseline, picked at run
