@@ -24,6 +24,8 @@
 
 struct options {
     pd_scene sc;
+    int has_g0;      /* --failure-energy: s00 from G0 once c is known */
+    double g0;       /* J/m^2                                       */
     int has_c, has_k, has_dt, has_steps, force_dt, has_status, has_output;
     int64_t status_every;
     const char *input;
@@ -47,6 +49,10 @@ static void usage(FILE *out)
             "Effects (each only when given):\n"
             "  --failure S00,ALPHA   critical stretch s0 = S00 - ALPHA s_min (both\n"
             "                        dimensionless)\n"
+            "  --failure-energy G0[,ALPHA]\n"
+            "                        the same with S00 from the fracture energy G0 (J/m^2):\n"
+            "                        sqrt(10 G0/(pi c delta^5)) = sqrt(5 G0/(9 K delta))\n"
+            "                        (seed 004 eq. 27); ALPHA defaults to 0\n"
             "  --contact             short-range contact forces\n"
             "  --contact-skin S      skin of the contact list, m (default spacing/2)\n"
             "  --indenter sphere,X,Y,Z,R,K,VX,VY,VZ\n"
@@ -58,7 +64,13 @@ static void usage(FILE *out)
             "  --dt DT               time step, s (default: stable step x safety)\n"
             "  --safety F            safety factor on the stable step (default 0.8)\n"
             "  --force-dt            run a --dt above the stable step anyway\n"
+            "  --lost-margin D       a particle farther than D (m) outside the body's\n"
+            "                        bounding box is lost: its bonds break and it stays\n"
+            "                        at rest (default 10 x the box's largest edge)\n"
             "  --every N             a frame every N steps; 0 = only the last (default 0)\n"
+            "Output:\n"
+            "  --fields LIST         optional per-particle fields of each frame, a comma\n"
+            "                        list of: energy (strain_energy_density, J/m^3)\n"
             "Other:\n"
             "  --restart RUN.h5      go on from the last complete frame of RUN.h5 for N\n"
             "                        more steps, with its scene (only --steps, --every,\n"
@@ -82,6 +94,27 @@ static int positive(const char *opt, const char *arg, double *out)
         char msg[128];
         snprintf(msg, sizeof msg, "%s must be a positive number, not", opt);
         return usage_error(msg, arg);
+    }
+    return 0;
+}
+
+/* --fields LIST: the optional per-particle fields of the frames. */
+static int parse_fields(const char *arg, unsigned *fields)
+{
+    static const struct { const char *name; unsigned bit; } known[] = {
+        {"energy", PD_FIELD_ENERGY}};
+    *fields = 0;
+    const char *p = arg;
+    while (*p) {
+        size_t len = strcspn(p, ",");
+        unsigned bit = 0;
+        for (size_t k = 0; k < sizeof known / sizeof known[0]; k++)
+            if (strlen(known[k].name) == len && strncmp(p, known[k].name, len) == 0)
+                bit = known[k].bit;
+        if (bit == 0)
+            return usage_error("--fields takes a comma list of: energy; not", arg);
+        *fields |= bit;
+        p += len + (p[len] == ',');
     }
     return 0;
 }
@@ -195,12 +228,13 @@ static int parse_options(int argc, char **argv, struct options *o)
 {
     enum { OPT_MODEL = 256, OPT_C, OPT_K, OPT_FAILURE, OPT_CONTACT, OPT_SKIN, OPT_INDENTER,
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
-           OPT_TIMING, OPT_RESTART };
+           OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0 };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
         {"bulk-modulus", required_argument, 0, OPT_K},
         {"failure", required_argument, 0, OPT_FAILURE},
+        {"failure-energy", required_argument, 0, OPT_G0},
         {"contact", no_argument, 0, OPT_CONTACT},
         {"contact-skin", required_argument, 0, OPT_SKIN},
         {"indenter", required_argument, 0, OPT_INDENTER},
@@ -213,6 +247,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"status", required_argument, 0, OPT_STATUS},
         {"timing", no_argument, 0, OPT_TIMING},
         {"restart", required_argument, 0, OPT_RESTART},
+        {"fields", required_argument, 0, OPT_FIELDS},
+        {"lost-margin", required_argument, 0, OPT_LOST},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -249,6 +285,20 @@ static int parse_options(int argc, char **argv, struct options *o)
                                    optarg);
             o->sc.has_failure = 1;
             o->sc.s00 = v[0];
+            o->sc.alpha = v[1];
+            o->has_g0 = 0; /* the last of --failure and --failure-energy wins */
+            break;
+        }
+        case OPT_G0: {
+            double v[2] = {0, 0};
+            if (!(pd_parse_doubles(optarg, v, 1) || pd_parse_doubles(optarg, v, 2)) ||
+                !(v[0] > 0) || !(v[1] >= 0))
+                return usage_error("--failure-energy needs G0[,ALPHA] with G0 > 0 (J/m^2) and "
+                                   "ALPHA >= 0, not",
+                                   optarg);
+            o->sc.has_failure = 1;
+            o->has_g0 = 1;
+            o->g0 = v[0];
             o->sc.alpha = v[1];
             break;
         }
@@ -319,6 +369,14 @@ static int parse_options(int argc, char **argv, struct options *o)
         case OPT_RESTART:
             o->restart = optarg;
             break;
+        case OPT_LOST:
+            if ((rc = positive("--lost-margin", optarg, &o->sc.lost_margin)))
+                return rc;
+            break;
+        case OPT_FIELDS:
+            if ((rc = parse_fields(optarg, &o->sc.fields)))
+                return rc;
+            break;
         case 'q':
             o->quiet = 1;
             break;
@@ -365,6 +423,9 @@ static char *scene_text(const pd_scene *s)
                      s->ind_velocity[0], s->ind_velocity[1], s->ind_velocity[2]);
     p += sprintf(p, "dt %.17g\nsteps %lld\nevery %lld\n", s->dt, (long long)s->steps,
                  (long long)s->every);
+    if (s->fields & PD_FIELD_ENERGY)
+        p += sprintf(p, "fields energy\n");
+    p += sprintf(p, "lost-margin %.17g\n", s->lost_margin);
     if (s->dt > s->dt_stable)
         sprintf(p, "force-dt\n");
     return t;
@@ -374,7 +435,7 @@ static char *scene_text(const pd_scene *s)
  * last; only the last with --every 0; and step 0 itself in a new run
  * (`fresh`), not in a restart (even from step 0, whose frame exists). */
 static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds *b,
-                             const pd_scene *sc, int64_t first, int fresh)
+                             const pd_scene *sc, unsigned fields, int64_t first, int fresh)
 {
     int64_t cap = sc->every > 0 ? sc->steps / sc->every + 2 : 1, m = 0;
     int64_t *steps = malloc((size_t)cap * sizeof *steps);
@@ -392,7 +453,7 @@ static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds
         steps[m++] = sc->steps;
     for (int64_t k = 0; k < m; k++)
         times[k] = (double)steps[k] * sc->dt;
-    pd_status s = pd_plan_frames(out, p->n, b->count, m, steps, times);
+    pd_status s = pd_plan_frames(out, p->n, b->count, m, steps, times, fields);
     free(steps);
     free(times);
     return s;
@@ -440,22 +501,49 @@ static void progress(int64_t step, int64_t steps, double elapsed)
     fflush(stderr);
 }
 
+/* The status line, with the energy balance; a kinetic energy that ran
+ * away from the energy put in is flagged (once). */
 static void status_line(const pd_sim *sim, int64_t steps, int tty)
 {
-    fprintf(stderr, "%s" PROG ": step %lld/%lld t=%.6e s KE=%.6e J broken=%lld max_damage=%.4f\n",
+    static int flagged;
+    pd_energy e;
+    double ratio;
+    if (pd_sim_energy(sim, &e, NULL) != PD_OK)
+        return;
+    if (!flagged && pd_energy_runaway(sim, &e, &ratio)) {
+        fprintf(stderr,
+                "%s" PROG ": warning: at step %lld the kinetic energy is %.3g times the energy "
+                "put in (step 0 and the work done): the run is unstable; try a smaller time "
+                "step or contact stiffness\n",
+                tty ? "\r\033[K" : "", (long long)pd_sim_stepno(sim), ratio);
+        flagged = 1;
+    }
+    fprintf(stderr,
+            "%s" PROG ": step %lld/%lld t=%.6e s KE=%.6e J elastic=%.6e J contact=%.6e J "
+            "released=%.6e J work=%.6e J balance=%.6e J broken=%lld max_damage=%.4f\n",
             tty ? "\r\033[K" : "", (long long)pd_sim_stepno(sim), (long long)steps,
-            pd_sim_time(sim), pd_sim_kinetic(sim), (long long)pd_sim_broken(sim),
-            pd_sim_max_damage(sim));
+            pd_sim_time(sim), e.kinetic, e.elastic, e.contact, e.released, e.work,
+            pd_energy_total(&e), (long long)pd_sim_broken(sim), pd_sim_max_damage(sim));
+    if (e.lost > 0 || pd_sim_lost(sim) > 0)
+        fprintf(stderr, PROG ": %lld particles lost so far, carrying %.6e J\n",
+                (long long)pd_sim_lost(sim), e.lost);
 }
 
 static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
-                             const pd_sim *sim, double *t_out)
+                             const pd_sim *sim, unsigned fields, double *t_out)
 {
     double t0 = pd_wtime();
-    pd_frame_info fi = {pd_sim_stepno(sim), pd_sim_time(sim), pd_sim_kinetic(sim),
-                        pd_sim_broken(sim)};
+    pd_frame_info fi = {.step = pd_sim_stepno(sim), .time = pd_sim_time(sim),
+                        .broken = pd_sim_broken(sim), .lost = pd_sim_lost(sim)};
+    double *density = NULL;
+    if ((fields & PD_FIELD_ENERGY) &&
+        (density = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof(double))) == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the strain energy density");
+    pd_status s = pd_sim_energy(sim, &fi.energy, density);
     /* what a restart needs, then the frame (marked complete last) */
-    pd_restart r = {{NULL}, {NULL}, NULL, {NULL}, 0};
+    pd_restart r;
+    memset(&r, 0, sizeof r);
+    pd_sim_accumulated(sim, &r);
     double *const *yb = pd_sim_contact_positions(sim, &r.contact_builds);
     for (int d = 0; d < 3; d++) {
         r.position[d] = pd_sim_positions(sim)[d];
@@ -463,10 +551,12 @@ static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds
         r.contact_position[d] = yb ? yb[d] : NULL;
     }
     r.s0 = (double *)pd_sim_s0(sim);
-    pd_status s = pd_write_restart(out, p->n, fi.step, &r);
+    if (s == PD_OK)
+        s = pd_write_restart(out, p->n, fi.step, &r);
     if (s == PD_OK)
         s = pd_write_frame(out, p, &fi, pd_sim_positions(sim), pd_sim_velocities(sim),
-                           pd_sim_intact(sim), b->count);
+                           pd_sim_intact(sim), b->count, density);
+    free(density);
     *t_out += pd_wtime() - t0;
     return s;
 }
@@ -566,8 +656,12 @@ int main(int argc, char **argv)
     pd_scene *sc = &o.sc;
     if (o.has_k)
         sc->c = pd_pmb_c_from_bulk(sc->bulk_modulus, b->horizon);
+    if (o.has_g0)
+        sc->s00 = pd_pmb_s0_from_energy(o.g0, sc->c, b->horizon);
     if (sc->has_contact && !(sc->contact_skin > 0))
         sc->contact_skin = 0.5 * p->spacing;
+    if (!(sc->lost_margin > 0))
+        sc->lost_margin = pd_lost_margin_default(p);
     sc->dt_stable = pd_stable_dt(p, b, sc);
     if (!o.has_dt) {
         if (!isfinite(sc->dt_stable)) {
@@ -622,7 +716,7 @@ int main(int argc, char **argv)
     /* every frame laid out now, then the file under its final name: a run
      * killed at any moment leaves it readable with its complete frames */
     if (s == PD_OK)
-        s = plan_frames(h.out, p, b, sc, first, !restart);
+        s = plan_frames(h.out, p, b, sc, o.sc.fields, first, !restart);
     if (s == PD_OK)
         s = pd_plan_restart(h.out, p->n, sc->has_failure, sc->has_contact);
     if (s == PD_OK)
@@ -646,6 +740,11 @@ int main(int argc, char **argv)
                      ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
                 (long long)p->n, (long long)(b->count / 2), pd_sim_effects(sim), sc->dt,
                 sc->dt_stable, (long long)nsteps, restart ? " more" : "");
+    if (!o.quiet && o.has_g0)
+        fprintf(stderr,
+                PROG ": critical stretch s00 %.6g from the fracture energy G0 %g J/m^2 (seed "
+                     "004 eq. 27), alpha %g\n",
+                sc->s00, o.g0, sc->alpha);
     if (!o.quiet && restart)
         fprintf(stderr, PROG ": going on from step %lld of '%s'\n", (long long)first, o.restart);
 
@@ -653,16 +752,24 @@ int main(int argc, char **argv)
     if (!restart) {
         s = pd_sim_setup(sim);
         if (s == PD_OK && sc->every > 0)
-            s = write_frame(out, p, b, sim, &t_output);
+            s = write_frame(out, p, b, sim, o.sc.fields, &t_output);
     }
+    int64_t lost = pd_sim_lost(sim);
     for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
         s = pd_sim_step(sim);
         if (s != PD_OK)
             break;
+        if (lost == 0 && pd_sim_lost(sim) > 0 && !o.quiet) /* the first; then counts */
+            fprintf(stderr,
+                    "%s" PROG ": step %lld: %lld particles lost (farther than %g m outside the "
+                    "body's box): their bonds broken, at rest from now on\n",
+                    tty ? "\r\033[K" : "", (long long)n, (long long)pd_sim_lost(sim),
+                    sc->lost_margin);
+        lost = pd_sim_lost(sim);
         if (((n - first) % status_every == 0 || n == sc->steps) && !o.quiet)
             status_line(sim, sc->steps, tty);
         if ((sc->every > 0 && n % sc->every == 0) || n == sc->steps)
-            s = write_frame(out, p, b, sim, &t_output);
+            s = write_frame(out, p, b, sim, o.sc.fields, &t_output);
         if (tty) {
             double now = pd_wtime();
             if (now - t_shown > 0.2 || n == sc->steps) {
@@ -672,7 +779,7 @@ int main(int argc, char **argv)
         }
     }
     if (s == PD_OK && !restart && sc->steps == 0 && sc->every == 0)
-        s = write_frame(out, p, b, sim, &t_output);
+        s = write_frame(out, p, b, sim, o.sc.fields, &t_output);
     double wall = pd_wtime() - t_start;
     if (tty)
         fputc('\n', stderr);

@@ -152,6 +152,18 @@ pd_status pd_bonds_build(const pd_particles *p, double horizon, pd_bonds **out)
         }
     }
     pd_cells_free(&c);
+    /* two particles at one place: no bond direction, no stretch */
+    for (int64_t i = 0; i < n; i++)
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
+            if (b->length[k] == 0) {
+                int64_t j = b->neighbor[k];
+                pd_bonds_free(b);
+                return pd_fail(PD_ERR_INVALID,
+                               "particles %lld and %lld (ids %lld and %lld) are at the same "
+                               "position (%g, %g, %g) m",
+                               (long long)i, (long long)j, (long long)p->id[i],
+                               (long long)p->id[j], p->x[0][i], p->x[1][i], p->x[2][i]);
+            }
     memset(b->intact, 0xff, (size_t)pd_bits_words(total) * sizeof(uint64_t));
     *out = b;
     return PD_OK;

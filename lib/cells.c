@@ -41,12 +41,18 @@ static int64_t cell_of(const pd_cells *c, const double x[3])
 
 pd_status pd_cells_build(pd_cells *c, int64_t n, double *const x[3], double cutoff)
 {
+    return pd_cells_build_except(c, n, x, cutoff, NULL);
+}
+
+pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], double cutoff,
+                                const uint8_t *skip)
+{
     c->start = NULL;
     c->index = NULL;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int64_t i = 0; i < n; i++)
         for (int d = 0; d < 3; d++)
-            if (isfinite(x[d][i])) {
+            if (isfinite(x[d][i]) && !(skip && skip[i])) {
                 lo[d] = fmin(lo[d], x[d][i]);
                 hi[d] = fmax(hi[d], x[d][i]);
             }
@@ -83,6 +89,8 @@ pd_status pd_cells_build(pd_cells *c, int64_t n, double *const x[3], double cuto
         return pd_fail(PD_ERR_NOMEM, "out of memory for a cell list");
     }
     for (int64_t i = 0; i < n; i++) {
+        if (skip && skip[i])
+            continue;
         double p[3] = {x[0][i], x[1][i], x[2][i]};
         cellof[i] = cell_of(c, p);
         c->start[cellof[i] + 1]++;
@@ -98,7 +106,8 @@ pd_status pd_cells_build(pd_cells *c, int64_t n, double *const x[3], double cuto
     for (int64_t k = 0; k < ncell; k++)
         fill[k] = c->start[k];
     for (int64_t i = 0; i < n; i++)
-        c->index[fill[cellof[i]]++] = (int32_t)i;
+        if (!(skip && skip[i]))
+            c->index[fill[cellof[i]]++] = (int32_t)i;
     free(fill);
     free(cellof);
     return PD_OK;

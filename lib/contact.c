@@ -68,6 +68,8 @@ static int64_t candidates(const pd_sim *sim, const pd_cells *c, double reach2, i
 {
     const pd_particles *p = sim->p;
     double *const *y = sim->y;
+    if (sim->lost && sim->lost[i]) /* out of the body for good: no contact */
+        return 0;
     double yi[3] = {y[0][i], y[1][i], y[2][i]};
     int64_t cells[27];
     int ncells = pd_cells_adjacent(c, yi, cells);
@@ -98,7 +100,7 @@ static pd_status contact_build(pd_sim *sim, contact_list *cl)
     double t0 = pd_wtime();
     double reach = cl->cutoff + cl->skin;
     pd_cells c;
-    pd_status s = pd_cells_build(&c, sim->n, sim->y, reach);
+    pd_status s = pd_cells_build_except(&c, sim->n, sim->y, reach, sim->lost);
     if (s != PD_OK)
         return s;
     int64_t n = sim->n;
@@ -209,8 +211,33 @@ double *const *pd_contact_positions(void *state)
     return ((contact_list *)state)->ybuild;
 }
 
-const pd_effect pd_effect_contact = {"contact", PD_T_CONTACT, contact_init, contact_force,
-                                     contact_free};
+/* The contact energy, half of each pair to each end (the list holds both
+ * i-j and j-i): e_i += sum_j 1/4 (c_S/delta) (d - r)^2 V_i V_j. */
+static void contact_energy(const pd_sim *sim, void *state, double *e)
+{
+    const contact_list *cl = state;
+    if (sim->contact_builds == 0)
+        return;
+    const double k = PD_CONTACT_SCALE * sim->sc.c / sim->b->horizon;
+    const double *V = sim->p->volume;
+    double *const *y = sim->y;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        double sum = 0;
+        for (int64_t q = cl->offset[i]; q < cl->offset[i + 1]; q++) {
+            const int32_t j = cl->partner[q];
+            const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i], dz = y[2][j] - y[2][i];
+            const double r = sqrt(dx * dx + dy * dy + dz * dz), d = cl->d[q];
+            if (r < d)
+                sum += 0.25 * k * (d - r) * (d - r) * V[j];
+        }
+        e[i] += sum * V[i];
+    }
+}
+
+const pd_effect pd_effect_contact = {
+    .name = "contact", .timer = PD_T_CONTACT, .init = contact_init, .force = contact_force,
+    .free = contact_free, .energy = contact_energy, .kind = PD_ENERGY_CONTACT};
 
 int64_t pd_sim_contact_builds(const pd_sim *sim)
 {

@@ -13,33 +13,82 @@
 
 #include "sim.h"
 
+/* The centre at the current step. */
+static void centre(const pd_sim *sim, double c[3])
+{
+    const pd_scene *s = &sim->sc;
+    /* the same evaluation order as the LAMMPS example: y0 + (step*dt)*v */
+    const double t = (double)sim->step * s->dt;
+    for (int d = 0; d < 3; d++)
+        c[d] = s->ind_center[d] + t * s->ind_velocity[d];
+}
+
+/* Forces, and the power the moving sphere puts in: its potential
+ * U = sum V_i K (R - r)^3 / 3 depends on time through c(t), and
+ * dU/dt = v . sum V_i f_i (pd_energy.work integrates it).  The power is
+ * summed in fixed chunks, the same at any thread count. */
 static pd_status indenter_force(pd_sim *sim, void *state)
 {
     (void)state;
     const pd_scene *s = &sim->sc;
-    /* the same evaluation order as the LAMMPS example: y0 + (step*dt)*v */
-    const double t = (double)sim->step * s->dt;
-    const double c0 = s->ind_center[0] + t * s->ind_velocity[0];
-    const double c1 = s->ind_center[1] + t * s->ind_velocity[1];
-    const double c2 = s->ind_center[2] + t * s->ind_velocity[2];
+    double c[3];
+    centre(sim, c);
     const double R = s->ind_radius, K = s->ind_k;
+    const double *V = sim->p->volume;
+    const uint8_t *lost = sim->lost;
     double *const *y = sim->y;
+    const int64_t n = sim->n, nchunks = (n + PD_SUM_CHUNK - 1) / PD_SUM_CHUNK;
+    double power = 0;
+    for (int64_t g = 0; g < nchunks; g += 64) {
+        const int64_t m = nchunks - g < 64 ? nchunks - g : 64;
+        double part[64];
 #pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++) {
-        const double dx = y[0][i] - c0, dy = y[1][i] - c1, dz = y[2][i] - c2;
-        const double r2 = dx * dx + dy * dy + dz * dz;
-        if (r2 >= R * R)
-            continue;
-        const double r = sqrt(r2);
-        const double dr = r - R;
-        if (dr >= 0.0 || r <= 0.0)
-            continue;
-        const double fmag = K * dr * dr;
-        sim->f[0][i] += dx * fmag / r;
-        sim->f[1][i] += dy * fmag / r;
-        sim->f[2][i] += dz * fmag / r;
+        for (int64_t ch = 0; ch < m; ch++) {
+            const int64_t lo = (g + ch) * PD_SUM_CHUNK;
+            const int64_t hi = lo + PD_SUM_CHUNK < n ? lo + PD_SUM_CHUNK : n;
+            double fv = 0;
+            for (int64_t i = lo; i < hi; i++) {
+                const double dx = y[0][i] - c[0], dy = y[1][i] - c[1], dz = y[2][i] - c[2];
+                const double r2 = dx * dx + dy * dy + dz * dz;
+                if (r2 >= R * R || (lost && lost[i]))
+                    continue;
+                const double r = sqrt(r2);
+                const double dr = r - R;
+                if (dr >= 0.0 || r <= 0.0)
+                    continue;
+                const double fmag = K * dr * dr;
+                const double f0 = dx * fmag / r, f1 = dy * fmag / r, f2 = dz * fmag / r;
+                sim->f[0][i] += f0;
+                sim->f[1][i] += f1;
+                sim->f[2][i] += f2;
+                fv += V[i] * (f0 * s->ind_velocity[0] + f1 * s->ind_velocity[1] +
+                              f2 * s->ind_velocity[2]);
+            }
+            part[ch] = fv;
+        }
+        for (int64_t ch = 0; ch < m; ch++)
+            power += part[ch];
     }
+    sim->power += power;
     return PD_OK;
 }
 
-const pd_effect pd_effect_indenter = {"indenter", PD_T_INDENTER, NULL, indenter_force, NULL};
+/* The sphere's penalty energy, V_i K (R - r)^3 / 3 (fix indent's). */
+static void indenter_energy(const pd_sim *sim, void *state, double *e)
+{
+    (void)state;
+    double c[3];
+    centre(sim, c);
+    const double R = sim->sc.ind_radius, K = sim->sc.ind_k;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        const double dx = sim->y[0][i] - c[0], dy = sim->y[1][i] - c[1], dz = sim->y[2][i] - c[2];
+        const double r = sqrt(dx * dx + dy * dy + dz * dz);
+        if (r < R && !(sim->lost && sim->lost[i]))
+            e[i] += sim->p->volume[i] * K * (R - r) * (R - r) * (R - r) / 3.0;
+    }
+}
+
+const pd_effect pd_effect_indenter = {
+    .name = "indenter", .timer = PD_T_INDENTER, .force = indenter_force,
+    .energy = indenter_energy, .kind = PD_ENERGY_CONTACT};

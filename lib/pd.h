@@ -54,6 +54,11 @@ void pd_h5_debug(int on);
                                       LAMMPS)                                  */
 #define PD_PMB_C_FACTOR 18.0       /* c = 18 K / (pi delta^4) (seed 000 eq. 6)  */
 
+/* Numerical guards of a run (not from the seeds: pd's own choices). */
+#define PD_LOST_MARGIN_FAC 10.0 /* lost beyond 10 box edges outside the body */
+#define PD_KE_GROWTH 100.0      /* kinetic energy above 100 times the energy
+                                   put in: a runaway (unstable) run        */
+
 /* ---------------------------------------------------------------- particles */
 
 typedef struct {
@@ -120,6 +125,9 @@ typedef struct {
 } pd_cells;
 
 pd_status pd_cells_build(pd_cells *c, int64_t n, double *const x[3], double cutoff);
+/* The same without the points whose skip[i] is set (skip may be NULL). */
+pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], double cutoff,
+                                const uint8_t *skip);
 void pd_cells_free(pd_cells *c);
 /* Cell coordinates of a point (clamped into the grid). */
 void pd_cells_locate(const pd_cells *c, const double x[3], int64_t cell[3]);
@@ -193,6 +201,10 @@ typedef struct {
     double safety;         /* dt = safety * dt_stable when dt not given     */
     int64_t steps;
     int64_t every;         /* frame every N steps; 0 = last step only      */
+    unsigned fields;       /* optional frame fields, PD_FIELD_* bits       */
+    double lost_margin;    /* a particle farther than this outside the
+                              reference bounding box is lost, m (0: ten
+                              times the box's largest edge)              */
     int threads;
 } pd_scene;
 
@@ -214,6 +226,11 @@ void pd_sim_free(pd_sim *sim);
  * eq. 6, 3-D). */
 double pd_pmb_c_from_bulk(double bulk_modulus, double horizon);
 
+/* Critical stretch from the fracture energy G0 (J/m^2) for PMB:
+ * s0 = sqrt(10 G0 / (pi c delta^5)) (seed 004 eqs. 26-27; with
+ * c = 18 K / (pi delta^4) this is sqrt(5 G0 / (9 K delta))). */
+double pd_pmb_s0_from_energy(double g0, double c, double horizon);
+
 /* Stable step of seed 004 eq. 46 for the bonds of the scene's model. */
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s);
 
@@ -227,6 +244,27 @@ const char *pd_sim_effects(const pd_sim *sim);
 int64_t pd_sim_stepno(const pd_sim *sim);
 double pd_sim_time(const pd_sim *sim);
 double pd_sim_kinetic(const pd_sim *sim);
+
+/* The energies of a run, J.  Up to the integrator's error,
+ *   kinetic + elastic + contact + released + lost - work
+ * stays at its value of step 0 (the energy balance). */
+typedef struct {
+    double kinetic;  /* sum of 1/2 rho_i V_i |v_i|^2                          */
+    double elastic;  /* intact bonds: sum of 1/2 c s^2 |xi| nu V_i V_j (PMB)  */
+    double contact;  /* contact pairs, 1/2 (c_S/delta) (d - r)^2 V_i V_j, and
+                        the indenter's penalty, V_i K (R - r)^3 / 3          */
+    double released; /* the elastic energy bonds held when they broke         */
+    double lost;     /* the kinetic energy lost particles carried away        */
+    double work;     /* work done on the body by the moving indenter          */
+} pd_energy;
+
+/* The energies of the current state; with `density` (n values, may be
+ * NULL), also the strain energy density of each particle, J/m^3 (half of
+ * the energy of each of its bonds, per its volume).  Sums are taken in a
+ * fixed order: the same figures at any thread count. */
+pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density);
+/* The balance kinetic + elastic + contact + released + lost - work. */
+double pd_energy_total(const pd_energy *e);
 int64_t pd_sim_broken(const pd_sim *sim);      /* broken bonds (pairs) */
 double pd_sim_max_damage(const pd_sim *sim);
 int64_t pd_sim_contact_builds(const pd_sim *sim);
@@ -240,7 +278,27 @@ typedef struct {
     double *s0;                  /* NULL without failure              */
     double *contact_position[3]; /* NULL without a contact list yet   */
     int64_t contact_builds;
+    double work;                 /* pd_energy.work so far, J          */
+    double released;             /* pd_energy.released so far, J      */
+    double power;                /* the indenter's power at the last
+                                    force evaluation, W (trapezoidal
+                                    rule of the work)                 */
+    double lost_energy;          /* pd_energy.lost so far, J          */
+    double energy0;              /* kinetic + elastic + contact at
+                                    step 0, J                         */
+    uint8_t *lost;               /* n flags: particle lost (NULL: none) */
 } pd_restart;
+/* The run's accumulated energies, power and lost particles, for its
+ * restart data (r->lost points into the run). */
+void pd_sim_accumulated(const pd_sim *sim, pd_restart *r);
+/* Particles lost so far (see pd_scene.lost_margin). */
+int64_t pd_sim_lost(const pd_sim *sim);
+/* The default lost margin: PD_LOST_MARGIN_FAC times the largest edge of
+ * the reference bounding box (at least the spacing). */
+double pd_lost_margin_default(const pd_particles *p);
+/* Has the kinetic energy grown past PD_KE_GROWTH times the energy put in
+ * (that of step 0 plus the work done)?  Then *ratio says by how much. */
+int pd_energy_runaway(const pd_sim *sim, const pd_energy *e, double *ratio);
 
 double *const *pd_sim_forces(const pd_sim *sim);
 const double *pd_sim_s0(const pd_sim *sim);
@@ -309,15 +367,21 @@ pd_status pd_read_scene_options(const pd_file *f, char **text);
 typedef struct {
     int64_t step;
     double time;       /* s */
-    double kinetic;    /* J */
     int64_t broken;    /* broken bonds (pairs) */
+    int64_t lost;      /* lost particles */
+    pd_energy energy;  /* J; attributes kinetic_energy, elastic_energy,
+                          contact_energy, released_energy, lost_energy,
+                          external_work */
 } pd_frame_info;
+
+/* Optional per-particle fields of frames, asked for with pd-run --output. */
+enum { PD_FIELD_ENERGY = 1 /* strain_energy_density (N), J/m^3 */ };
 
 /* Lay out every frame a run will write (steps[k] at times[k]) before the
  * first step, so that writing them later changes no structure of the file;
  * see schema.c on crash safety. */
 pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
-                         const int64_t *steps, const double *times);
+                         const int64_t *steps, const double *times, unsigned fields);
 /* Restart slots (see schema.c): lay out, write (in turn), read the one of
  * `step` (arrays allocated; pd_restart_free). */
 pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact);
@@ -326,10 +390,11 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
 void pd_restart_free(pd_restart *r);
 /* Remove frames laid out but never completed. */
 pd_status pd_drop_incomplete_frames(pd_file *f);
-/* Write a frame (into its place when planned), then mark it complete. */
+/* Write a frame (into its place when planned), then mark it complete;
+ * energy_density (may be NULL) goes into the strain_energy_density field. */
 pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
                          double *const y[3], double *const v[3],
-                         const uint64_t *intact, int64_t nbonds);
+                         const uint64_t *intact, int64_t nbonds, const double *energy_density);
 /* Number of complete frames and their names in step order (none, from a
  * run killed before its first frame, is not an error; no /frames is);
  * caller frees with pd_frames_free_list. */

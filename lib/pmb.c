@@ -56,6 +56,7 @@ void pd_half_free(pd_half_bonds *h)
         free(h->w_ji);
     free(h->w_ij);
     free(h->intact);
+    free(h->released);
     free(h->cursor);
 }
 
@@ -118,6 +119,9 @@ pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_h
     }
     h->block = span;
     h->nblocks = (n + span - 1) / span;
+    h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
+    if (h->released == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");
     return PD_OK;
 }
 
@@ -134,6 +138,17 @@ void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *inta
                     h->intact[q >> 6] |= UINT64_C(1) << (q & 63);
                 q++;
             }
+    }
+}
+
+void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i)
+{
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        int32_t j = b->neighbor[k];
+        int64_t row = j < i ? j : i, other = j < i ? i : j;
+        int64_t q = lower_bound(h->neighbor, h->offset[row], h->offset[row + 1], (int32_t)other);
+        if (q < h->offset[row + 1] && h->neighbor[q] == other)
+            pd_bond_break(h->intact, q);
     }
 }
 
@@ -157,11 +172,26 @@ void pd_half_expand(pd_half_bonds *h, const pd_bonds *b, uint64_t *intact)
     }
 }
 
+/* The elastic energy of half bond k of row i, J: 1/2 c s^2 |xi| nu V_i V_j,
+ * with the mean of nu_ij and nu_ji (w = c V nu holds the rest). */
+static double bond_energy(const pd_sim *sim, int64_t i, int64_t k)
+{
+    const pd_half_bonds *h = &sim->half;
+    const int32_t j = h->neighbor[k];
+    const double dx = sim->y[0][j] - sim->y[0][i], dy = sim->y[1][j] - sim->y[1][i],
+                 dz = sim->y[2][j] - sim->y[2][i];
+    double dr = sqrt(dx * dx + dy * dy + dz * dz) - h->length[k];
+    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+    const double s = dr / h->length[k];
+    const double *V = sim->p->volume;
+    return 0.25 * s * s * h->length[k] * (h->w_ij[k] * V[i] + h->w_ji[k] * V[j]);
+}
+
 /* The forces of the half bonds of row i (and with `failure` their breaking
  * test and the new s0 of both ends), branch-free so that the arithmetic
  * vectorizes; the scatter to the partners j is a plain loop. */
 static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i,
-                                                          const int failure)
+                                                          const int failure, double *released)
 {
     pd_half_bonds *h = &sim->half;
     const double s00 = sim->sc.s00, alpha = sim->sc.alpha;
@@ -217,8 +247,10 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
         }
         if (failure && nbreak > 0)
             for (int64_t q = 0; q < m; q++)
-                if (brk[q] > 0)
+                if (brk[q] > 0) {
                     pd_bond_break(h->intact, c0 + q);
+                    *released += bond_energy(sim, i, c0 + q);
+                }
     }
     fx[i] += ax;
     fy[i] += ay;
@@ -231,13 +263,14 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
 PD_VECTOR_CLONES static void pmb_block_elastic(pd_sim *sim, int64_t lo, int64_t hi)
 {
     for (int64_t i = lo; i < hi; i++)
-        pmb_row(sim, i, 0);
+        pmb_row(sim, i, 0, NULL);
 }
 
-PD_VECTOR_CLONES static void pmb_block_failure(pd_sim *sim, int64_t lo, int64_t hi)
+PD_VECTOR_CLONES static void pmb_block_failure(pd_sim *sim, int64_t lo, int64_t hi,
+                                               double *released)
 {
     for (int64_t i = lo; i < hi; i++)
-        pmb_row(sim, i, 1);
+        pmb_row(sim, i, 1, released);
 }
 
 static void pmb_kernel(pd_sim *sim, int failure)
@@ -251,17 +284,21 @@ static void pmb_kernel(pd_sim *sim, int failure)
 #pragma omp parallel for schedule(dynamic, 1)
         for (int64_t blk = phase; blk < h->nblocks; blk += 2) {
             int64_t lo = blk * h->block, hi = lo + h->block < sim->n ? lo + h->block : sim->n;
-            if (failure)
-                pmb_block_failure(sim, lo, hi);
-            else
+            if (failure) {
+                h->released[blk] = 0;
+                pmb_block_failure(sim, lo, hi, &h->released[blk]);
+            } else
                 pmb_block_elastic(sim, lo, hi);
         }
     }
-    if (failure)
+    if (!failure)
+        return;
 #pragma omp parallel for schedule(static)
-        for (int64_t i = 0; i < sim->n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
-            if (sim->s0_new[i] == -INFINITY)
-                sim->s0_new[i] = DBL_MAX;
+    for (int64_t i = 0; i < sim->n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
+        if (sim->s0_new[i] == -INFINITY)
+            sim->s0_new[i] = DBL_MAX;
+    for (int64_t blk = 0; blk < h->nblocks; blk++) /* in block order: any thread count */
+        sim->released += h->released[blk];
 }
 
 static pd_status pmb_force(pd_sim *sim, void *state)
@@ -288,9 +325,38 @@ static pd_status pmb_failure_force(pd_sim *sim, void *state)
     return PD_OK;
 }
 
-const pd_effect pd_effect_pmb = {"pmb", PD_T_BONDS, NULL, pmb_force, NULL};
-const pd_effect pd_effect_pmb_failure = {"pmb+failure", PD_T_BONDS, NULL, pmb_failure_force,
-                                         NULL};
+/* The bonds' energy, half of each bond to each end (directed bonds, each
+ * row its own sum): e_i += sum_j 1/4 c s^2 |xi| nu_ij V_i V_j. */
+static void pmb_energy(const pd_sim *sim, void *state, double *e)
+{
+    (void)state;
+    const pd_bonds *b = sim->b;
+    const uint64_t *intact = pd_sim_intact(sim);
+    const double *V = sim->p->volume, c = sim->sc.c;
+    double *const *y = sim->y;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        double sum = 0;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            if (!pd_bond_intact(intact, k))
+                continue;
+            const int32_t j = b->neighbor[k];
+            const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i], dz = y[2][j] - y[2][i];
+            double dr = sqrt(dx * dx + dy * dy + dz * dz) - b->length[k];
+            dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+            const double s = dr / b->length[k];
+            sum += 0.25 * c * s * s * b->length[k] * b->vfactor[k] * V[j];
+        }
+        e[i] += sum * V[i];
+    }
+}
+
+const pd_effect pd_effect_pmb = {
+    .name = "pmb", .timer = PD_T_BONDS, .force = pmb_force,
+    .energy = pmb_energy, .kind = PD_ENERGY_ELASTIC};
+const pd_effect pd_effect_pmb_failure = {
+    .name = "pmb+failure", .timer = PD_T_BONDS, .force = pmb_failure_force,
+    .energy = pmb_energy, .kind = PD_ENERGY_ELASTIC};
 
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
 {
@@ -312,4 +378,10 @@ double pd_pmb_c_from_bulk(double bulk_modulus, double horizon)
 {
     const double pi = 3.14159265358979323846;
     return PD_PMB_C_FACTOR * bulk_modulus / (pi * pow(horizon, 4));
+}
+
+double pd_pmb_s0_from_energy(double g0, double c, double horizon)
+{
+    const double pi = 3.14159265358979323846;
+    return sqrt(10.0 * g0 / (pi * c * pow(horizon, 5)));
 }

@@ -508,6 +508,17 @@ static pd_status frame_path(const char *name, const char *field, char *buf, size
  * complete before the first step, and whose complete frames are whole;
  * readers list only complete frames. */
 
+/* The energies of a frame as attributes, in pd_energy's order. */
+#define NENERGY 6
+static const char *energy_attrs[NENERGY] = {"kinetic_energy",  "elastic_energy", "contact_energy",
+                                            "released_energy", "lost_energy",    "external_work"};
+
+static double *energy_field(pd_energy *e, int k)
+{
+    double *v[NENERGY] = {&e->kinetic, &e->elastic, &e->contact, &e->released, &e->lost, &e->work};
+    return v[k];
+}
+
 static void frame_name(int64_t step, char *buf, size_t len)
 {
     snprintf(buf, len, "/frames/%08lld", (long long)step);
@@ -515,7 +526,8 @@ static void frame_name(int64_t step, char *buf, size_t len)
 
 /* One frame's group, datasets (storage allocated) and attributes, not yet
  * complete. */
-static pd_status lay_out_frame(pd_file *f, int64_t n, int64_t nbonds, int64_t step, double time)
+static pd_status lay_out_frame(pd_file *f, int64_t n, int64_t nbonds, int64_t step, double time,
+                               unsigned fields)
 {
     if (!pd_h5_has_link(f->fid, "/frames")) {
         hid_t root = pd_h5_create_group(f->fid, "/frames");
@@ -528,7 +540,7 @@ static pd_status lay_out_frame(pd_file *f, int64_t n, int64_t nbonds, int64_t st
     hid_t g = pd_h5_create_group(f->fid, path);
     if (g < 0)
         return pd_fail(PD_ERR_IO, "cannot create frame %s (disk full?)", path);
-    hsize_t d2[2] = {(hsize_t)n, 3}, ds[1] = {(hsize_t)((nbonds + 7) / 8)};
+    hsize_t d2[2] = {(hsize_t)n, 3}, d1[1] = {(hsize_t)n}, ds[1] = {(hsize_t)((nbonds + 7) / 8)};
     double zero = 0;
     pd_status s;
     if ((s = pd_h5_reserve_data(g, "displacement", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
@@ -536,30 +548,35 @@ static pd_status lay_out_frame(pd_file *f, int64_t n, int64_t nbonds, int64_t st
         (s = pd_h5_reserve_data(g, "state", H5T_STD_U8LE, 1, ds)) == PD_OK &&
         (s = pd_h5_write_attr_int(g, "step", step)) == PD_OK &&
         (s = pd_h5_write_attr_doubles(g, "time", &time, 1)) == PD_OK &&
-        (s = pd_h5_write_attr_doubles(g, "kinetic_energy", &zero, 1)) == PD_OK &&
-        (s = pd_h5_write_attr_int(g, "broken_bonds", 0)) == PD_OK)
+        (s = pd_h5_write_attr_int(g, "broken_bonds", 0)) == PD_OK &&
+        (s = pd_h5_write_attr_int(g, "lost_particles", 0)) == PD_OK)
         s = pd_h5_write_attr_int(g, "complete", 0);
+    for (int k = 0; k < NENERGY && s == PD_OK; k++)
+        s = pd_h5_write_attr_doubles(g, energy_attrs[k], &zero, 1);
+    if (s == PD_OK && (fields & PD_FIELD_ENERGY))
+        s = pd_h5_reserve_data(g, "strain_energy_density", H5T_IEEE_F64LE, 1, d1);
     H5Gclose(g);
     return s;
 }
 
 pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
-                         const int64_t *steps, const double *times)
+                         const int64_t *steps, const double *times, unsigned fields)
 {
     pd_status s = PD_OK;
     for (int64_t k = 0; k < nframes && s == PD_OK; k++)
-        s = lay_out_frame(f, n, nbonds, steps[k], times[k]);
+        s = lay_out_frame(f, n, nbonds, steps[k], times[k], fields);
     return s;
 }
 
 pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
                          double *const y[3], double *const v[3], const uint64_t *intact,
-                         int64_t nbonds)
+                         int64_t nbonds, const double *energy_density)
 {
     char path[64];
     frame_name(fi->step, path, sizeof path);
     if (!pd_h5_has_link(f->fid, path)) { /* not laid out: lay out this one */
-        pd_status s = lay_out_frame(f, p->n, nbonds, fi->step, fi->time);
+        pd_status s = lay_out_frame(f, p->n, nbonds, fi->step, fi->time,
+                                    energy_density ? PD_FIELD_ENERGY : 0);
         if (s != PD_OK)
             return s;
     }
@@ -584,10 +601,15 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
     }
     if (s == PD_OK && nbonds > 0)
         s = pd_h5_write_into(g, "state", H5T_NATIVE_UINT8, bytes);
-    if (s == PD_OK)
-        s = pd_h5_update_attr(g, "kinetic_energy", H5T_NATIVE_DOUBLE, &fi->kinetic);
+    if (s == PD_OK && energy_density)
+        s = pd_h5_write_into(g, "strain_energy_density", H5T_NATIVE_DOUBLE, energy_density);
+    pd_energy e = fi->energy;
+    for (int k = 0; k < NENERGY && s == PD_OK; k++)
+        s = pd_h5_update_attr(g, energy_attrs[k], H5T_NATIVE_DOUBLE, energy_field(&e, k));
     if (s == PD_OK)
         s = pd_h5_update_attr(g, "broken_bonds", H5T_NATIVE_INT64, &fi->broken);
+    if (s == PD_OK)
+        s = pd_h5_update_attr(g, "lost_particles", H5T_NATIVE_INT64, &fi->lost);
     /* the frame whole on disk first, then marked complete */
     if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
         s = pd_fail(PD_ERR_IO, "cannot write frame %s (disk full?)", path);
@@ -715,10 +737,13 @@ pd_status pd_read_frame_info(const pd_file *f, const char *name, pd_frame_info *
     s = pd_h5_read_attr_int(g, "step", &fi->step);
     if (s == PD_OK)
         s = pd_h5_read_attr_double(g, "time", &fi->time);
-    if (s == PD_OK && pd_h5_has_attr(g, "kinetic_energy"))
-        s = pd_h5_read_attr_double(g, "kinetic_energy", &fi->kinetic);
+    for (int k = 0; k < NENERGY && s == PD_OK; k++)
+        if (pd_h5_has_attr(g, energy_attrs[k]))
+            s = pd_h5_read_attr_double(g, energy_attrs[k], energy_field(&fi->energy, k));
     if (s == PD_OK && pd_h5_has_attr(g, "broken_bonds"))
         s = pd_h5_read_attr_int(g, "broken_bonds", &fi->broken);
+    if (s == PD_OK && pd_h5_has_attr(g, "lost_particles"))
+        s = pd_h5_read_attr_int(g, "lost_particles", &fi->lost);
     H5Gclose(g);
     if (s != PD_OK)
         return pd_fail(PD_ERR_FORMAT, "'%s': frame '%s': %s", f->name, name, pd_errmsg());
@@ -829,6 +854,16 @@ pd_status pd_read_frame_damage(const pd_file *f, const pd_particles *p, const ch
  * other slot may be half written when a run is killed). */
 
 static const char *restart_fields[4] = {"position", "force", "s0", "contact_position"};
+/* the run's accumulated energies and the last power (pd_restart) */
+#define NSUMS 5
+static const char *restart_sums[NSUMS] = {"external_work", "released_energy", "external_power",
+                                          "lost_energy", "initial_energy"};
+
+static double *restart_sum(pd_restart *r, int a)
+{
+    double *v[NSUMS] = {&r->work, &r->released, &r->power, &r->lost_energy, &r->energy0};
+    return v[a];
+}
 
 pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact)
 {
@@ -855,6 +890,12 @@ pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact)
         if (s == PD_OK && (s = pd_h5_write_attr_int(g, "step", -1)) == PD_OK &&
             (s = pd_h5_write_attr_int(g, "contact_builds", 0)) == PD_OK)
             s = pd_h5_write_attr_int(g, "complete", 0);
+        double zero = 0;
+        for (int a = 0; a < NSUMS && s == PD_OK; a++)
+            s = pd_h5_write_attr_doubles(g, restart_sums[a], &zero, 1);
+        /* lost particles: flags, written once some are */
+        if (s == PD_OK && (s = pd_h5_reserve_data(g, "lost", H5T_STD_U8LE, 1, d1)) == PD_OK)
+            s = pd_h5_write_attr_int(g, "lost_particles", 0);
         H5Gclose(g);
     }
     return s;
@@ -911,6 +952,16 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
         s = pd_h5_update_attr(g, "step", H5T_NATIVE_INT64, &step);
     if (s == PD_OK)
         s = pd_h5_update_attr(g, "contact_builds", H5T_NATIVE_INT64, &r->contact_builds);
+    pd_restart sums = *r;
+    for (int a = 0; a < NSUMS && s == PD_OK; a++)
+        s = pd_h5_update_attr(g, restart_sums[a], H5T_NATIVE_DOUBLE, restart_sum(&sums, a));
+    int64_t nlost = 0;
+    for (int64_t i = 0; r->lost && i < n; i++)
+        nlost += r->lost[i] != 0;
+    if (s == PD_OK && nlost > 0)
+        s = pd_h5_write_into(g, "lost", H5T_NATIVE_UINT8, r->lost);
+    if (s == PD_OK)
+        s = pd_h5_update_attr(g, "lost_particles", H5T_NATIVE_INT64, &nlost);
     if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
         s = pd_fail(PD_ERR_IO, "cannot write restart data (disk full?)");
     if (s == PD_OK)
@@ -928,6 +979,7 @@ void pd_restart_free(pd_restart *r)
         free(r->contact_position[d]);
     }
     free(r->s0);
+    free(r->lost);
     memset(r, 0, sizeof *r);
 }
 
@@ -977,7 +1029,20 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
     if (s == PD_OK) {
         hid_t g = H5Gopen2(f->fid, group, H5P_DEFAULT);
         s = pd_h5_read_attr_int(g, "contact_builds", &r->contact_builds);
+        for (int a = 0; a < NSUMS && s == PD_OK; a++)
+            if (pd_h5_has_attr(g, restart_sums[a]))
+                s = pd_h5_read_attr_double(g, restart_sums[a], restart_sum(r, a));
+        int64_t nlost = 0;
+        if (s == PD_OK && pd_h5_has_attr(g, "lost_particles"))
+            s = pd_h5_read_attr_int(g, "lost_particles", &nlost);
         H5Gclose(g);
+        if (s == PD_OK && nlost > 0) {
+            char path[64];
+            snprintf(path, sizeof path, "%s/lost", group);
+            pd_h5_form form = {H5T_INTEGER, 1, 1, {(hsize_t)n, 0}};
+            s = pd_h5_read_data(f->fid, f->name, path, &form, H5T_NATIVE_UINT8, 1,
+                                (void **)&r->lost, NULL);
+        }
     }
     if (s != PD_OK)
         pd_restart_free(r);

@@ -32,6 +32,38 @@ static pd_status add_effect(pd_sim *sim, const pd_effect *e)
     return PD_OK;
 }
 
+double pd_lost_margin_default(const pd_particles *p)
+{
+    double edge = p->spacing;
+    for (int d = 0; d < 3; d++) {
+        double lo = INFINITY, hi = -INFINITY;
+        for (int64_t i = 0; i < p->n; i++) {
+            lo = fmin(lo, p->x[d][i]);
+            hi = fmax(hi, p->x[d][i]);
+        }
+        if (hi > lo)
+            edge = fmax(edge, hi - lo);
+    }
+    return PD_LOST_MARGIN_FAC * edge;
+}
+
+/* The box outside which a particle is lost: the reference bounding box
+ * grown by the margin on every side. */
+static void lost_box(pd_sim *sim)
+{
+    double margin = sim->sc.lost_margin > 0 ? sim->sc.lost_margin : pd_lost_margin_default(sim->p);
+    for (int d = 0; d < 3; d++) {
+        sim->box_lo[d] = INFINITY;
+        sim->box_hi[d] = -INFINITY;
+        for (int64_t i = 0; i < sim->n; i++) {
+            sim->box_lo[d] = fmin(sim->box_lo[d], sim->p->x[d][i]);
+            sim->box_hi[d] = fmax(sim->box_hi[d], sim->p->x[d][i]);
+        }
+        sim->box_lo[d] -= margin;
+        sim->box_hi[d] += margin;
+    }
+}
+
 pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s, pd_sim **out)
 {
     if (!(s->dt > 0) || !isfinite(s->dt))
@@ -74,6 +106,7 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
     if (s->has_failure)
         for (size_t i = 0; i < n; i++)
             sim->s0[i] = sim->s0_new[i] = DBL_MAX;
+    lost_box(sim);
 
     /* The step is assembled from the declared effects only. */
     pd_status st = add_effect(sim, s->has_failure ? &pd_effect_pmb_failure : &pd_effect_pmb);
@@ -105,11 +138,37 @@ void pd_sim_free(pd_sim *sim)
     pd_half_free(&sim->half);
     free(sim->s0);
     free(sim->s0_new);
+    free(sim->lost);
     free(sim);
 }
 
+double pd_sum_fixed(const double *x, int64_t n)
+{
+    int64_t nchunks = (n + PD_SUM_CHUNK - 1) / PD_SUM_CHUNK;
+    double part[64], total = 0;
+    /* groups of 64 chunks: a stack array, the same order at any thread count */
+    for (int64_t g = 0; g < nchunks; g += 64) {
+        int64_t m = nchunks - g < 64 ? nchunks - g : 64;
+#pragma omp parallel for schedule(static)
+        for (int64_t c = 0; c < m; c++) {
+            int64_t lo = (g + c) * PD_SUM_CHUNK, hi = lo + PD_SUM_CHUNK < n ? lo + PD_SUM_CHUNK : n;
+            double sum = 0;
+            for (int64_t i = lo; i < hi; i++)
+                sum += x[i];
+            part[c] = sum;
+        }
+        for (int64_t c = 0; c < m; c++)
+            total += part[c];
+    }
+    return total;
+}
+
+/* All force densities at the current positions; the power the effects put
+ * in is integrated into the work with the trapezoidal rule over the step. */
 static pd_status compute_forces(pd_sim *sim)
 {
+    double before = sim->power;
+    sim->power = 0;
     for (int d = 0; d < 3; d++)
         memset(sim->f[d], 0, (size_t)sim->n * sizeof(double));
     for (int k = 0; k < sim->neffects; k++) {
@@ -119,7 +178,24 @@ static pd_status compute_forces(pd_sim *sim)
         if (s != PD_OK)
             return s;
     }
+    if (sim->nlost > 0) /* lost particles feel nothing: they stay at rest */
+#pragma omp parallel for schedule(static)
+        for (int64_t i = 0; i < sim->n; i++)
+            if (sim->lost[i])
+                sim->f[0][i] = sim->f[1][i] = sim->f[2][i] = 0;
+    if (!sim->setup)
+        sim->work += 0.5 * sim->sc.dt * (before + sim->power);
     return PD_OK;
+}
+
+/* Is particle i outside the box?  (Not finite is not outside: the
+ * numerical guard names those.) */
+static inline int outside(const pd_sim *sim, int64_t i)
+{
+    int out = 0;
+    for (int d = 0; d < 3; d++)
+        out |= sim->y[d][i] < sim->box_lo[d] || sim->y[d][i] > sim->box_hi[d];
+    return out;
 }
 
 pd_status pd_sim_setup(pd_sim *sim)
@@ -127,7 +203,49 @@ pd_status pd_sim_setup(pd_sim *sim)
     sim->setup = 1;
     pd_status s = compute_forces(sim);
     sim->setup = 0;
+    pd_energy e;
+    if (s == PD_OK && (s = pd_sim_energy(sim, &e, NULL)) == PD_OK)
+        sim->energy0 = e.kinetic + e.elastic + e.contact;
     return s;
+}
+
+int pd_energy_runaway(const pd_sim *sim, const pd_energy *e, double *ratio)
+{
+    double in = sim->energy0 + fmax(e->work, 0.0);
+    *ratio = in > 0 ? e->kinetic / in : INFINITY;
+    return e->kinetic > PD_KE_GROWTH * in;
+}
+
+/* Particles that left the box: lost, when the energy is sane (their bonds
+ * broken, at rest where they are, out of contact and of the balance but
+ * for pd_energy.lost); when the kinetic energy has run away, the run is
+ * unstable instead. */
+static pd_status take_lost(pd_sim *sim)
+{
+    pd_energy e = {.kinetic = pd_sim_kinetic(sim), .work = sim->work}; /* what the test needs */
+    double ratio;
+    if (sim->lost == NULL && (sim->lost = calloc((size_t)sim->n, 1)) == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for lost particles");
+    for (int64_t i = 0; i < sim->n; i++) {
+        if (sim->lost[i] || !outside(sim, i))
+            continue;
+        if (pd_energy_runaway(sim, &e, &ratio))
+            return pd_fail(PD_ERR_UNSTABLE,
+                           "particle %lld (id %lld) flew off at step %lld while the kinetic "
+                           "energy is %.3g times the energy put in: the run is unstable; the "
+                           "time step may be too large for the bonds or the contact stiffness",
+                           (long long)i, (long long)sim->p->id[i], (long long)sim->step, ratio);
+        const double *v[3] = {sim->v[0], sim->v[1], sim->v[2]};
+        sim->lost_energy += 0.5 * sim->p->density[i] * sim->p->volume[i] *
+                            (v[0][i] * v[0][i] + v[1][i] * v[1][i] + v[2][i] * v[2][i]);
+        for (int d = 0; d < 3; d++)
+            sim->v[d][i] = sim->f[d][i] = 0;
+        pd_half_break_all(&sim->half, sim->b, i);
+        sim->intact_stale = 1;
+        sim->lost[i] = 1;
+        sim->nlost++;
+    }
+    return PD_OK;
 }
 
 /* Half a kick: v += dt/(2 rho) f.  Returns 1 when some velocity is not
@@ -171,17 +289,23 @@ pd_status pd_sim_step(pd_sim *sim)
 {
     double t0 = pd_wtime();
     const double dt = sim->sc.dt;
+    const uint8_t *lost = sim->lost;
     half_kick(sim);
-#pragma omp parallel for schedule(static)
+    int away = 0;
+#pragma omp parallel for schedule(static) reduction(| : away)
     for (int64_t i = 0; i < sim->n; i++) {
         sim->y[0][i] += dt * sim->v[0][i];
         sim->y[1][i] += dt * sim->v[1][i];
         sim->y[2][i] += dt * sim->v[2][i];
+        away |= outside(sim, i) && !(lost && lost[i]);
     }
     sim->step++;
     sim->time = (double)sim->step * dt;
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
-    pd_status s = compute_forces(sim);
+    pd_status s = away ? take_lost(sim) : PD_OK;
+    if (s != PD_OK)
+        return s;
+    s = compute_forces(sim);
     if (s != PD_OK)
         return s;
     t0 = pd_wtime();
@@ -205,16 +329,78 @@ double pd_sim_time(const pd_sim *sim)
     return sim->time;
 }
 
-double pd_sim_kinetic(const pd_sim *sim)
+/* 1/2 rho V |v|^2 of every particle into e. */
+static void kinetic_each(const pd_sim *sim, double *e)
 {
-    /* a serial sum: the same figure at any thread count */
-    double e = 0;
+#pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++) {
         double v2 = sim->v[0][i] * sim->v[0][i] + sim->v[1][i] * sim->v[1][i] +
                     sim->v[2][i] * sim->v[2][i];
-        e += 0.5 * sim->p->density[i] * sim->p->volume[i] * v2;
+        e[i] = 0.5 * sim->p->density[i] * sim->p->volume[i] * v2;
     }
+}
+
+double pd_sim_kinetic(const pd_sim *sim)
+{
+    double *buf = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
+    if (buf == NULL)
+        return NAN;
+    kinetic_each(sim, buf);
+    double e = pd_sum_fixed(buf, sim->n);
+    free(buf);
     return e;
+}
+
+pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density)
+{
+    memset(e, 0, sizeof *e);
+    double *buf = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
+    if (buf == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the energies");
+    kinetic_each(sim, buf);
+    e->kinetic = pd_sum_fixed(buf, sim->n);
+    if (density)
+        memset(density, 0, (size_t)sim->n * sizeof(double));
+    for (int k = 0; k < sim->neffects; k++) {
+        const pd_effect *ef = sim->effects[k];
+        if (ef->energy == NULL)
+            continue;
+        memset(buf, 0, (size_t)sim->n * sizeof(double));
+        ef->energy(sim, sim->state[k], buf);
+        double sum = pd_sum_fixed(buf, sim->n);
+        if (ef->kind == PD_ENERGY_ELASTIC) {
+            e->elastic += sum;
+            if (density)
+                for (int64_t i = 0; i < sim->n; i++)
+                    density[i] += buf[i] / sim->p->volume[i];
+        } else
+            e->contact += sum;
+    }
+    e->released = sim->released;
+    e->lost = sim->lost_energy;
+    e->work = sim->work;
+    free(buf);
+    return PD_OK;
+}
+
+double pd_energy_total(const pd_energy *e)
+{
+    return e->kinetic + e->elastic + e->contact + e->released + e->lost - e->work;
+}
+
+void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
+{
+    r->work = sim->work;
+    r->released = sim->released;
+    r->power = sim->power;
+    r->lost_energy = sim->lost_energy;
+    r->energy0 = sim->energy0;
+    r->lost = sim->lost;
+}
+
+int64_t pd_sim_lost(const pd_sim *sim)
+{
+    return sim->nlost;
 }
 
 int64_t pd_sim_broken(const pd_sim *sim)
@@ -306,6 +492,20 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
     sim->intact_stale = 0;
     sim->step = step;
     sim->time = (double)step * sim->sc.dt;
+    sim->work = r->work;
+    sim->released = r->released;
+    sim->power = r->power;
+    sim->lost_energy = r->lost_energy;
+    sim->energy0 = r->energy0;
+    if (r->lost) {
+        free(sim->lost);
+        if ((sim->lost = malloc((size_t)sim->n)) == NULL)
+            return pd_fail(PD_ERR_NOMEM, "out of memory for lost particles");
+        memcpy(sim->lost, r->lost, (size_t)sim->n);
+        sim->nlost = 0;
+        for (int64_t i = 0; i < sim->n; i++)
+            sim->nlost += sim->lost[i] != 0;
+    }
     void *cs = effect_state(sim, &pd_effect_contact);
     if (cs && r->contact_builds > 0) {
         if (r->contact_position[0] == NULL)

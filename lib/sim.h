@@ -13,10 +13,19 @@ typedef struct pd_effect {
     pd_timer timer;    /* where its time is booked                  */
     /* Allocate the effect's state (may stay NULL). */
     pd_status (*init)(pd_sim *sim, void **state);
-    /* Add the effect's force density to sim->f. */
+    /* Add the effect's force density to sim->f (and the power it puts in
+     * to sim->power). */
     pd_status (*force)(pd_sim *sim, void *state);
     void (*free)(void *state);
+    /* Add each particle's share of the effect's potential energy, J, to
+     * e[i]; NULL: none.  `kind` says where pd_energy books it. */
+    void (*energy)(const pd_sim *sim, void *state, double *e);
+    enum { PD_ENERGY_ELASTIC, PD_ENERGY_CONTACT } kind;
 } pd_effect;
+
+/* Deterministic parallel sums: fixed chunks, summed in order. */
+#define PD_SUM_CHUNK 4096
+double pd_sum_fixed(const double *x, int64_t n);
 
 #define PD_MAX_EFFECTS 8
 
@@ -34,6 +43,8 @@ typedef struct {
     uint64_t *intact;  /* mu per bond                                    */
     int64_t block;     /* rows per block (>= the largest j - i)          */
     int64_t nblocks;
+    double *released;  /* nblocks: energy of the bonds broken in a block
+                          in this step, J (summed in block order)        */
     int64_t *cursor;   /* scratch of pd_half_expand                      */
 } pd_half_bonds;
 
@@ -68,6 +79,16 @@ struct pd_sim {
     double *s0_new;     /* being computed in this step                   */
     int64_t step;
     double time;        /* s                                             */
+    double power;       /* power put in by the effects at this step's
+                           force evaluation, W                           */
+    double work;        /* its time integral (trapezoidal), J            */
+    double released;    /* energy of the bonds broken so far, J          */
+    double energy0;     /* kinetic + elastic + contact at step 0, J      */
+    double box_lo[3];   /* a particle outside [box_lo, box_hi] is lost, m */
+    double box_hi[3];
+    uint8_t *lost;      /* n flags, NULL until the first loss            */
+    int64_t nlost;
+    double lost_energy; /* kinetic energy of the lost particles, J       */
     int setup;          /* 1 while computing the forces of the initial state */
     const pd_effect *effects[PD_MAX_EFFECTS];
     void *state[PD_MAX_EFFECTS];
@@ -76,6 +97,9 @@ struct pd_sim {
     double timers[PD_T_COUNT];
     int64_t contact_builds;
 };
+
+/* Break every bond of particle i (both halves). */
+void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i);
 
 pd_status pd_contact_restore(pd_sim *sim, void *state, double *const yb[3], int64_t builds);
 double *const *pd_contact_positions(void *state);

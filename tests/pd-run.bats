@@ -652,8 +652,10 @@ with h5py.File(sys.argv[1]) as f:
         --steps 2000 --every 5 -q model.h5 -o r.h5
     [ "$status" -eq 1 ]
     [ "$(printf '%s\n' "$stderr" | wc -l)" -eq 1 ]
-    [[ "$stderr" =~ ^pd-run:\ error:\ the\ (force|position|velocity)\ of\ particle\ [0-9]+\ \(id\ [0-9]+\)\ is\ not\ finite\ at\ step\ ([0-9]+):.*time\ step ]]
-    bad=${BASH_REMATCH[2]}
+    # caught as not finite, or as a particle flying off while the kinetic
+    # energy runs away (not taken for a lost particle)
+    [[ "$stderr" =~ ^pd-run:\ error:\ (the\ (force|position|velocity)\ of\ )?particle\ [0-9]+\ \(id\ [0-9]+\)\ (is\ not\ finite|flew\ off)\ at\ step\ ([0-9]+)[:\ ].*time\ step ]]
+    bad=${BASH_REMATCH[4]}
     # every complete frame in the file is finite and comes before the bad step
     py "
 import numpy as np
@@ -687,7 +689,12 @@ with h5py.File(sys.argv[1]) as a, h5py.File(sys.argv[2]) as b:
     for d in ('displacement', 'velocity', 'state'):
         x, y = a['frames'][k][d][:], b['frames'][k][d][:]
         assert x.dtype == y.dtype and np.array_equal(x.view(np.uint8), y.view(np.uint8)), (k, d)
-    assert a['frames'][k].attrs['complete'] == b['frames'][k].attrs['complete'] == 1" "$@"
+    assert a['frames'][k].attrs['complete'] == b['frames'][k].attrs['complete'] == 1
+    # the energies too: the work and released energy go on from the restart data
+    for n in ('kinetic_energy', 'elastic_energy', 'contact_energy', 'released_energy',
+              'lost_energy', 'external_work', 'broken_bonds', 'lost_particles'):
+        x, y = a['frames'][k].attrs[n], b['frames'][k].attrs[n]
+        assert x == y, (k, n, x, y)" "$@"
 }
 
 @test "--restart: 2N steps in one run equal N steps and N more, bit for bit" {
@@ -752,4 +759,47 @@ with h5py.File(sys.argv[1]) as f:
     pd-run "${RUN_OPTS[@]}" --steps 0 --every 20 --threads 2 -q model.h5 -o run.h5
     run -0 pd-run --restart run.h5 --steps 40 --threads 2 -q
     for step in 20 40; do same_frame full.h5 run.h5 "$step"; done
+}
+
+@test "--restart goes on bit for bit after particles were lost" {
+    pd-lattice -q --spacing 0.0005 --density "$DENSITY" --box 0,0.02,0,0.02,0,0.0025 -o plate.h5
+    pd-bonds -q --horizon 0.0015001 plate.h5 -o model.h5
+    local opts=(--bulk-modulus "$BULK" --failure 0.0005,0.25 --contact --lost-margin 0.005
+                --indenter sphere,0.01,0.01,0.0055,0.0025,1e18,0,0,-1000 --every 100 -q)
+    pd-run "${opts[@]}" --steps 300 model.h5 -o full.h5
+    pd-run "${opts[@]}" --steps 200 model.h5 -o run.h5
+    py "
+with h5py.File(sys.argv[1]) as f:
+    assert f['frames/00000200'].attrs['lost_particles'] > 0" run.h5
+    run -0 pd-run --restart run.h5 --steps 100 -q
+    same_frame full.h5 run.h5 300
+}
+
+@test "--failure-energy G0 gives s00 = sqrt(5 G0 / (9 K delta)) (seed 004 eq. 27)" {
+    make_block
+    run --separate-stderr pd-run --bulk-modulus "$BULK" --failure-energy 3.8 --steps 1 \
+        model.h5 -o g.h5
+    [ "$status" -eq 0 ]
+    [[ "$stderr" =~ critical\ stretch\ s00\ [0-9.e-]+\ from\ the\ fracture\ energy\ G0\ 3.8 ]]
+    py "
+import math
+with h5py.File(sys.argv[1]) as f:
+    a = f['scene'].attrs
+    want = math.sqrt(5 * 3.8 / (9 * $BULK * $HORIZON))
+    assert abs(a['s00'] - want) <= 1e-12 * want and a['alpha'] == 0, (a['s00'], want)" g.h5
+    # with --c and ALPHA: sqrt(10 G0 / (pi c delta^5))
+    run -0 pd-run --c 1e21 --failure-energy 3.8,0.25 --steps 1 -q model.h5 -o c.h5
+    py "
+import math
+with h5py.File(sys.argv[1]) as f:
+    a = f['scene'].attrs
+    want = math.sqrt(10 * 3.8 / (math.pi * 1e21 * $HORIZON ** 5))
+    assert abs(a['s00'] - want) <= 1e-12 * want and a['alpha'] == 0.25, (a['s00'], want)" c.h5
+    # the last of --failure and --failure-energy wins
+    run -0 pd-run --c 1e21 --failure-energy 3.8 --failure 0.001,0.5 --steps 1 -q model.h5 -o l.h5
+    [ "$(scene_attr l.h5 s00)" = 0.001 ]
+    for bad in 0 -1 abc 3.8,-1 3.8,1,2; do
+        expect_usage_error "--failure-energy needs G0" pd-run --c 1e21 --failure-energy "$bad" \
+            --steps 1 model.h5 -o x.h5
+    done
 }

@@ -197,6 +197,16 @@ static void test_uniform_stretch(void)
     double scale = 0; /* |force density| of one side of the ball */
     for (int64_t k = b->offset[0]; k < b->offset[1]; k++)
         scale = fmax(scale, c * eps * p->volume[b->neighbor[k]] * b->vfactor[k]);
+    /* the library's strain energy density (pd_sim_energy) is the same */
+    double *wlib = malloc((size_t)p->n * sizeof(double));
+    pd_energy en;
+    if (wlib == NULL || pd_sim_energy(sim, &en, wlib) != PD_OK)
+        die("pd_sim_energy");
+    double wsum = 0;
+    for (int64_t i = 0; i < p->n; i++)
+        wsum += wlib[i] * p->volume[i];
+    CHECK(fabs(wsum - en.elastic) <= 1e-12 * en.elastic, "elastic %g, sum of W V %g", en.elastic,
+          wsum);
     int64_t interior = 0, faces = 0;
     for (int64_t i = 0; i < p->n; i++) {
         long n[3];
@@ -220,6 +230,8 @@ static void test_uniform_stretch(void)
                      p->volume[b->neighbor[k]];
             double want = 4.5 * K * eps * eps * share;
             CHECK(fabs(w - want) <= 1e-9 * want, "energy density %g, expected %g", w, want);
+            CHECK(fabs(wlib[i] - want) <= 1e-9 * want, "pd_sim_energy density %g, expected %g",
+                  wlib[i], want);
         }
         if (on == 1) {
             /* a face particle (not on an edge): pulled inward along the normal */
@@ -233,11 +245,12 @@ static void test_uniform_stretch(void)
           (long long)interior, (long long)faces);
     for (int d = 0; d < 3; d++)
         free(f[d]);
+    free(wlib);
     pd_sim_free(sim);
     pd_bonds_free(b);
     pd_particles_free(p);
     proved(f0, "uniform stretch: bond stretch eps, no interior force, faces pulled in, "
-               "W = 9/2 K eps^2 x lattice share");
+               "W = 9/2 K eps^2 x lattice share (also from pd_sim_energy)");
 }
 
 /* Broken pairs after each of `steps` steps of a pair held at stretch s. */

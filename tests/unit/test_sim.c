@@ -170,6 +170,13 @@ static double energy_drift(const pd_particles *p, const pd_bonds *b, double safe
             die("step");
         double ke = kinetic(sim, p), w = strain_energy(sim, p, b, c);
         CHECK(isfinite(ke) && ke <= 1.2 * e0, "kinetic energy runs away at step %d", n + 1);
+        pd_energy en;
+        if (pd_sim_energy(sim, &en, NULL) != PD_OK)
+            die("pd_sim_energy");
+        CHECK(fabs(en.kinetic - ke) <= 1e-12 * e0 && fabs(en.elastic - w) <= 1e-12 * e0 &&
+                  en.contact == 0 && en.work == 0 && en.released == 0,
+              "pd_sim_energy at step %d: kinetic %g elastic %g, expected %g %g", n + 1,
+              en.kinetic, en.elastic, ke, w);
         worst = fmax(worst, fabs(ke + w - e0));
         wmax = fmax(wmax, w);
     }
@@ -234,11 +241,39 @@ static void test_threads(void)
     proved(f0, "the trajectory is bit-identical with 1 and 2 threads");
 }
 
+/* Two particles brought to one point (bonded, and in contact range) give
+ * no NaN: the bond and contact forces of a pair at r = 0 are 0. */
+static void test_coincident(void)
+{
+    int f0 = failures;
+    pd_particles *p;
+    pd_bonds *b;
+    model(&p, &b);
+    for (int failure = 0; failure <= 1; failure++) {
+        pd_sim *sim = start(p, b, failure, 1, 0.0, 0.8);
+        double *const *y = pd_sim_positions(sim);
+        int32_t j = b->neighbor[b->offset[0]]; /* a partner of particle 0 */
+        for (int d = 0; d < 3; d++)
+            y[d][j] = y[d][0];
+        for (int n = 0; n < 20; n++)
+            if (pd_sim_step(sim) != PD_OK)
+                CHECK(0, "step %d: %s", n + 1, pd_errmsg());
+        pd_energy e;
+        CHECK(pd_sim_energy(sim, &e, NULL) == PD_OK && isfinite(pd_energy_total(&e)),
+              "energies not finite");
+        pd_sim_free(sim);
+    }
+    pd_bonds_free(b);
+    pd_particles_free(p);
+    proved(f0, "two particles at one point give finite forces and energies");
+}
+
 int main(void)
 {
     test_momentum();
     test_energy();
     test_threads();
+    test_coincident();
     if (failures)
         fprintf(stderr, "test_sim: %d failures\n", failures);
     return failures != 0;
