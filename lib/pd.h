@@ -405,6 +405,13 @@ pd_status pd_read_frame_scalar(const pd_file *f, const char *name, const char *f
  * for later frames; the caller frees them (pd_bonds_free, free). */
 pd_status pd_read_frame_damage(const pd_file *f, const pd_particles *p, const char *frame,
                                pd_bonds **b, uint64_t **intact, double *damage);
+/* Damage of a frame without the pre-crack: its stored `damage_run` field
+ * (pd-damage --no-precrack), or else computed from its bond state
+ * (pd_damage_no_precrack); *b and *intact as for pd_read_frame_damage.
+ * When the file has no /bonds/precrack, *present = 0 and nothing is read. */
+pd_status pd_read_frame_damage_run(const pd_file *f, const pd_particles *p, const char *frame,
+                                   pd_bonds **b, uint64_t **intact, double *damage,
+                                   int *present);
 pd_status pd_write_frame_scalar(pd_file *f, const char *name, const char *field,
                                 int64_t n, const double *values);
 
@@ -420,6 +427,7 @@ typedef struct {
     const double *damage;
     const int32_t *material;
     const int64_t *id;
+    const double *damage_run;     /* damage without the pre-crack    */
 } pd_vtk_frame;
 
 pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr);

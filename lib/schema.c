@@ -881,13 +881,11 @@ pd_status pd_write_frame_scalar(pd_file *f, const char *name, const char *field,
     return pd_h5_write_data(f->fid, path, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, d1, values);
 }
 
-pd_status pd_read_frame_damage(const pd_file *f, const pd_particles *p, const char *frame,
-                               pd_bonds **b, uint64_t **intact, double *damage)
+/* The bonds and the frame's state bits, the bonds read on first need. */
+static pd_status frame_bonds(const pd_file *f, const pd_particles *p, const char *frame,
+                             pd_bonds **b, uint64_t **intact)
 {
-    int present = 0;
-    pd_status s = pd_read_frame_scalar(f, frame, "damage", p->n, damage, &present);
-    if (s != PD_OK || present)
-        return s;
+    pd_status s;
     if (*b == NULL) {
         if ((s = pd_read_bonds(f, p, b)) != PD_OK)
             return s;
@@ -895,9 +893,36 @@ pd_status pd_read_frame_damage(const pd_file *f, const pd_particles *p, const ch
         if (*intact == NULL)
             return pd_fail(PD_ERR_NOMEM, "out of memory");
     }
-    if ((s = pd_read_frame_state(f, frame, (*b)->count, *intact)) != PD_OK)
+    return pd_read_frame_state(f, frame, (*b)->count, *intact);
+}
+
+pd_status pd_read_frame_damage(const pd_file *f, const pd_particles *p, const char *frame,
+                               pd_bonds **b, uint64_t **intact, double *damage)
+{
+    int present = 0;
+    pd_status s = pd_read_frame_scalar(f, frame, "damage", p->n, damage, &present);
+    if (s != PD_OK || present)
+        return s;
+    if ((s = frame_bonds(f, p, frame, b, intact)) != PD_OK)
         return s;
     pd_damage(p, *b, *intact, damage);
+    return PD_OK;
+}
+
+pd_status pd_read_frame_damage_run(const pd_file *f, const pd_particles *p, const char *frame,
+                                   pd_bonds **b, uint64_t **intact, double *damage,
+                                   int *present)
+{
+    *present = pd_h5_has_link(f->fid, "/bonds/precrack");
+    if (!*present)
+        return PD_OK;
+    int stored = 0;
+    pd_status s = pd_read_frame_scalar(f, frame, "damage_run", p->n, damage, &stored);
+    if (s != PD_OK || stored)
+        return s;
+    if ((s = frame_bonds(f, p, frame, b, intact)) != PD_OK)
+        return s;
+    pd_damage_no_precrack(p, *b, *intact, damage);
     return PD_OK;
 }
 
