@@ -886,9 +886,9 @@ static pd_status frame_bonds(const pd_file *f, const pd_particles *p, const char
                              pd_bonds **b, uint64_t **intact)
 {
     pd_status s;
-    if (*b == NULL) {
-        if ((s = pd_read_bonds(f, p, b)) != PD_OK)
-            return s;
+    if (*b == NULL && (s = pd_read_bonds(f, p, b)) != PD_OK)
+        return s;
+    if (*intact == NULL) {
         *intact = calloc((size_t)pd_bits_words((*b)->count) + 1, sizeof(uint64_t));
         if (*intact == NULL)
             return pd_fail(PD_ERR_NOMEM, "out of memory");
