@@ -213,7 +213,9 @@ int pd_crack_crosses(const pd_crack *c, const double x[3], const double y[3]);
  * the cracks is broken on both directed copies (intact bit cleared) and
  * marked in b->precrack (allocated when some bond crosses; stays NULL when
  * none does).  counts[c] (counts may be NULL) gets the number of bonds
- * (pairs) crack c crosses; a bond crossing two cracks counts for both. */
+ * (pairs) crack c crosses; a bond crossing two cracks counts for both.
+ * Families must be symmetric and sorted, as built; on failure b may be
+ * partly cracked and is to be discarded. */
 pd_status pd_bonds_precrack(const pd_particles *p, pd_bonds *b, const pd_crack *cracks,
                             int ncracks, int64_t *counts);
 
