@@ -7,6 +7,10 @@
  * Volume") and the bond state mu as one bit per bond.  Particles are first
  * sorted by horizon-sized cells, row by row along the longest axis, so that
  * families sit close in memory; ids travel with them.
+ *
+ * Pre-cracks (--crack): every bond whose reference segment crosses a given
+ * planar crack is created broken (mu = 0, seed 004) and marked in
+ * /bonds/precrack; lib/crack.c holds the geometry and its conventions.
  */
 #include <getopt.h>
 #include <math.h>
@@ -18,11 +22,15 @@
 
 #define PROG "pd-bonds"
 #include "cli.h"
+#define MAX_CRACKS 64
 
 struct options {
     double horizon;
     int has_horizon;
     int no_sort;
+    pd_crack cracks[MAX_CRACKS];
+    const char *crack_specs[MAX_CRACKS];
+    int ncracks;
     const char *input;
     const char *output;
     int quiet, debug;
@@ -38,6 +46,14 @@ static void usage(FILE *out)
             "  --horizon DELTA   horizon, m (at least the spacing; give 3.0001 x spacing,\n"
             "                    not 3 x, so that pairs at exactly 3 spacings are bonded)\n"
             "  --no-sort         keep the particle order of INPUT\n"
+            "  --crack SPEC      pre-crack: make every bond that crosses the crack broken\n"
+            "                    (and marked in /bonds/precrack); repeatable.  SPEC is\n"
+            "                    rect,X,Y,Z,AX,AY,AZ,BX,BY,BZ  the parallelogram with\n"
+            "                      corner X,Y,Z and edge vectors A and B, m; or\n"
+            "                    segment,X1,Y1,X2,Y2  a segment in the x-y plane, m,\n"
+            "                      through the whole thickness along z.\n"
+            "                    An end of a bond exactly on the crack's plane counts on\n"
+            "                    the side A x B points to (segment: (X2-X1,Y2-Y1,0) x z).\n"
             "  -o, --output FILE output file, '-' for stdout (default '-')\n"
             "  -q, --quiet       no summary on stderr\n"
             "      --debug       print HDF5's own error stack\n"
@@ -47,10 +63,11 @@ static void usage(FILE *out)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_HORIZON = 256, OPT_NOSORT };
+    enum { OPT_HORIZON = 256, OPT_NOSORT, OPT_CRACK };
     static const struct option longopts[] = {
         {"horizon", required_argument, 0, OPT_HORIZON},
         {"no-sort", no_argument, 0, OPT_NOSORT},
+        {"crack", required_argument, 0, OPT_CRACK},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -67,6 +84,13 @@ static int parse_options(int argc, char **argv, struct options *o)
             break;
         case OPT_NOSORT:
             o->no_sort = 1;
+            break;
+        case OPT_CRACK:
+            if (o->ncracks == MAX_CRACKS)
+                return usage_error("too many --crack options", NULL);
+            if (pd_crack_parse(optarg, &o->cracks[o->ncracks]) != PD_OK)
+                return usage_error(pd_errmsg(), NULL);
+            o->crack_specs[o->ncracks++] = optarg;
             break;
         case 'o':
             o->output = optarg;
@@ -123,6 +147,9 @@ int main(int argc, char **argv)
         s = pd_particles_sort_spatial(p, o.horizon);
     if (s == PD_OK)
         s = pd_bonds_build(p, o.horizon, &b);
+    int64_t cut[MAX_CRACKS];
+    if (s == PD_OK && o.ncracks > 0)
+        s = pd_bonds_precrack(p, b, o.cracks, o.ncracks, cut);
     pd_file *out = NULL;
     if (s == PD_OK)
         s = pd_file_create(o.output, &out);
@@ -148,6 +175,9 @@ int main(int argc, char **argv)
         fprintf(stderr, PROG ": %lld particles, %lld bonds (%.2f per particle, %lld to %lld)\n",
                 (long long)p->n, (long long)(b->count / 2), (double)b->count / (double)p->n,
                 (long long)lo, (long long)hi);
+        for (int c = 0; c < o.ncracks; c++)
+            fprintf(stderr, PROG ": --crack %s: %lld bonds broken\n", o.crack_specs[c],
+                    (long long)cut[c]);
     }
     pd_bonds_free(b);
     pd_particles_free(p);

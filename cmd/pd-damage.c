@@ -5,6 +5,11 @@
  * (seed 000 eq. 10, as LAMMPS compute damage/atom), stored as the frame
  * field `damage`, and a table on stdout per frame: step, time, broken bonds,
  * mean and max damage, and the number of particles with damage > 0.3.
+ *
+ * Pre-cracked bonds (/bonds/precrack, pd-bonds --crack) are broken bonds and
+ * count in phi.  With --no-precrack they are left out of both sums
+ * (pd_damage_no_precrack): the damage of what broke during the run, stored
+ * as the frame field `damage_run`.
  */
 #include <getopt.h>
 #include <stdio.h>
@@ -20,6 +25,7 @@ struct options {
     const char *input;
     const char *output;  /* NULL: update INPUT in place (through a copy) */
     double threshold;
+    int no_precrack;     /* damage without the pre-crack, field damage_run */
     int no_write, quiet, debug;
 };
 
@@ -36,6 +42,8 @@ static void usage(FILE *out)
             "  -n, --no-write      only print the table\n"
             "  -q, --quiet         no table\n"
             "  --threshold D       count particles with damage above D (default 0.3)\n"
+            "  --no-precrack       leave the pre-crack (pd-bonds --crack) out: damage and\n"
+            "                      broken bonds of the run alone, stored as 'damage_run'\n"
             "      --debug         print HDF5's own error stack\n"
             "  -h, --help          show this help\n"
             "  -V, --version       show the version\n");
@@ -43,12 +51,13 @@ static void usage(FILE *out)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_THRESHOLD = 256 };
+    enum { OPT_THRESHOLD = 256, OPT_NO_PRECRACK };
     static const struct option longopts[] = {
         {"output", required_argument, 0, 'o'},
         {"no-write", no_argument, 0, 'n'},
         {"quiet", no_argument, 0, 'q'},
         {"threshold", required_argument, 0, OPT_THRESHOLD},
+        {"no-precrack", no_argument, 0, OPT_NO_PRECRACK},
         COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
@@ -68,6 +77,9 @@ static int parse_options(int argc, char **argv, struct options *o)
         case OPT_THRESHOLD:
             if (!pd_parse_double(optarg, &o->threshold) || o->threshold < 0 || o->threshold > 1)
                 return usage_error("--threshold must be a number in [0,1], not", optarg);
+            break;
+        case OPT_NO_PRECRACK:
+            o->no_precrack = 1;
             break;
         default:
             return option_error(argv);
@@ -133,7 +145,13 @@ int main(int argc, char **argv)
         if (k == 0 && table) /* only once a frame is known to be readable */
             fprintf(table, "# step time_s broken_bonds mean_damage max_damage n_damage_gt_%g\n",
                     o.threshold);
-        pd_damage(p, b, intact, damage);
+        if (o.no_precrack)
+            pd_damage_no_precrack(p, b, intact, damage);
+        else
+            pd_damage(p, b, intact, damage);
+        /* with --no-precrack only the bonds the run broke */
+        int64_t broken =
+            pd_bits_count_broken_except(intact, o.no_precrack ? b->precrack : NULL, b->count) / 2;
         double sum = 0, max = 0;
         int64_t above = 0;
         for (int64_t i = 0; i < p->n; i++) {
@@ -143,10 +161,10 @@ int main(int argc, char **argv)
         }
         if (table)
             fprintf(table, "%lld %.9e %lld %.9f %.9f %lld\n", (long long)fi.step, fi.time,
-                (long long)(pd_bits_count_broken(intact, b->count) / 2), sum / (double)p->n, max,
-                (long long)above);
+                (long long)broken, sum / (double)p->n, max, (long long)above);
         if (!o.no_write)
-            s = pd_write_frame_scalar(f, names[k], "damage", p->n, damage);
+            s = pd_write_frame_scalar(f, names[k], o.no_precrack ? "damage_run" : "damage", p->n,
+                                      damage);
     }
     if (s == PD_OK && !o.no_write) {
         s = pd_append_history(f, cmdline ? cmdline : PROG);

@@ -8,6 +8,9 @@
  * with their times, so ParaView opens the whole run as one time series.
  * Damage is the frame's `damage` field when pd-damage stored it, otherwise
  * it is computed from the frame's bond state (seed 000 eq. 10, pd_damage).
+ * A run from a pre-cracked model (/bonds/precrack) also gets damage_run, the
+ * damage without the pre-crack (pd_damage_no_precrack, or the frame's
+ * `damage_run` field), which shows only what broke during the run.
  */
 #include <errno.h>
 #include <getopt.h>
@@ -35,7 +38,9 @@ static void usage(FILE *out)
             "Write every frame of a run as DIR/NAME_STEP.vtu (VTK XML, points at the current\n"
             "positions with displacement, velocity, damage, material and id) and the\n"
             "ParaView collection DIR/NAME.pvd of all frames with their times.  NAME is the\n"
-            "file name of RUN.h5 without '.h5' ('run' when RUN.h5 is '-', stdin).\n"
+            "file name of RUN.h5 without '.h5' ('run' when RUN.h5 is '-', stdin).  A run\n"
+            "with a pre-crack (pd-bonds --crack) also gets damage_run, the damage without\n"
+            "the pre-crack.\n"
             "\n"
             "Options:\n"
             "  -o, --output DIR    directory of the output, created when missing (required)\n"
@@ -139,14 +144,14 @@ static pd_status make_dirs(const char *dir)
 
 /* Per-particle work arrays of one frame. */
 struct frame_data {
-    double *disp[3], *vel[3], *pos[3], *damage;
+    double *disp[3], *vel[3], *pos[3], *damage, *damage_run;
 };
 
 static pd_status frame_data_alloc(struct frame_data *d, int64_t n)
 {
     memset(d, 0, sizeof *d);
     size_t bytes = (size_t)n * sizeof(double);
-    int ok = (d->damage = malloc(bytes)) != NULL;
+    int ok = (d->damage = malloc(bytes)) != NULL && (d->damage_run = malloc(bytes)) != NULL;
     for (int k = 0; k < 3; k++)
         ok &= (d->disp[k] = malloc(bytes)) != NULL && (d->vel[k] = malloc(bytes)) != NULL &&
               (d->pos[k] = malloc(bytes)) != NULL;
@@ -161,6 +166,7 @@ static void frame_data_free(struct frame_data *d)
         free(d->pos[k]);
     }
     free(d->damage);
+    free(d->damage_run);
 }
 
 /* Write frame `frame` as DIR/file; file and time are filled in. */
@@ -170,9 +176,11 @@ static pd_status dump_frame(const pd_file *f, const pd_particles *p, const char 
 {
     pd_frame_info fi;
     pd_status s;
+    int has_run = 0;
     if ((s = pd_read_frame_info(f, frame, &fi)) != PD_OK ||
         (s = pd_read_frame_vectors(f, frame, p->n, d->disp, d->vel)) != PD_OK ||
-        (s = pd_read_frame_damage(f, p, frame, b, intact, d->damage)) != PD_OK)
+        (s = pd_read_frame_damage(f, p, frame, b, intact, d->damage)) != PD_OK ||
+        (s = pd_read_frame_damage_run(f, p, frame, b, intact, d->damage_run, &has_run)) != PD_OK)
         return s;
     for (int k = 0; k < 3; k++)
         for (int64_t i = 0; i < p->n; i++)
@@ -187,7 +195,8 @@ static pd_status dump_frame(const pd_file *f, const pd_particles *p, const char 
     snprintf(*file, len, "%s_%08lld.vtu", name, (long long)fi.step);
     snprintf(path, len, "%s/%s", dir, *file);
     *time = fi.time;
-    pd_vtk_frame fr = {p->n, d->pos, d->disp, d->vel, d->damage, p->material, p->id};
+    pd_vtk_frame fr = {p->n, d->pos, d->disp, d->vel, d->damage, p->material, p->id,
+                       has_run ? d->damage_run : NULL};
     s = pd_vtk_write(path, &fr);
     free(path);
     return s;

@@ -9,6 +9,8 @@
  *   nu = (delta + r_j - |xi|) / (2 r_j)  delta - r_j < |xi| <= delta
  * (seed 000, "Modification to the Particle Volume"; nu(delta) = 1/2), and
  * the state mu as one bit (seed 004: "a bit variable to store values of mu").
+ * Bonds broken before the run by a pre-crack (crack.c) carry a second bit,
+ * so that damage can be shown with or without them.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -50,6 +52,7 @@ void pd_bonds_free(pd_bonds *b)
     free(b->length);
     free(b->vfactor);
     free(b->intact);
+    free(b->precrack);
     free(b);
 }
 
@@ -61,6 +64,18 @@ int64_t pd_bits_count_broken(const uint64_t *bits, int64_t count)
     for (int64_t b = words * 64; b < count; b++)
         intact += pd_bond_intact(bits, b);
     return count - intact;
+}
+
+int64_t pd_bits_count_broken_except(const uint64_t *bits, const uint64_t *skip, int64_t count)
+{
+    if (skip == NULL)
+        return pd_bits_count_broken(bits, count);
+    int64_t broken = 0, words = count / 64;
+    for (int64_t w = 0; w < words; w++)
+        broken += __builtin_popcountll(~bits[w] & ~skip[w]);
+    for (int64_t b = words * 64; b < count; b++)
+        broken += !pd_bond_intact(bits, b) && !pd_bond_intact(skip, b);
+    return broken;
 }
 
 /* Partial-volume factor of a bond of length len to a node of radius r. */
@@ -169,12 +184,17 @@ pd_status pd_bonds_build(const pd_particles *p, double horizon, pd_bonds **out)
     return PD_OK;
 }
 
-void pd_damage(const pd_particles *p, const pd_bonds *b, const uint64_t *intact, double *damage)
+/* Damage (seed 000 eq. 10) over the bonds whose bit in `skip` is clear
+ * (skip NULL: every bond). */
+static void damage_over(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
+                        const uint64_t *skip, double *damage)
 {
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < b->n; i++) {
         double all = 0, kept = 0;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            if (skip && pd_bond_intact(skip, k))
+                continue;
             double v = p->volume[b->neighbor[k]];
             all += v;
             if (pd_bond_intact(intact, k))
@@ -182,6 +202,17 @@ void pd_damage(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
         }
         damage[i] = all > 0 ? 1.0 - kept / all : 0.0;
     }
+}
+
+void pd_damage(const pd_particles *p, const pd_bonds *b, const uint64_t *intact, double *damage)
+{
+    damage_over(p, b, intact, NULL, damage);
+}
+
+void pd_damage_no_precrack(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
+                           double *damage)
+{
+    damage_over(p, b, intact, b->precrack, damage);
 }
 
 typedef struct {

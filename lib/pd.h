@@ -146,6 +146,9 @@ typedef struct {
     double *length;     /* count: reference length |xi|, m                  */
     double *vfactor;    /* count: partial-volume factor nu in [1/2, 1]      */
     uint64_t *intact;   /* ceil(count/64) words: bit b = mu of bond b       */
+    uint64_t *precrack; /* NULL, or ceil(count/64) words packed as intact:
+                           bit b set = bond b was made broken before the run
+                           by a pre-crack (pd_bonds_precrack)               */
     double horizon;     /* delta, m                                         */
 } pd_bonds;
 
@@ -168,9 +171,61 @@ int64_t pd_bits_count_broken(const uint64_t *bits, int64_t count);
 
 /* Damage (seed 000 eq. 10, as LAMMPS compute damage/atom): 1 - sum of V_j
  * over intact bonds / sum of V_j over the reference family; 0 for a particle
- * without family. */
+ * without family.  Pre-cracked bonds are broken bonds like any other. */
 void pd_damage(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
                double *damage);
+/* Damage without the pre-crack: the same ratio with the pre-cracked bonds
+ * (b->precrack) left out of both sums,
+ *   phi_i = 1 - sum_{j intact, not pre-cracked} V_j
+ *             / sum_{j in family, not pre-cracked} V_j,
+ * so that it shows only what broke during the run; 0 for a particle whose
+ * bonds are all pre-cracked.  Equals pd_damage when b->precrack is NULL. */
+void pd_damage_no_precrack(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
+                           double *damage);
+/* Number of cleared bits of `bits` among the first `count` whose bit in
+ * `skip` is clear (skip NULL: all of them), e.g. bonds broken during a run
+ * but not pre-cracked. */
+int64_t pd_bits_count_broken_except(const uint64_t *bits, const uint64_t *skip, int64_t count);
+
+/* A planar pre-crack (lib/crack.c): the closed parallelogram
+ *   C = { P + u A + v B : u, v in [0, 1] },  normal n = A x B,
+ * or, with `through`, a segment in the x-y plane from (P_x, P_y) to
+ * (P_x + A_x, P_y + A_y) extended through the whole thickness along z: when
+ * applied it becomes the parallelogram with edges A and (0, 0, height) that
+ * spans the particles' z range and a horizon more on each side.
+ * The reference segment x_i -> x_j of a bond crosses C when its endpoints
+ * are on different sides of the plane, with s(x) = n . (x - P) >= 0 the
+ * positive side (a point exactly on the plane counts on the side n points
+ * to), and the segment meets the plane at a point of C.  The test is
+ * exactly symmetric in i and j. */
+typedef struct {
+    double p[3];  /* corner P, m                                             */
+    double a[3];  /* edge vector A, m                                        */
+    double b[3];  /* edge vector B, m (unused with `through`)                */
+    int through;  /* 1: segment through the thickness along z (see above)    */
+} pd_crack;
+
+/* Parse "rect,X,Y,Z,AX,AY,AZ,BX,BY,BZ" (corner and two edge vectors, m) or
+ * "segment,X1,Y1,X2,Y2" (m); a degenerate crack (pd_crack_check) is
+ * PD_ERR_INVALID. */
+pd_status pd_crack_parse(const char *spec, pd_crack *out);
+/* PD_ERR_INVALID for a zero-length edge, parallel edges (|A x B| below
+ * 1e-9 |A| |B|) or a segment of zero length; `spec` (may be NULL) names the
+ * crack in the message. */
+pd_status pd_crack_check(const pd_crack *c, const char *spec);
+/* Does the segment x -> y cross the crack (rules above)?  A `through`
+ * crack must first be made a parallelogram: only pd_bonds_precrack does
+ * that, this test takes c as it is. */
+int pd_crack_crosses(const pd_crack *c, const double x[3], const double y[3]);
+/* Pre-crack built bonds: every bond whose reference segment crosses one of
+ * the cracks is broken on both directed copies (intact bit cleared) and
+ * marked in b->precrack (allocated when some bond crosses; stays NULL when
+ * none does).  counts[c] (counts may be NULL) gets the number of bonds
+ * (pairs) crack c crosses; a bond crossing two cracks counts for both.
+ * Families must be symmetric and sorted, as built; on failure b may be
+ * partly cracked and is to be discarded. */
+pd_status pd_bonds_precrack(const pd_particles *p, pd_bonds *b, const pd_crack *cracks,
+                            int ncracks, int64_t *counts);
 
 /* Reorder particles by horizon-sized cells, row by row with the longest
  * axis outermost, so that families are close in memory and every bond joins
@@ -417,6 +472,13 @@ pd_status pd_read_frame_scalar(const pd_file *f, const char *name, const char *f
  * for later frames; the caller frees them (pd_bonds_free, free). */
 pd_status pd_read_frame_damage(const pd_file *f, const pd_particles *p, const char *frame,
                                pd_bonds **b, uint64_t **intact, double *damage);
+/* Damage of a frame without the pre-crack: its stored `damage_run` field
+ * (pd-damage --no-precrack), or else computed from its bond state
+ * (pd_damage_no_precrack); *b and *intact as for pd_read_frame_damage.
+ * When the file has no /bonds/precrack, *present = 0 and nothing is read. */
+pd_status pd_read_frame_damage_run(const pd_file *f, const pd_particles *p, const char *frame,
+                                   pd_bonds **b, uint64_t **intact, double *damage,
+                                   int *present);
 pd_status pd_write_frame_scalar(pd_file *f, const char *name, const char *field,
                                 int64_t n, const double *values);
 
@@ -432,6 +494,7 @@ typedef struct {
     const double *damage;
     const int32_t *material;
     const int64_t *id;
+    const double *damage_run;     /* damage without the pre-crack    */
 } pd_vtk_frame;
 
 pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr);

@@ -268,7 +268,7 @@ static uint8_t *words_to_bytes(const uint64_t *words, int64_t count)
 }
 
 /* Check the CSR structure; families must be sorted and symmetric with equal
- * state on both sides. */
+ * state (and pre-crack bits) on both sides. */
 static pd_status check_bonds(const char *fn, const pd_bonds *b)
 {
     if (b->offset[0] != 0)
@@ -323,6 +323,14 @@ static pd_status check_bonds(const char *fn, const pd_bonds *b)
                             fn, (long long)j, (long long)i);
                 break;
             }
+            if (b->precrack &&
+                pd_bond_intact(b->precrack, k) != pd_bond_intact(b->precrack, q)) {
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': bond %lld-%lld is pre-cracked on one side only (precrack bits "
+                            "differ)",
+                            fn, (long long)j, (long long)i);
+                break;
+            }
         }
     for (int64_t j = 0; j < b->n && s == PD_OK; j++)
         if (next[j] != b->offset[j + 1])
@@ -331,6 +339,67 @@ static pd_status check_bonds(const char *fn, const pd_bonds *b)
                         (long long)b->neighbor[next[j]], (long long)j);
     free(next);
     return s;
+}
+
+/* The row whose family holds directed bond k (offsets checked). */
+static int64_t row_of(const pd_bonds *b, int64_t k)
+{
+    int64_t lo = 0, hi = b->n; /* offset[lo] <= k < offset[hi] */
+    while (hi - lo > 1) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (b->offset[mid] <= k)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* /bonds/precrack, when present: the bonds broken before the run, packed as
+ * /bonds/state.  Every pre-cracked bond must be broken in /bonds/state (the
+ * symmetry of the bits is checked with the families).  All clear is the
+ * same as absent: b->precrack stays NULL. */
+static pd_status read_precrack(const pd_file *f, pd_bonds *b)
+{
+    const char *fn = f->name;
+    if (b->count == 0 || !pd_h5_has_link(f->fid, "/bonds/precrack"))
+        return PD_OK;
+    pd_h5_form bf = {H5T_INTEGER, 1, 1, {(hsize_t)((b->count + 7) / 8), 0}};
+    uint8_t *bytes = NULL;
+    pd_status s = pd_h5_read_data(f->fid, fn, "/bonds/precrack", &bf, H5T_NATIVE_UINT8, 1,
+                                  (void **)&bytes, NULL);
+    if (s != PD_OK)
+        return s;
+    int64_t words = pd_bits_words(b->count);
+    b->precrack = calloc((size_t)words + 1, sizeof(uint64_t));
+    if (b->precrack == NULL) {
+        free(bytes);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the pre-crack");
+    }
+    bytes_to_words(bytes, b->count, b->precrack);
+    free(bytes);
+    if (pd_bits_count_broken(b->precrack, b->count) == b->count) {
+        free(b->precrack);
+        b->precrack = NULL;
+    }
+    return PD_OK;
+}
+
+static pd_status check_precrack(const char *fn, const pd_bonds *b)
+{
+    if (b->precrack == NULL)
+        return PD_OK;
+    for (int64_t w = 0; w < pd_bits_words(b->count); w++) {
+        uint64_t both = b->precrack[w] & b->intact[w];
+        if (both) {
+            int64_t k = w * 64 + __builtin_ctzll(both);
+            return pd_fail(PD_ERR_FORMAT,
+                           "'%s': bond %lld-%lld is pre-cracked (/bonds/precrack) but intact in "
+                           "/bonds/state",
+                           fn, (long long)row_of(b, k), (long long)b->neighbor[k]);
+        }
+    }
+    return PD_OK;
 }
 
 pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
@@ -396,6 +465,8 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
     if (s == PD_OK && count > 0)
         bytes_to_words(state, count, b->intact);
     free(state);
+    if (s == PD_OK)
+        s = read_precrack(f, b);
     hid_t g = H5Gopen2(f->fid, "/bonds", H5P_DEFAULT);
     if (s == PD_OK && pd_h5_read_attr_double(g, "horizon", &b->horizon) != PD_OK)
         s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds has no horizon attribute", fn);
@@ -404,6 +475,8 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
         s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds horizon must be positive", fn);
     if (s == PD_OK)
         s = check_bonds(fn, b);
+    if (s == PD_OK)
+        s = check_precrack(fn, b);
     if (s != PD_OK) {
         pd_bonds_free(b);
         return s;
@@ -440,6 +513,13 @@ pd_status pd_write_bonds(pd_file *f, const pd_bonds *b)
         (s = pd_h5_write_attr_doubles(g, "horizon", &b->horizon, 1)) == PD_OK)
         s = pd_h5_write_attr_int(g, "count", b->count);
     free(bytes);
+    /* the pre-crack only when some bond is pre-cracked */
+    if (s == PD_OK && b->precrack && pd_bits_count_broken(b->precrack, b->count) < b->count) {
+        bytes = words_to_bytes(b->precrack, b->count);
+        s = bytes ? pd_h5_write_data(g, "precrack", H5T_STD_U8LE, H5T_NATIVE_UINT8, 1, ds, bytes)
+                  : pd_fail(PD_ERR_NOMEM, "out of memory");
+        free(bytes);
+    }
     H5Gclose(g);
     return s;
 }
@@ -826,6 +906,21 @@ pd_status pd_write_frame_scalar(pd_file *f, const char *name, const char *field,
     return pd_h5_write_data(f->fid, path, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, d1, values);
 }
 
+/* The bonds and the frame's state bits, the bonds read on first need. */
+static pd_status frame_bonds(const pd_file *f, const pd_particles *p, const char *frame,
+                             pd_bonds **b, uint64_t **intact)
+{
+    pd_status s;
+    if (*b == NULL && (s = pd_read_bonds(f, p, b)) != PD_OK)
+        return s;
+    if (*intact == NULL) {
+        *intact = calloc((size_t)pd_bits_words((*b)->count) + 1, sizeof(uint64_t));
+        if (*intact == NULL)
+            return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    return pd_read_frame_state(f, frame, (*b)->count, *intact);
+}
+
 pd_status pd_read_frame_damage(const pd_file *f, const pd_particles *p, const char *frame,
                                pd_bonds **b, uint64_t **intact, double *damage)
 {
@@ -833,16 +928,26 @@ pd_status pd_read_frame_damage(const pd_file *f, const pd_particles *p, const ch
     pd_status s = pd_read_frame_scalar(f, frame, "damage", p->n, damage, &present);
     if (s != PD_OK || present)
         return s;
-    if (*b == NULL) {
-        if ((s = pd_read_bonds(f, p, b)) != PD_OK)
-            return s;
-        *intact = calloc((size_t)pd_bits_words((*b)->count) + 1, sizeof(uint64_t));
-        if (*intact == NULL)
-            return pd_fail(PD_ERR_NOMEM, "out of memory");
-    }
-    if ((s = pd_read_frame_state(f, frame, (*b)->count, *intact)) != PD_OK)
+    if ((s = frame_bonds(f, p, frame, b, intact)) != PD_OK)
         return s;
     pd_damage(p, *b, *intact, damage);
+    return PD_OK;
+}
+
+pd_status pd_read_frame_damage_run(const pd_file *f, const pd_particles *p, const char *frame,
+                                   pd_bonds **b, uint64_t **intact, double *damage,
+                                   int *present)
+{
+    *present = pd_h5_has_link(f->fid, "/bonds/precrack");
+    if (!*present)
+        return PD_OK;
+    int stored = 0;
+    pd_status s = pd_read_frame_scalar(f, frame, "damage_run", p->n, damage, &stored);
+    if (s != PD_OK || stored)
+        return s;
+    if ((s = frame_bonds(f, p, frame, b, intact)) != PD_OK)
+        return s;
+    pd_damage_no_precrack(p, *b, *intact, damage);
     return PD_OK;
 }
 

@@ -4,7 +4,8 @@
  * A frame is one UnstructuredGrid (.vtu): N points at the current positions
  * y = x + u, one vertex cell (VTK type 1) per particle (connectivity 0..N-1,
  * offsets 1..N), and point data displacement, velocity (3 components),
- * damage, material, id.  Data are binary and appended (encoding "raw"): each
+ * damage, damage_run (damage without the pre-crack, when given), material,
+ * id.  Data are binary and appended (encoding "raw"): each
  * array is a UInt64 byte count followed by its values, little-endian
  * whatever the host, so the XML header can state every array's offset before
  * any byte is written.  A time series is a ParaView collection (.pvd) that
@@ -219,7 +220,7 @@ pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr)
 
     /* Point data first, then Points, then Cells: the order of the XML and
      * of the appended block. */
-    varray a[9];
+    varray a[10];
     int na = 0, npoint = 0;
     if (fr->displacement)
         a[na++] = (varray){"displacement", "Float64", 3, 8, SRC_SOA, .soa = fr->displacement};
@@ -227,6 +228,8 @@ pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr)
         a[na++] = (varray){"velocity", "Float64", 3, 8, SRC_SOA, .soa = fr->velocity};
     if (fr->damage)
         a[na++] = (varray){"damage", "Float64", 1, 8, SRC_F64, .f64 = fr->damage};
+    if (fr->damage_run)
+        a[na++] = (varray){"damage_run", "Float64", 1, 8, SRC_F64, .f64 = fr->damage_run};
     if (fr->material)
         a[na++] = (varray){"material", "Int32", 1, 4, SRC_I32, .i32 = fr->material};
     if (fr->id)

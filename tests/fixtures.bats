@@ -99,6 +99,18 @@ refused_by_run() {
     refused_by_run vfactor-two.h5 "'vfactor-two.h5': bond 0 has volume factor 2"
 }
 
+@test "a pre-cracked bond that is intact in /bonds/state" {
+    refused_by_run precrack-intact.h5 "'precrack-intact.h5': bond 0-2 is pre-cracked (/bonds/precrack) but intact in /bonds/state"
+}
+
+@test "a bond pre-cracked on one side only" {
+    refused_by_run precrack-one-side.h5 "'precrack-one-side.h5': bond 0-1 is pre-cracked on one side only (precrack bits differ)"
+}
+
+@test "a /bonds/precrack too short" {
+    refused_by_run precrack-short.h5 "'precrack-short.h5': dataset '/bonds/precrack' has 31 entries along axis 0, expected 32"
+}
+
 @test "a run without bonds (the wrong stage)" {
     refused_by_run no-bonds.h5 "'no-bonds.h5' has no /bonds (run pd-bonds first)"
 }

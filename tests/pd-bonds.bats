@@ -354,3 +354,247 @@ assert np.array_equal(pairs(sys.argv[1]), pairs(sys.argv[2]))
 print('ok')" model.h5 plain.h5
     assert_output ok
 }
+
+# ------------------------------------------------------------ pre-cracks
+
+# The crack across the whole y-z section of the make_block cube (x, y, z in
+# 0..10 mm): the plane x = 4.5 mm, between two lattice planes, corner
+# (4.5, -1, -1) mm, edges 12 mm along y and z.
+CRACK_FULL=rect,0.0045,-0.001,-0.001,0,0.012,0,0,0,0.012
+# The same plane over y in [-1, 4.4] mm only: the edge y = 4.4 mm is 0.4
+# spacing from a lattice line, off every point where a bond crosses.
+CRACK_HALF=rect,0.0045,-0.001,-0.001,0,0.0054,0,0,0,0.012
+# The half crack as a segment through the thickness.
+CRACK_SEGMENT=segment,0.0045,-0.001,0.0045,0.0044
+
+# check_precrack MODEL.h5 SPEC...: /bonds/precrack holds exactly the bonds
+# that cross one of the cracks, computed here independently from all pairs
+# within the horizon: the ends on different sides of the plane (s = n.(x-P)
+# with n = A x B, s >= 0 the positive side), the crossing point inside the
+# parallelogram; a segment is the parallelogram over the particles' z range
+# and a horizon more.  The bits are symmetric, padding clear, and the broken
+# bonds of /bonds/state are exactly the pre-cracked ones.  Prints
+# "ok PAIRS" and a line "SPEC PAIRS" per crack.
+check_precrack() {
+    py "
+f = h5py.File(sys.argv[1], 'r')
+x = f['particles/position'][:]
+ids = f['particles/id'][:]
+b = f['bonds']
+off, nb = b['offset'][:], b['neighbor'][:]
+delta = float(b.attrs['horizon'])
+n, count = x.shape[0], nb.size
+pre_bytes = b['precrack'][:]
+assert pre_bytes.dtype == np.uint8 and pre_bytes.shape == ((count + 7) // 8,)
+bits = np.unpackbits(pre_bytes, bitorder='little')
+assert not bits[count:].any(), 'padding bits set'
+pre = bits[:count].astype(bool)
+intact = np.unpackbits(b['state'][:], bitorder='little')[:count].astype(bool)
+assert np.array_equal(pre, ~intact), 'broken bonds other than the pre-cracked'
+rows = np.repeat(np.arange(n), np.diff(off))
+key = lambda i, j: np.minimum(ids[i], ids[j]) * 10**7 + np.maximum(ids[i], ids[j])
+# symmetric: each pre-cracked pair twice, once from each end
+got, times = np.unique(key(rows[pre], nb[pre]), return_counts=True)
+assert np.all(times == 2), 'pre-crack bits not symmetric'
+# all pairs within the horizon, i < j
+d2 = ((x[:, None, :] - x[None, :, :])**2).sum(axis=2)
+I, J = np.nonzero(np.triu(d2 <= delta * delta, 1))
+want = np.zeros(I.size, bool)
+for spec in sys.argv[2:]:
+    kind, *v = spec.split(',')
+    v = [float(t) for t in v]
+    if kind == 'rect':
+        P, A, B = np.array(v[0:3]), np.array(v[3:6]), np.array(v[6:9])
+    else:
+        lo, hi = x[:, 2].min(), x[:, 2].max()
+        P = np.array([v[0], v[1], lo - delta])
+        A = np.array([v[2] - v[0], v[3] - v[1], 0.0])
+        B = np.array([0.0, 0.0, hi - lo + 2 * delta])
+    nrm = np.cross(A, B)
+    s = (x - P) @ nrm
+    pos = s >= 0
+    cand = pos[I] != pos[J]
+    m = np.where(pos[I], J, I)[cand]          # the end on the negative side
+    p = np.where(pos[I], I, J)[cand]
+    t = s[m] / (s[m] - s[p])
+    X = x[m] + t[:, None] * (x[p] - x[m]) - P
+    G = np.array([[A @ A, A @ B], [A @ B, B @ B]])
+    uv = np.linalg.solve(G, np.stack([X @ A, X @ B]))
+    inside = np.all((uv >= 0) & (uv <= 1), axis=0)
+    hit = np.zeros(I.size, bool)
+    hit[np.nonzero(cand)[0][inside]] = True
+    print(spec, int(hit.sum()))
+    want |= hit
+expect = np.sort(key(I[want], J[want]))
+assert np.array_equal(got, expect), ('pre-cracked pairs differ', got.size, expect.size,
+                                     np.setdiff1d(got, expect)[:5], np.setdiff1d(expect, got)[:5])
+print('ok', got.size)
+" "$@"
+}
+
+# bits MODEL.h5 NAME: the bytes of /bonds/NAME in hex.
+bits() {
+    py "print(h5py.File(sys.argv[1], 'r')['bonds/' + sys.argv[2]][:].tobytes().hex())" "$1" "$2"
+}
+
+@test "--crack across the whole section breaks exactly the bonds crossing it" {
+    make_block
+    run -0 --separate-stderr pd-bonds --horizon "$HORIZON" --crack "$CRACK_FULL" lattice.h5 -o m.h5
+    run -0 check_precrack m.h5 "$CRACK_FULL"
+    assert_line --index 1 --regexp '^ok [0-9]+$'
+    pairs=${lines[1]#ok }
+    assert_equal "${lines[0]}" "$CRACK_FULL $pairs"
+    # a plane across the whole section cuts every pair with ends on both
+    # sides of x = 4.5 mm
+    run -0 py "
+f = h5py.File(sys.argv[1], 'r')
+x = f['particles/position'][:]
+d2 = ((x[:, None, :] - x[None, :, :])**2).sum(axis=2)
+I, J = np.nonzero(np.triu(d2 <= float(sys.argv[2])**2, 1))
+print(np.count_nonzero((x[I, 0] < 0.0045) != (x[J, 0] < 0.0045)))" m.h5 "$HORIZON"
+    assert_output "$pairs"
+    # the families are those without a crack
+    run -0 check_families m.h5
+    assert_output --regexp '^ok 28 122 '
+}
+
+@test "the summary reports how many bonds each crack breaks" {
+    make_block
+    run -0 --separate-stderr pd-bonds --horizon "$HORIZON" --crack "$CRACK_FULL" \
+        --crack "$CRACK_HALF" lattice.h5 -o m.h5
+    run -0 check_precrack m.h5 "$CRACK_FULL" "$CRACK_HALF"
+    full=${lines[0]##* } half=${lines[1]##* }
+    [ "$half" -gt 0 ] && [ "$half" -lt "$full" ]
+    run -0 --separate-stderr pd-bonds --horizon "$HORIZON" --crack "$CRACK_FULL" \
+        --crack "$CRACK_HALF" lattice.h5 -o m.h5
+    assert_equal "${#stderr_lines[@]}" 3
+    assert_regex "${stderr_lines[0]}" '^pd-bonds: 1331 particles, '
+    assert_equal "${stderr_lines[1]}" "pd-bonds: --crack $CRACK_FULL: $full bonds broken"
+    assert_equal "${stderr_lines[2]}" "pd-bonds: --crack $CRACK_HALF: $half bonds broken"
+    run -0 --separate-stderr pd-bonds -q --horizon "$HORIZON" --crack "$CRACK_FULL" lattice.h5 -o m.h5
+    assert_equal "$stderr" ""
+}
+
+@test "a crack over half the section breaks only bonds crossing that half" {
+    make_block
+    pd-bonds -q --horizon "$HORIZON" --crack "$CRACK_FULL" lattice.h5 -o full.h5
+    pd-bonds -q --horizon "$HORIZON" --crack "$CRACK_HALF" lattice.h5 -o half.h5
+    run -0 check_precrack half.h5 "$CRACK_HALF"
+    assert_line --index 1 --regexp '^ok [0-9]+$'
+    # a subset of the full crack's bonds, each meeting x = 4.5 mm at y <= 4.4
+    # mm, and all of those
+    run -0 py "
+def load(name):
+    f = h5py.File(name, 'r')
+    off, nb = f['bonds/offset'][:], f['bonds/neighbor'][:]
+    pre = np.unpackbits(f['bonds/precrack'][:], bitorder='little')[:nb.size].astype(bool)
+    return f['particles/position'][:], np.repeat(np.arange(off.size - 1), np.diff(off)), nb, pre
+x, rows, nb, full = load(sys.argv[1])
+x2, rows2, nb2, half = load(sys.argv[2])
+assert np.array_equal(x, x2) and np.array_equal(nb, nb2)
+assert half.sum() > 0 and half.sum() < full.sum()
+assert not np.any(half & ~full), 'a bond outside the full crack'
+xi, xj = x[rows], x[nb]
+t = (0.0045 - xi[:, 0]) / (xj[:, 0] - xi[:, 0] + (xj[:, 0] == xi[:, 0]))
+y = xi[:, 1] + t * (xj[:, 1] - xi[:, 1])
+assert np.array_equal(half, full & (y <= 0.0044)), 'not exactly the bonds across the half'
+print('ok')" full.h5 half.h5
+    assert_output ok
+}
+
+@test "segment through the thickness equals the equivalent rect" {
+    make_block
+    pd-bonds -q --horizon "$HORIZON" --crack "$CRACK_SEGMENT" lattice.h5 -o seg.h5
+    pd-bonds -q --horizon "$HORIZON" --crack "$CRACK_HALF" lattice.h5 -o rect.h5
+    run -0 check_precrack seg.h5 "$CRACK_SEGMENT"
+    assert_line --index 1 --regexp '^ok [0-9]+$'
+    assert_equal "$(bits seg.h5 precrack)" "$(bits rect.h5 precrack)"
+    assert_equal "$(bits seg.h5 state)" "$(bits rect.h5 state)"
+}
+
+@test "a crack exactly on a lattice plane cuts on the side A x B points away from" {
+    make_block
+    at() { pd-bonds -q --horizon "$HORIZON" --crack "$1" lattice.h5 -o "$2"; }
+    # normal +x: the plane x = 5 mm joins the + side, as the crack at 4.5 mm
+    at rect,0.005,-0.001,-0.001,0,0.012,0,0,0,0.012 on-plus.h5
+    at "$CRACK_FULL" at45.h5
+    # normal -x (A and B swapped): as the crack at 5.5 mm
+    at rect,0.005,-0.001,-0.001,0,0,0.012,0,0.012,0 on-minus.h5
+    at rect,0.0055,-0.001,-0.001,0,0.012,0,0,0,0.012 at55.h5
+    assert_equal "$(bits on-plus.h5 precrack)" "$(bits at45.h5 precrack)"
+    assert_equal "$(bits on-minus.h5 precrack)" "$(bits at55.h5 precrack)"
+    [ "$(bits at45.h5 precrack)" != "$(bits at55.h5 precrack)" ]
+    run -0 check_precrack on-plus.h5 rect,0.005,-0.001,-0.001,0,0.012,0,0,0,0.012
+    assert_line --index 1 --regexp '^ok [0-9]+$'
+    run -0 check_precrack on-minus.h5 rect,0.005,-0.001,-0.001,0,0,0.012,0,0.012,0
+    assert_line --index 1 --regexp '^ok [0-9]+$'
+}
+
+@test "an oblique crack: the bonds crossing it, computed independently" {
+    make_block
+    # a tilted parallelogram inside the cube, edges off the lattice
+    spec=rect,0.0021,0.0017,0.0013,0.0043,0.0011,0.0029,-0.0012,0.0051,0.0007
+    pd-bonds -q --horizon "$HORIZON" --crack "$spec" lattice.h5 -o m.h5
+    run -0 check_precrack m.h5 "$spec"
+    assert_line --index 1 --regexp '^ok [1-9][0-9]*$'
+}
+
+@test "a crack that crosses no bond breaks none and writes no /bonds/precrack" {
+    make_block
+    run -0 --separate-stderr pd-bonds --horizon "$HORIZON" --crack rect,0.5,0,0,0,1,0,0,0,1 \
+        lattice.h5 -o m.h5
+    assert_equal "${stderr_lines[1]}" "pd-bonds: --crack rect,0.5,0,0,0,1,0,0,0,1: 0 bonds broken"
+    run -0 py "
+b = h5py.File(sys.argv[1], 'r')['bonds']
+assert 'precrack' not in b
+count = b['neighbor'].size
+assert np.all(np.unpackbits(b['state'][:], bitorder='little')[:count] == 1)
+print('ok')" m.h5
+    assert_output ok
+}
+
+bad_crack() {
+    make_block
+    expect_usage_error "$2" pd-bonds --horizon "$HORIZON" --crack "$1" lattice.h5 -o x.h5
+    [ ! -e x.h5 ]
+}
+@test "--crack with a zero-length edge is a usage error" {
+    bad_crack rect,0,0,0,0,0,0,0,0.01,0 "edge A has zero length"
+    bad_crack rect,0,0,0,0.01,0,0,0,0,0 "edge B has zero length"
+}
+@test "--crack with parallel edges is a usage error" {
+    bad_crack rect,0,0,0,0.001,0.002,0.003,0.002,0.004,0.006 "edges A and B are parallel"
+}
+@test "--crack segment of zero length is a usage error" {
+    bad_crack segment,0.004,0.005,0.004,0.005 "segment has zero length"
+}
+@test "--crack with the wrong count of numbers, a bad number or kind is a usage error" {
+    bad_crack rect,0,0,0,1,0,0,0,1 "expected rect,X,Y,Z,AX,AY,AZ,BX,BY,BZ"
+    bad_crack rect,0,0,0,1,0,0,0,1,0,0 "expected rect,X,Y,Z"
+    bad_crack rect,0,0,0,1,0,0,0,1,x "expected rect,X,Y,Z"
+    bad_crack segment,0,0,1 "expected segment,X1,Y1,X2,Y2"
+    bad_crack segment,0,0,1,inf "expected segment,X1,Y1,X2,Y2"
+    bad_crack line,0,0,1,1 "expected rect,\.\.\. or segment,\.\.\."
+    bad_crack "" "expected rect"
+}
+
+@test "the pre-crack survives pd-run into the run file and stays broken in every frame" {
+    make_block
+    pd-bonds -q --horizon "$HORIZON" --crack "$CRACK_HALF" lattice.h5 -o m.h5
+    pd-run -q "${RUN_OPTS[@]}" --steps 20 --every 10 m.h5 -o run.h5
+    run -0 py "
+m, r = h5py.File(sys.argv[1], 'r'), h5py.File(sys.argv[2], 'r')
+for k in ('precrack', 'state', 'offset', 'neighbor'):
+    a, b = m['bonds/' + k], r['bonds/' + k]
+    assert a.dtype == b.dtype and np.array_equal(a[:], b[:]), k
+count = r['bonds/neighbor'].size
+pre = np.unpackbits(r['bonds/precrack'][:], bitorder='little')[:count].astype(bool)
+assert pre.any()
+frames = list(r['frames'].values())
+assert len(frames) == 3
+for g in frames:
+    mu = np.unpackbits(g['state'][:], bitorder='little')[:count].astype(bool)
+    assert not np.any(mu & pre), ('a pre-cracked bond intact in a frame', g.attrs['step'])
+print('ok')" m.h5 run.h5
+    assert_output ok
+}

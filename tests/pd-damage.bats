@@ -297,3 +297,162 @@ print('ok')" run.h5
     run -0 check_damage out.h5
     assert_output "ok 6 True"
 }
+
+# ------------------------------------------------------------ pre-cracks
+
+# The plane x = 4.5 mm over y in [-1, 4.4] mm, through the make_block cube.
+CRACK=rect,0.0045,-0.001,-0.001,0,0.0054,0,0,0,0.012
+
+# make_cracked_model: lattice.h5 and model.h5 of make_block, the model with
+# the pre-crack CRACK.
+make_cracked_model() {
+    make_block || return 1
+    pd-bonds -q --horizon "$HORIZON" --crack "$CRACK" lattice.h5 -o model.h5
+}
+
+# check_damage_run RUN.h5 [TABLE]: every frame's damage_run equals
+#   1 - sum_{j intact, not pre-cracked} V_j / sum_{j not pre-cracked} V_j
+# (0 without such partners), computed here from /bonds/precrack and the
+# frame's state; with TABLE, its rows count the broken bonds that are not
+# pre-cracked and give the mean and max of that damage.  Prints
+# "ok NFRAMES MAX>0".
+check_damage_run() {
+    py "
+f = h5py.File(sys.argv[1], 'r')
+V = f['particles/volume'][:]
+off, nb = f['bonds/offset'][:], f['bonds/neighbor'][:]
+n, count = V.size, nb.size
+pre = np.unpackbits(f['bonds/precrack'][:], bitorder='little')[:count].astype(bool)
+assert pre.any()
+rows = np.repeat(np.arange(n), np.diff(off))
+total = np.bincount(rows, V[nb] * ~pre, minlength=n)
+frames = sorted(f['frames'].values(), key=lambda g: g.attrs['step'])
+table = None
+if len(sys.argv) > 2:
+    text = open(sys.argv[2]).read().splitlines()
+    table = [l.split() for l in text[1:]]
+    assert len(table) == len(frames)
+for k, g in enumerate(frames):
+    mu = np.unpackbits(g['state'][:], bitorder='little')[:count].astype(bool)
+    assert not np.any(mu & pre), 'a pre-cracked bond is intact'
+    kept = np.bincount(rows, V[nb] * (mu & ~pre), minlength=n)
+    want = np.where(total > 0, 1 - kept / np.where(total > 0, total, 1), 0)
+    d = g['damage_run'][:]
+    assert np.allclose(d, want, rtol=0, atol=1e-14), abs(d - want).max()
+    if table is not None:
+        row = table[k]
+        assert int(row[0]) == g.attrs['step']
+        assert int(row[2]) * 2 == np.count_nonzero(~mu & ~pre), row
+        assert abs(float(row[3]) - want.mean()) <= 1e-8 and abs(float(row[4]) - want.max()) <= 1e-8, row
+print('ok', len(frames), repr(frames[-1]['damage_run'][:].max() > 0))
+" "$@"
+}
+
+@test "with a pre-crack, step 0: damage > 0 next to the crack, 0 with --no-precrack" {
+    make_cracked_model
+    pd-run -q --bulk-modulus "$BULK" --steps 0 model.h5 -o run.h5
+    run -0 pd-damage -n run.h5
+    assert_line --index 1 --regexp '^0 0\.0+e\+00 [1-9][0-9]* 0\.[0-9]*[1-9][0-9]* 0\.[0-9]*[1-9][0-9]* [0-9]+$'
+    run -0 pd-damage -n --no-precrack run.h5
+    assert_equal "${#lines[@]}" 2
+    assert_line --index 1 --regexp '^0 0\.0+e\+00 0 0\.0+ 0\.0+ 0$'
+    # stored: damage is positive exactly for particles with a bond across
+    # the crack, damage_run is 0 everywhere
+    pd-damage -q run.h5
+    pd-damage -q --no-precrack run.h5
+    run -0 py "
+f = h5py.File(sys.argv[1], 'r')
+off, nb = f['bonds/offset'][:], f['bonds/neighbor'][:]
+pre = np.unpackbits(f['bonds/precrack'][:], bitorder='little')[:nb.size].astype(bool)
+rows = np.repeat(np.arange(off.size - 1), np.diff(off))
+next_to = np.bincount(rows, pre, minlength=off.size - 1) > 0
+g = f['frames/00000000']
+d, r = g['damage'][:], g['damage_run'][:]
+assert np.array_equal(d > 0, next_to) and next_to.any()
+x = f['particles/position'][:]
+assert np.all(np.abs(x[next_to, 0] - 0.0045) < 0.003), 'damage away from the crack'
+assert np.all(r == 0)
+print('ok')" run.h5
+    assert_output ok
+}
+
+@test "--no-precrack: damage_run and the table leave the pre-crack out; damage keeps it" {
+    make_cracked_model
+    make_run
+    pd-damage --no-precrack run.h5 -o out.h5 > table
+    run -0 check_damage_run out.h5 table
+    assert_output "ok 6 True"
+    # damage_run only: no damage field written
+    run -0 py "
+f = h5py.File(sys.argv[1], 'r')
+assert not any('damage' in g for g in f['frames'].values())
+print('ok')" out.h5
+    assert_output ok
+    # the default counts the pre-cracked bonds as broken
+    pd-damage out.h5 > table2
+    run -0 check_damage out.h5 table2
+    assert_output "ok 6 True"
+    run -0 check_damage_run out.h5
+    assert_output "ok 6 True"
+}
+
+@test "--no-precrack without a pre-crack equals the default" {
+    make_run
+    diff <(pd-damage -n run.h5) <(pd-damage -n --no-precrack run.h5)
+}
+
+# precrack_edit EDIT: model.h5 of make_cracked_model, its /bonds/precrack
+# changed by EDIT (python, with f open and count, pre (bits), state (bits),
+# off, nb), into bad.h5.
+precrack_edit() {
+    make_cracked_model
+    cp model.h5 bad.h5
+    py "
+f = h5py.File(sys.argv[1], 'a')
+b = f['bonds']
+count = b['neighbor'].size
+off, nb = b['offset'][:], b['neighbor'][:]
+pre = np.unpackbits(b['precrack'][:], bitorder='little')[:count]
+state = np.unpackbits(b['state'][:], bitorder='little')[:count]
+$1
+f.close()" bad.h5
+}
+
+@test "a pre-cracked bond intact in /bonds/state is refused naming the bond" {
+    # mark the intact bond 0 -> nb[0] and its mirror as pre-cracked
+    precrack_edit "
+j = nb[0]
+m = off[j] + np.searchsorted(nb[off[j]:off[j + 1]], 0)
+assert state[0] == 1 and state[m] == 1
+pre[0] = pre[m] = 1
+b['precrack'][...] = np.packbits(pre, bitorder='little')"
+    j=$(py "print(h5py.File(sys.argv[1], 'r')['bonds/neighbor'][0])" bad.h5)
+    msg="'bad\.h5': bond 0-$j is pre-cracked \(/bonds/precrack\) but intact in /bonds/state$"
+    expect_runtime_error "$msg" pd-damage -n bad.h5
+    expect_runtime_error "$msg" pd-run -q --bulk-modulus "$BULK" --steps 0 bad.h5 -o r.h5
+    [ ! -e r.h5 ]
+}
+
+@test "pre-crack bits on one side of a bond only are refused" {
+    # clear one of the two copies of the first pre-cracked bond
+    precrack_edit "
+k = int(np.nonzero(pre)[0][0])
+pre[k] = 0
+b['precrack'][...] = np.packbits(pre, bitorder='little')"
+    expect_runtime_error "'bad.h5': bond [0-9]+-[0-9]+ is pre-cracked on one side only \(precrack bits differ\)" \
+        pd-damage -n bad.h5
+}
+
+@test "/bonds/precrack of the wrong size or type is refused naming the dataset" {
+    precrack_edit "
+p = b['precrack'][:]
+del b['precrack']
+b['precrack'] = p[:-1]"
+    expect_runtime_error "'bad.h5': dataset '/bonds/precrack' has [0-9]+ entries along axis 0, expected [0-9]+" \
+        pd-damage -n bad.h5
+    precrack_edit "
+p = b['precrack'][:]
+del b['precrack']
+b['precrack'] = p.astype(np.float64)"
+    expect_runtime_error "'bad.h5': dataset '/bonds/precrack' is float64, expected uint8" pd-damage -n bad.h5
+}

@@ -218,3 +218,88 @@ EOF
     expect_runtime_error "state" pd-dump2vtk broken.h5 -o out
     [ ! -e out/broken.pvd ]
 }
+
+# ------------------------------------------------------------ pre-cracks
+
+@test "a run without a pre-crack has no damage_run field" {
+    pd-dump2vtk -q "$RUN" -o out
+    run -0 "$PY" -c "
+import sys, meshio
+m = meshio.read(sys.argv[1])
+assert 'damage' in m.point_data and 'damage_run' not in m.point_data, list(m.point_data)
+print('ok')" out/run_00000100.vtu
+    assert_output ok
+}
+
+# The pre-cracked run: the make_block lattice with the plane x = 4.5 mm over
+# y in [-1, 4.4] mm, pressed by the make_run sphere for 50 steps.
+make_cracked_run() {
+    make_block || return 1
+    pd-bonds -q --horizon "$HORIZON" --crack rect,0.0045,-0.001,-0.001,0,0.0054,0,0,0,0.012 \
+        lattice.h5 -o model.h5 && make_run
+}
+
+# check_damage_run RUN DIR NAME: every .vtu has damage (pre-crack counted)
+# and damage_run (pre-cracked bonds out of both sums), both equal to a
+# recomputation here; damage_run is 0 at step 0 where damage is not.
+check_damage_run() {
+    "$PY" - "$@" <<'EOF2'
+import os, sys
+import h5py, meshio, numpy as np
+run, out, name = sys.argv[1:4]
+f = h5py.File(run, "r")
+vol = f["particles/volume"][:]
+off, nb = f["bonds/offset"][:], f["bonds/neighbor"][:]
+n, count = vol.size, nb.size
+row = np.repeat(np.arange(n), np.diff(off))
+pre = np.unpackbits(f["bonds/precrack"][:], bitorder="little")[:count].astype(bool)
+def damage(mu, use):
+    tot = np.bincount(row, vol[nb] * use, minlength=n)
+    kept = np.bincount(row, vol[nb] * (mu & use), minlength=n)
+    return np.where(tot > 0, 1.0 - kept / np.where(tot > 0, tot, 1.0), 0.0)
+for g in f["frames"].values():
+    step = int(g.attrs["step"])
+    m = meshio.read(os.path.join(out, "%s_%08d.vtu" % (name, step)))
+    mu = np.unpackbits(g["state"][:], bitorder="little")[:count].astype(bool)
+    d, r = m.point_data["damage"].ravel(), m.point_data["damage_run"].ravel()
+    assert np.abs(d - damage(mu, np.ones(count, bool))).max() <= 1e-12
+    assert np.abs(r - damage(mu, ~pre)).max() <= 1e-12
+    if step == 0:
+        assert d.max() > 0 and np.all(r == 0), (d.max(), r.max())
+    assert np.all(r <= 1) and np.all(r >= 0)
+print("ok", len(f["frames"]))
+EOF2
+}
+
+@test "a pre-cracked run gets damage_run, the damage without the pre-crack" {
+    make_cracked_run
+    run -0 pd-dump2vtk -q run.h5 -o out
+    run -0 check_damage_run run.h5 out run
+    assert_output "ok 6"
+    run -0 check_vtk run.h5 out run
+    assert_output "ok 6"
+}
+
+@test "damage_run comes from the frame's damage_run field when pd-damage stored one" {
+    make_cracked_run
+    pd-damage -q --no-precrack run.h5
+    run -0 pd-dump2vtk -q run.h5 -o out
+    run -0 check_damage_run run.h5 out run
+    assert_output "ok 6"
+    # values no bond state gives: the dump shows them
+    "$PY" - run.h5 <<'EOF2'
+import sys, h5py, numpy as np
+with h5py.File(sys.argv[1], "r+") as f:
+    for k, g in f["frames"].items():
+        g["damage_run"][...] = 0.5 + int(k) * 1e-6
+EOF2
+    pd-dump2vtk -q run.h5 -o out2
+    run -0 "$PY" -c "
+import sys, h5py, meshio, numpy as np
+f = h5py.File(sys.argv[1], 'r')
+for k, g in f['frames'].items():
+    m = meshio.read('%s/run_%08d.vtu' % (sys.argv[2], g.attrs['step']))
+    assert np.all(m.point_data['damage_run'].ravel() == 0.5 + int(k) * 1e-6)
+print('ok')" run.h5 out2
+    assert_output ok
+}

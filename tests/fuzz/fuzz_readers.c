@@ -4,10 +4,10 @@
  * Fuzzing raw HDF5 bytes would mostly exercise HDF5's own parser; what pd
  * must get right is what it does with a well-formed HDF5 file whose
  * contents are wrong.  So the input is a recipe of edits to a small valid
- * run file (a 4x4x4 block with bonds and one frame): each edit picks a
- * dataset or attribute and overwrites an element with raw bytes (NaN, Inf,
- * huge, negative), truncates or extends it, changes its type or rank, or
- * drops it.  The edited file is built in memory and handed to every reader
+ * run file (a 4x4x4 block with bonds, a pre-crack and one frame): each edit
+ * picks a dataset or attribute and overwrites an element with raw bytes
+ * (NaN, Inf, huge, negative), truncates or extends it, changes its type or
+ * rank, or drops it.  The edited file is built in memory and handed to every reader
  * (particles, bonds, frames, damage, restart data, history).  A reader may
  * refuse the file -- that is the point -- but must never crash, hang or
  * read out of bounds (AddressSanitizer and UndefinedBehaviorSanitizer
@@ -91,18 +91,22 @@ static void build_base(void)
     pd_lattice_params lp = {1.0, 1000.0, 1, 0.0, 1};
     pd_particles *p;
     pd_bonds *b;
-    if (pd_lattice_make(&box, 1, &lp, &p) != PD_OK || pd_bonds_build(p, 2.0001, &b) != PD_OK)
+    pd_crack crack = {{1.5, -1, -1}, {0, 5, 0}, {0, 0, 5}, 0};
+    if (pd_lattice_make(&box, 1, &lp, &p) != PD_OK || pd_bonds_build(p, 2.0001, &b) != PD_OK ||
+        pd_bonds_precrack(p, b, &crack, 1, NULL) != PD_OK || b->precrack == NULL)
         abort();
     size_t n = (size_t)p->n, nb = (size_t)b->count, ns = (nb + 7) / 8;
     double *pos = malloc(n * 3 * sizeof(double)), *vel = malloc(n * 3 * sizeof(double));
-    unsigned char *bits = malloc(ns);
+    unsigned char *bits = malloc(ns), *pre = malloc(ns);
     for (size_t i = 0; i < n; i++)
         for (int d = 0; d < 3; d++) {
             pos[3 * i + d] = p->x[d][i];
             vel[3 * i + d] = 0.1 * (double)d;
         }
-    for (size_t k = 0; k < ns; k++)
+    for (size_t k = 0; k < ns; k++) {
         bits[k] = (unsigned char)(b->intact[k / 8] >> (8 * (k % 8)));
+        pre[k] = (unsigned char)(b->precrack[k / 8] >> (8 * (k % 8)));
+    }
     double spacing = 1.0, horizon = 2.0001, t = 0.5;
     int64_t version = PD_FORMAT_VERSION, dim = 3, step = 7, one = 1;
     add("/particles/position", T_F64, 2, n, 3, pos);
@@ -116,6 +120,7 @@ static void build_base(void)
     add("/bonds/length", T_F64, 1, nb, 0, b->length);
     add("/bonds/volume_factor", T_F64, 1, nb, 0, b->vfactor);
     add("/bonds/state", T_U8, 1, ns, 0, bits);
+    add("/bonds/precrack", T_U8, 1, ns, 0, pre);
     add("/frames/00000007/displacement", T_F64, 2, n, 3, vel);
     add("/frames/00000007/velocity", T_F64, 2, n, 3, vel);
     add("/frames/00000007/state", T_U8, 1, ns, 0, bits);
@@ -136,6 +141,7 @@ static void build_base(void)
     free(pos);
     free(vel);
     free(bits);
+    free(pre);
     pd_bonds_free(b);
     pd_particles_free(p);
 }
@@ -293,6 +299,7 @@ static void read_all(const void *img, size_t len)
         if (pd_read_bonds(f, p, &b) == PD_OK) {
             double *dmg = malloc((size_t)p->n * sizeof(double));
             pd_damage(p, b, b->intact, dmg);
+            pd_damage_no_precrack(p, b, b->intact, dmg);
             free(dmg);
             pd_bonds_free(b);
             b = NULL;
@@ -308,6 +315,8 @@ static void read_all(const void *img, size_t len)
                 pd_read_frame_info(f, names[k], &fi);
                 pd_read_frame_vectors(f, names[k], p->n, d, v);
                 pd_read_frame_damage(f, p, names[k], &b, &intact, dmg);
+                int has_run = 0;
+                pd_read_frame_damage_run(f, p, names[k], &b, &intact, dmg, &has_run);
                 pd_restart r;
                 if (pd_read_restart(f, p->n, fi.step, &r) == PD_OK)
                     pd_restart_free(&r);

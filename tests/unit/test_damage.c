@@ -8,7 +8,11 @@
  * bonds (the partial-volume factor nu does not enter); on a lattice cut by
  * a plane, damage is in [0,1], positive exactly for particles with a bond
  * across the plane, mirror-symmetric about it, and the broken bits are
- * twice the pairs across.
+ * twice the pairs across.  Without the pre-crack (pd_damage_no_precrack),
+ * pre-cracked bonds leave both sums: a pre-crack alone gives damage 0, a
+ * bond broken later weighs against the family less its pre-cracked
+ * bonds, a family all pre-cracked gives 0, and with no pre-crack it equals
+ * pd_damage.
  */
 #include <math.h>
 #include <stdio.h>
@@ -141,10 +145,60 @@ static void test_plane_cut(void)
     proved(f0, "a plane cut: damage in [0,1], positive exactly next to the cut, symmetric");
 }
 
+static void test_no_precrack(void)
+{
+    int f0 = failures;
+    pd_particles *p;
+    pd_bonds *b;
+    hand_built(&p, &b);
+    const double *V = p->volume;
+    double d[5], e[5];
+    /* no pre-crack: the same as pd_damage */
+    pd_bond_break(b->intact, 1);
+    pd_bond_break(b->intact, 5);
+    pd_damage(p, b, b->intact, d);
+    pd_damage_no_precrack(p, b, b->intact, e);
+    for (int i = 0; i < 5; i++)
+        CHECK(d[i] == e[i], "no pre-crack: damage[%d] %g != %g", i, e[i], d[i]);
+    /* 0-2 (bonds 1, 5) pre-cracked: damage 0 without it, the same with */
+    b->precrack = calloc((size_t)pd_bits_words(8) + 1, sizeof(uint64_t));
+    if (b->precrack == NULL)
+        die("alloc");
+    b->precrack[0] = (UINT64_C(1) << 1) | (UINT64_C(1) << 5);
+    pd_damage_no_precrack(p, b, b->intact, e);
+    for (int i = 0; i < 5; i++)
+        CHECK(e[i] == 0, "pre-crack only: damage[%d] = %g", i, e[i]);
+    pd_damage(p, b, b->intact, e);
+    for (int i = 0; i < 5; i++)
+        CHECK(e[i] == d[i], "pd_damage counts the pre-crack: damage[%d] = %g", i, e[i]);
+    CHECK(pd_bits_count_broken_except(b->intact, b->precrack, 8) == 0, "no bond broken later");
+    /* then 0-1 (bonds 0, 3) breaks in the run */
+    pd_bond_break(b->intact, 0);
+    pd_bond_break(b->intact, 3);
+    pd_damage_no_precrack(p, b, b->intact, e);
+    CHECK(fabs(e[0] - V[1] / (V[1] + V[3])) <= 1e-15, "damage[0] = V1/(V1+V3): %g", e[0]);
+    CHECK(fabs(e[1] - V[0] / (V[0] + V[2])) <= 1e-15, "damage[1] = V0/(V0+V2): %g", e[1]);
+    CHECK(e[2] == 0, "damage[2]: its only other bond 2-1 is intact (%g)", e[2]);
+    CHECK(e[3] == 0 && e[4] == 0, "untouched particles");
+    CHECK(pd_bits_count_broken_except(b->intact, b->precrack, 8) == 2, "one pair broken later");
+    /* 0-3 (bonds 2, 7) pre-cracked too: particle 3 has no bond left to
+     * count, damage 0 */
+    b->precrack[0] |= (UINT64_C(1) << 2) | (UINT64_C(1) << 7);
+    pd_bond_break(b->intact, 2);
+    pd_bond_break(b->intact, 7);
+    pd_damage_no_precrack(p, b, b->intact, e);
+    CHECK(e[3] == 0, "all bonds pre-cracked: damage 0 (%g)", e[3]);
+    CHECK(e[0] == 1, "particle 0: its only bond outside the pre-crack broke (%g)", e[0]);
+    pd_bonds_free(b);
+    pd_particles_free(p);
+    proved(f0, "damage without the pre-crack: pre-cracked bonds out of both sums");
+}
+
 int main(void)
 {
     test_hand_built();
     test_plane_cut();
+    test_no_precrack();
     if (failures)
         fprintf(stderr, "test_damage: %d failures\n", failures);
     return failures != 0;
