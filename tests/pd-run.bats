@@ -803,3 +803,24 @@ with h5py.File(sys.argv[1]) as f:
             --steps 1 model.h5 -o x.h5
     done
 }
+
+@test "an unwritable directory is one error naming the file and its cause, and leaves nothing" {
+    make_block
+    # a directory without write permission; root ignores permission bits,
+    # so as root take sysfs, which refuses new files to everyone
+    local dir=ro
+    mkdir ro && chmod 555 ro
+    if [ "$(id -u)" -eq 0 ]; then
+        dir=/sys
+        if touch /sys/pd-probe 2>/dev/null; then
+            rm -f /sys/pd-probe
+            skip "no unwritable directory here"
+        fi
+    fi
+    run --separate-stderr pd-run --c 1e21 --steps 1 -q model.h5 -o "$dir/run.h5"
+    [ "$status" -eq 1 ]
+    [ "$(printf '%s\n' "$stderr" | wc -l)" -eq 1 ]
+    [[ "$stderr" =~ ^pd-run:\ error:\ cannot\ write\ \'$dir/run.h5\':\ (Permission\ denied|Read-only\ file\ system) ]]
+    [ ! -e "$dir/run.h5" ]
+    [ -z "$(ls -A ro)" ]
+}
