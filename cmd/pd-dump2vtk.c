@@ -11,6 +11,8 @@
  * A run from a pre-cracked model (/bonds/precrack) also gets damage_run, the
  * damage without the pre-crack (pd_damage_no_precrack, or the frame's
  * `damage_run` field), which shows only what broke during the run.
+ * Every optional field a frame holds (pd-run --fields) goes along:
+ * strain_energy_density, stress (a 9-component tensor) and von_mises.
  */
 #include <errno.h>
 #include <getopt.h>
@@ -40,7 +42,8 @@ static void usage(FILE *out)
             "ParaView collection DIR/NAME.pvd of all frames with their times.  NAME is the\n"
             "file name of RUN.h5 without '.h5' ('run' when RUN.h5 is '-', stdin).  A run\n"
             "with a pre-crack (pd-bonds --crack) also gets damage_run, the damage without\n"
-            "the pre-crack.\n"
+            "the pre-crack.  The optional fields of pd-run --fields go along when the frames\n"
+            "have them: strain_energy_density, stress (a tensor) and von_mises.\n"
             "\n"
             "Options:\n"
             "  -o, --output DIR    directory of the output, created when missing (required)\n"
@@ -145,13 +148,16 @@ static pd_status make_dirs(const char *dir)
 /* Per-particle work arrays of one frame. */
 struct frame_data {
     double *disp[3], *vel[3], *pos[3], *damage, *damage_run;
+    double *energy, *stress, *mises; /* the optional fields pd-run --fields wrote */
 };
 
 static pd_status frame_data_alloc(struct frame_data *d, int64_t n)
 {
     memset(d, 0, sizeof *d);
     size_t bytes = (size_t)n * sizeof(double);
-    int ok = (d->damage = malloc(bytes)) != NULL && (d->damage_run = malloc(bytes)) != NULL;
+    int ok = (d->damage = malloc(bytes)) != NULL && (d->damage_run = malloc(bytes)) != NULL &&
+             (d->energy = malloc(bytes)) != NULL && (d->stress = malloc(9 * bytes)) != NULL &&
+             (d->mises = malloc(bytes)) != NULL;
     for (int k = 0; k < 3; k++)
         ok &= (d->disp[k] = malloc(bytes)) != NULL && (d->vel[k] = malloc(bytes)) != NULL &&
               (d->pos[k] = malloc(bytes)) != NULL;
@@ -167,6 +173,9 @@ static void frame_data_free(struct frame_data *d)
     }
     free(d->damage);
     free(d->damage_run);
+    free(d->energy);
+    free(d->stress);
+    free(d->mises);
 }
 
 /* Write frame `frame` as DIR/file; file and time are filled in. */
@@ -176,8 +185,12 @@ static pd_status dump_frame(const pd_file *f, const pd_particles *p, const char 
 {
     pd_frame_info fi;
     pd_status s;
-    int has_run = 0;
+    int has_run = 0, has_energy = 0, has_stress = 0, has_mises = 0;
     if ((s = pd_read_frame_info(f, frame, &fi)) != PD_OK ||
+        (s = pd_read_frame_scalar(f, frame, "strain_energy_density", p->n, d->energy,
+                                  &has_energy)) != PD_OK ||
+        (s = pd_read_frame_stress(f, frame, p->n, d->stress, &has_stress)) != PD_OK ||
+        (s = pd_read_frame_scalar(f, frame, "von_mises", p->n, d->mises, &has_mises)) != PD_OK ||
         (s = pd_read_frame_vectors(f, frame, p->n, d->disp, d->vel)) != PD_OK ||
         (s = pd_read_frame_damage(f, p, frame, b, intact, d->damage)) != PD_OK ||
         (s = pd_read_frame_damage_run(f, p, frame, b, intact, d->damage_run, &has_run)) != PD_OK)
@@ -195,8 +208,17 @@ static pd_status dump_frame(const pd_file *f, const pd_particles *p, const char 
     snprintf(*file, len, "%s_%08lld.vtu", name, (long long)fi.step);
     snprintf(path, len, "%s/%s", dir, *file);
     *time = fi.time;
+    /* every optional field the frame has */
+    pd_vtk_field extra[3];
+    int nextra = 0;
+    if (has_energy)
+        extra[nextra++] = (pd_vtk_field){"strain_energy_density", 1, d->energy};
+    if (has_stress)
+        extra[nextra++] = (pd_vtk_field){"stress", 9, d->stress};
+    if (has_mises)
+        extra[nextra++] = (pd_vtk_field){"von_mises", 1, d->mises};
     pd_vtk_frame fr = {p->n, d->pos, d->disp, d->vel, d->damage, p->material, p->id,
-                       has_run ? d->damage_run : NULL};
+                       has_run ? d->damage_run : NULL, nextra, extra};
     s = pd_vtk_write(path, &fr);
     free(path);
     return s;

@@ -70,7 +70,9 @@ static void usage(FILE *out)
             "  --every N             a frame every N steps; 0 = only the last (default 0)\n"
             "Output:\n"
             "  --fields LIST         optional per-particle fields of each frame, a comma\n"
-            "                        list of: energy (strain_energy_density, J/m^3)\n"
+            "                        list of: energy (strain_energy_density, J/m^3),\n"
+            "                        stress (the peridynamic stress tensor and its von\n"
+            "                        Mises value, Pa)\n"
             "Other:\n"
             "  --restart RUN.h5      go on from the last complete frame of RUN.h5 for N\n"
             "                        more steps, with its scene (only --steps, --every,\n"
@@ -102,7 +104,7 @@ static int positive(const char *opt, const char *arg, double *out)
 static int parse_fields(const char *arg, unsigned *fields)
 {
     static const struct { const char *name; unsigned bit; } known[] = {
-        {"energy", PD_FIELD_ENERGY}};
+        {"energy", PD_FIELD_ENERGY}, {"stress", PD_FIELD_STRESS}};
     *fields = 0;
     const char *p = arg;
     while (*p) {
@@ -112,7 +114,7 @@ static int parse_fields(const char *arg, unsigned *fields)
             if (strlen(known[k].name) == len && strncmp(p, known[k].name, len) == 0)
                 bit = known[k].bit;
         if (bit == 0)
-            return usage_error("--fields takes a comma list of: energy; not", arg);
+            return usage_error("--fields takes a comma list of: energy, stress; not", arg);
         *fields |= bit;
         p += len + (p[len] == ',');
     }
@@ -423,8 +425,10 @@ static char *scene_text(const pd_scene *s)
                      s->ind_velocity[0], s->ind_velocity[1], s->ind_velocity[2]);
     p += sprintf(p, "dt %.17g\nsteps %lld\nevery %lld\n", s->dt, (long long)s->steps,
                  (long long)s->every);
-    if (s->fields & PD_FIELD_ENERGY)
-        p += sprintf(p, "fields energy\n");
+    if (s->fields)
+        p += sprintf(p, "fields %s%s%s\n", s->fields & PD_FIELD_ENERGY ? "energy" : "",
+                     s->fields == (PD_FIELD_ENERGY | PD_FIELD_STRESS) ? "," : "",
+                     s->fields & PD_FIELD_STRESS ? "stress" : "");
     p += sprintf(p, "lost-margin %.17g\n", s->lost_margin);
     if (s->dt > s->dt_stable)
         sprintf(p, "force-dt\n");
@@ -535,11 +539,23 @@ static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds
     double t0 = pd_wtime();
     pd_frame_info fi = {.step = pd_sim_stepno(sim), .time = pd_sim_time(sim),
                         .broken = pd_sim_broken(sim), .lost = pd_sim_lost(sim)};
-    double *density = NULL;
-    if ((fields & PD_FIELD_ENERGY) &&
-        (density = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof(double))) == NULL)
+    size_t n = (size_t)(p->n > 0 ? p->n : 1);
+    double *density = NULL, *stress = NULL, *mises = NULL;
+    if ((fields & PD_FIELD_ENERGY) && (density = malloc(n * sizeof(double))) == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the strain energy density");
+    if ((fields & PD_FIELD_STRESS) && ((stress = malloc(9 * n * sizeof(double))) == NULL ||
+                                       (mises = malloc(n * sizeof(double))) == NULL)) {
+        free(density);
+        free(stress);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the stress");
+    }
     pd_status s = pd_sim_energy(sim, &fi.energy, density);
+    if (s == PD_OK && stress) {
+        s = pd_sim_stress(sim, stress);
+        for (int64_t i = 0; i < p->n; i++)
+            mises[i] = pd_von_mises(stress + 9 * i);
+    }
+    pd_frame_fields ff = {density, stress, mises};
     /* what a restart needs, then the frame (marked complete last) */
     pd_restart r;
     memset(&r, 0, sizeof r);
@@ -555,8 +571,10 @@ static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds
         s = pd_write_restart(out, p->n, fi.step, &r);
     if (s == PD_OK)
         s = pd_write_frame(out, p, &fi, pd_sim_positions(sim), pd_sim_velocities(sim),
-                           pd_sim_intact(sim), b->count, density);
+                           pd_sim_intact(sim), b->count, &ff);
     free(density);
+    free(stress);
+    free(mises);
     *t_out += pd_wtime() - t0;
     return s;
 }

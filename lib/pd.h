@@ -318,6 +318,16 @@ typedef struct {
  * the energy of each of its bonds, per its volume).  Sums are taken in a
  * fixed order: the same figures at any thread count. */
 pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density);
+/* The peridynamic stress of every particle (seed 003 eq. 7 read per
+ * particle: the static virial of its bonds),
+ *   sigma_i = 1/2 sum_j V_j f_ij (x) xi_ij,
+ * with f_ij the force density the intact bond j puts on i per unit volume
+ * of j (N/m^6) and xi_ij = x_j - x_i its reference vector: a first
+ * Piola-Kirchhoff stress, Pa, 9 values per particle (stress[9i + 3a + b]).
+ * Computed only when called. */
+pd_status pd_sim_stress(const pd_sim *sim, double *stress);
+/* The von Mises stress of a 3x3 tensor (of its symmetric part), Pa. */
+double pd_von_mises(const double s[9]);
 /* The balance kinetic + elastic + contact + released + lost - work. */
 double pd_energy_total(const pd_energy *e);
 int64_t pd_sim_broken(const pd_sim *sim);      /* broken bonds (pairs) */
@@ -429,8 +439,19 @@ typedef struct {
                           external_work */
 } pd_frame_info;
 
-/* Optional per-particle fields of frames, asked for with pd-run --output. */
-enum { PD_FIELD_ENERGY = 1 /* strain_energy_density (N), J/m^3 */ };
+/* Optional per-particle fields of frames, asked for with pd-run --fields. */
+enum {
+    PD_FIELD_ENERGY = 1, /* strain_energy_density (N), J/m^3                 */
+    PD_FIELD_STRESS = 2  /* stress (N,3,3) and von_mises (N), Pa             */
+};
+
+/* The optional fields of one frame (each NULL when not asked for). */
+typedef struct {
+    const double *energy_density; /* N values, J/m^3                        */
+    const double *stress;         /* 9 N values, Pa: particle i's tensor at
+                                     stress[9i + 3a + b], row a, column b  */
+    const double *von_mises;      /* N values, Pa                           */
+} pd_frame_fields;
 
 /* Lay out every frame a run will write (steps[k] at times[k]) before the
  * first step, so that writing them later changes no structure of the file;
@@ -446,10 +467,11 @@ void pd_restart_free(pd_restart *r);
 /* Remove frames laid out but never completed. */
 pd_status pd_drop_incomplete_frames(pd_file *f);
 /* Write a frame (into its place when planned), then mark it complete;
- * energy_density (may be NULL) goes into the strain_energy_density field. */
+ * the optional fields `ff` (may be NULL) go into strain_energy_density,
+ * stress and von_mises. */
 pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
                          double *const y[3], double *const v[3],
-                         const uint64_t *intact, int64_t nbonds, const double *energy_density);
+                         const uint64_t *intact, int64_t nbonds, const pd_frame_fields *ff);
 /* Number of complete frames and their names in step order (none, from a
  * run killed before its first frame, is not an error; no /frames is);
  * caller frees with pd_frames_free_list. */
@@ -481,6 +503,10 @@ pd_status pd_read_frame_damage_run(const pd_file *f, const pd_particles *p, cons
                                    int *present);
 pd_status pd_write_frame_scalar(pd_file *f, const char *name, const char *field,
                                 int64_t n, const double *values);
+/* The stress field of a frame (9 n values, as pd_frame_fields.stress);
+ * *present = 0 when absent. */
+pd_status pd_read_frame_stress(const pd_file *f, const char *name, int64_t n, double *out,
+                               int *present);
 
 /* ---------------------------------------------------------------- VTK */
 
@@ -495,7 +521,17 @@ typedef struct {
     const int32_t *material;
     const int64_t *id;
     const double *damage_run;     /* damage without the pre-crack    */
+    int nextra;                   /* more point data:                */
+    const struct pd_vtk_field *extra;
 } pd_vtk_frame;
+
+/* A named point-data array of `ncomp` components per point, interleaved
+ * (values[ncomp i + c]); 9 components is a tensor to ParaView. */
+typedef struct pd_vtk_field {
+    const char *name;
+    int ncomp;
+    const double *values;
+} pd_vtk_field;
 
 pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr);
 /* A ParaView collection listing files (relative names) with their times. */

@@ -351,12 +351,48 @@ static void pmb_energy(const pd_sim *sim, void *state, double *e)
     }
 }
 
+/* The static virial of each particle's intact bonds (pd_sim_stress):
+ * s_i += 1/2 sum_j V_j f_ij (x) xi_ij with f_ij = c s nu_ij (y_j - y_i)/r,
+ * the force density bond j puts on i per unit volume of j.  Directed
+ * bonds, each row its own sum: the same at any thread count. */
+static void pmb_stress(const pd_sim *sim, void *state, double *out)
+{
+    (void)state;
+    const pd_bonds *b = sim->b;
+    const uint64_t *intact = pd_sim_intact(sim);
+    const double *V = sim->p->volume, c = sim->sc.c;
+    double *const *y = sim->y;
+    double *const *x = sim->p->x;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        double sum[9] = {0};
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            if (!pd_bond_intact(intact, k))
+                continue;
+            const int32_t j = b->neighbor[k];
+            const double e[3] = {y[0][j] - y[0][i], y[1][j] - y[1][i], y[2][j] - y[2][i]};
+            const double r = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+            double dr = r - b->length[k];
+            dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+            if (r <= 0.0)
+                continue;
+            const double f = 0.5 * c * (dr / b->length[k]) * b->vfactor[k] * V[j] / r;
+            const double xi[3] = {x[0][j] - x[0][i], x[1][j] - x[1][i], x[2][j] - x[2][i]};
+            for (int a = 0; a < 3; a++)
+                for (int d = 0; d < 3; d++)
+                    sum[3 * a + d] += f * e[a] * xi[d];
+        }
+        for (int m = 0; m < 9; m++)
+            out[9 * i + m] += sum[m];
+    }
+}
+
 const pd_effect pd_effect_pmb = {
     .name = "pmb", .timer = PD_T_BONDS, .force = pmb_force,
-    .energy = pmb_energy, .kind = PD_ENERGY_ELASTIC};
+    .energy = pmb_energy, .kind = PD_ENERGY_ELASTIC, .stress = pmb_stress};
 const pd_effect pd_effect_pmb_failure = {
     .name = "pmb+failure", .timer = PD_T_BONDS, .force = pmb_failure_force,
-    .energy = pmb_energy, .kind = PD_ENERGY_ELASTIC};
+    .energy = pmb_energy, .kind = PD_ENERGY_ELASTIC, .stress = pmb_stress};
 
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
 {

@@ -635,6 +635,10 @@ static pd_status lay_out_frame(pd_file *f, int64_t n, int64_t nbonds, int64_t st
         s = pd_h5_write_attr_doubles(g, energy_attrs[k], &zero, 1);
     if (s == PD_OK && (fields & PD_FIELD_ENERGY))
         s = pd_h5_reserve_data(g, "strain_energy_density", H5T_IEEE_F64LE, 1, d1);
+    hsize_t d3[3] = {(hsize_t)n, 3, 3};
+    if (s == PD_OK && (fields & PD_FIELD_STRESS) &&
+        (s = pd_h5_reserve_data(g, "stress", H5T_IEEE_F64LE, 3, d3)) == PD_OK)
+        s = pd_h5_reserve_data(g, "von_mises", H5T_IEEE_F64LE, 1, d1);
     H5Gclose(g);
     return s;
 }
@@ -650,13 +654,17 @@ pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
 
 pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
                          double *const y[3], double *const v[3], const uint64_t *intact,
-                         int64_t nbonds, const double *energy_density)
+                         int64_t nbonds, const pd_frame_fields *ff)
 {
+    static const pd_frame_fields none;
+    if (ff == NULL)
+        ff = &none;
     char path[64];
     frame_name(fi->step, path, sizeof path);
     if (!pd_h5_has_link(f->fid, path)) { /* not laid out: lay out this one */
-        pd_status s = lay_out_frame(f, p->n, nbonds, fi->step, fi->time,
-                                    energy_density ? PD_FIELD_ENERGY : 0);
+        unsigned fields = (ff->energy_density ? PD_FIELD_ENERGY : 0) |
+                          (ff->stress && ff->von_mises ? PD_FIELD_STRESS : 0);
+        pd_status s = lay_out_frame(f, p->n, nbonds, fi->step, fi->time, fields);
         if (s != PD_OK)
             return s;
     }
@@ -681,8 +689,11 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
     }
     if (s == PD_OK && nbonds > 0)
         s = pd_h5_write_into(g, "state", H5T_NATIVE_UINT8, bytes);
-    if (s == PD_OK && energy_density)
-        s = pd_h5_write_into(g, "strain_energy_density", H5T_NATIVE_DOUBLE, energy_density);
+    if (s == PD_OK && ff->energy_density)
+        s = pd_h5_write_into(g, "strain_energy_density", H5T_NATIVE_DOUBLE, ff->energy_density);
+    if (s == PD_OK && ff->stress && ff->von_mises &&
+        (s = pd_h5_write_into(g, "stress", H5T_NATIVE_DOUBLE, ff->stress)) == PD_OK)
+        s = pd_h5_write_into(g, "von_mises", H5T_NATIVE_DOUBLE, ff->von_mises);
     pd_energy e = fi->energy;
     for (int k = 0; k < NENERGY && s == PD_OK; k++)
         s = pd_h5_update_attr(g, energy_attrs[k], H5T_NATIVE_DOUBLE, energy_field(&e, k));
@@ -891,6 +902,41 @@ pd_status pd_read_frame_scalar(const pd_file *f, const char *name, const char *f
     memcpy(out, buf, (size_t)n * sizeof(double));
     free(buf);
     return PD_OK;
+}
+
+pd_status pd_read_frame_stress(const pd_file *f, const char *name, int64_t n, double *out,
+                               int *present)
+{
+    char path[256];
+    pd_status s = frame_path(name, "stress", path, sizeof path);
+    if (s != PD_OK)
+        return s;
+    *present = pd_h5_has_link(f->fid, path);
+    if (!*present)
+        return PD_OK;
+    /* (N,3,3) read as (N,9): the form checks rank 2, so look at rank 3 here */
+    hid_t ds = H5Dopen2(f->fid, path, H5P_DEFAULT);
+    if (ds < 0)
+        return pd_fail(PD_ERR_FORMAT, "%s: cannot open %s", f->name, path);
+    hid_t sp = H5Dget_space(ds);
+    hsize_t dims[3] = {0, 0, 0};
+    int rank = sp < 0 ? -1 : H5Sget_simple_extent_ndims(sp);
+    if (rank == 3)
+        H5Sget_simple_extent_dims(sp, dims, NULL);
+    hid_t ft = H5Dget_type(ds);
+    int isfloat = ft >= 0 && H5Tget_class(ft) == H5T_FLOAT;
+    if (ft >= 0)
+        H5Tclose(ft);
+    if (sp >= 0)
+        H5Sclose(sp);
+    if (rank != 3 || dims[0] != (hsize_t)n || dims[1] != 3 || dims[2] != 3 || !isfloat) {
+        H5Dclose(ds);
+        return pd_fail(PD_ERR_FORMAT, "%s: %s is not a (%lld,3,3) float dataset", f->name, path,
+                       (long long)n);
+    }
+    herr_t rc = H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out);
+    H5Dclose(ds);
+    return rc < 0 ? pd_fail(PD_ERR_FORMAT, "%s: cannot read %s", f->name, path) : PD_OK;
 }
 
 pd_status pd_write_frame_scalar(pd_file *f, const char *name, const char *field, int64_t n,

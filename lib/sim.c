@@ -386,6 +386,22 @@ pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density)
     return PD_OK;
 }
 
+pd_status pd_sim_stress(const pd_sim *sim, double *stress)
+{
+    memset(stress, 0, (size_t)sim->n * 9 * sizeof(double));
+    for (int k = 0; k < sim->neffects; k++)
+        if (sim->effects[k]->stress)
+            sim->effects[k]->stress(sim, sim->state[k], stress);
+    return PD_OK;
+}
+
+double pd_von_mises(const double s[9])
+{
+    const double xy = 0.5 * (s[1] + s[3]), yz = 0.5 * (s[5] + s[7]), zx = 0.5 * (s[2] + s[6]);
+    const double a = s[0] - s[4], b = s[4] - s[8], c = s[8] - s[0];
+    return sqrt(0.5 * (a * a + b * b + c * c) + 3.0 * (xy * xy + yz * yz + zx * zx));
+}
+
 double pd_energy_total(const pd_energy *e)
 {
     return e->kinetic + e->elastic + e->contact + e->released + e->lost - e->work;

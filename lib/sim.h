@@ -21,6 +21,9 @@ typedef struct pd_effect {
      * e[i]; NULL: none.  `kind` says where pd_energy books it. */
     void (*energy)(const pd_sim *sim, void *state, double *e);
     enum { PD_ENERGY_ELASTIC, PD_ENERGY_CONTACT } kind;
+    /* Add each particle's peridynamic stress from the effect's bonds, Pa,
+     * to s[9i + 3a + b] (pd_sim_stress); NULL: the effect adds none. */
+    void (*stress)(const pd_sim *sim, void *state, double *s);
 } pd_effect;
 
 /* Deterministic parallel sums: fixed chunks, summed in order. */

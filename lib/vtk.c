@@ -113,6 +113,7 @@ static pd_status pending_close(pending *w, pd_status s)
 typedef enum {
     SRC_SOA,      /* double, 3 components from soa[0..2][i] */
     SRC_F64,      /* double, f64[i]                          */
+    SRC_AOS,      /* double, ncomp interleaved: f64[ncomp i + c] */
     SRC_I32,      /* int32, i32[i]                           */
     SRC_I64,      /* int64, i64[i]                           */
     SRC_SEQUENCE, /* int64, i + start                        */
@@ -151,6 +152,10 @@ static uint64_t value_bits(const varray *a, int64_t i, int c)
         break;
     case SRC_F64:
         v = a->f64[i];
+        memcpy(&bits, &v, sizeof bits);
+        break;
+    case SRC_AOS:
+        v = a->f64[(int64_t)a->ncomp * i + c];
         memcpy(&bits, &v, sizeof bits);
         break;
     case SRC_I32:
@@ -220,7 +225,13 @@ pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr)
 
     /* Point data first, then Points, then Cells: the order of the XML and
      * of the appended block. */
-    varray a[10];
+    if (fr->nextra < 0 || fr->nextra > 64 || (fr->nextra > 0 && fr->extra == NULL))
+        return pd_fail(PD_ERR_INVALID, "VTK frame with %d extra fields", fr->nextra);
+    for (int k = 0; k < fr->nextra; k++)
+        if (fr->extra[k].name == NULL || fr->extra[k].values == NULL ||
+            fr->extra[k].ncomp < 1 || fr->extra[k].ncomp > 9)
+            return pd_fail(PD_ERR_INVALID, "VTK frame field %d is incomplete", k);
+    varray a[10 + 64];
     int na = 0, npoint = 0;
     if (fr->displacement)
         a[na++] = (varray){"displacement", "Float64", 3, 8, SRC_SOA, .soa = fr->displacement};
@@ -234,6 +245,9 @@ pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr)
         a[na++] = (varray){"material", "Int32", 1, 4, SRC_I32, .i32 = fr->material};
     if (fr->id)
         a[na++] = (varray){"id", "Int64", 1, 8, SRC_I64, .i64 = fr->id};
+    for (int k = 0; k < fr->nextra; k++)
+        a[na++] = (varray){fr->extra[k].name, "Float64", fr->extra[k].ncomp, 8, SRC_AOS,
+                           .f64 = fr->extra[k].values};
     npoint = na;
     a[na++] = (varray){"Points", "Float64", 3, 8, SRC_SOA, .soa = fr->position};
     a[na++] = (varray){"connectivity", "Int64", 1, 8, SRC_SEQUENCE, .start = 0};

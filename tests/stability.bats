@@ -185,6 +185,54 @@ with h5py.File(sys.argv[1]) as f:
     [[ "$output" =~ --fields ]]
 }
 
+@test "--fields stress writes the peridynamic stress and von Mises; pd-dump2vtk carries every field" {
+    make_block
+    # the sphere presses the top face down: compression along z below it
+    run -0 pd-run --bulk-modulus "$BULK" --fields energy,stress -q \
+        --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-10 \
+        --steps 200 --every 100 model.h5 -o f.h5
+    py "
+import numpy as np
+with h5py.File(sys.argv[1]) as f:
+    assert 'fields energy,stress' in f['scene'].attrs['options']
+    n = f['particles/volume'].shape[0]
+    g = f['frames/%08d' % 200]
+    s, vm = g['stress'][:], g['von_mises'][:]
+    assert s.shape == (n, 3, 3) and vm.shape == (n,)
+    # von Mises of the symmetric part, computed here
+    t = 0.5 * (s + s.transpose(0, 2, 1))
+    dev = t - np.einsum('ijj->i', t)[:, None, None] / 3 * np.eye(3)
+    want = np.sqrt(1.5 * np.einsum('ijk,ijk->i', dev, dev))
+    assert np.allclose(vm, want, rtol=1e-9, atol=1e-9 * vm.max()), abs(vm - want).max()
+    # the particle under the sphere (top centre) is compressed along z
+    x = f['particles/position'][:]
+    top = np.argmin((x[:, 0] - 0.005)**2 + (x[:, 1] - 0.005)**2 + (x[:, 2] - 0.01)**2)
+    assert s[top, 2, 2] < 0 and s[top, 2, 2] <= 0.5 * s[:, 2, 2].min(), (s[top, 2, 2], s[:, 2, 2].min())
+    # at step 0 the body is at rest and unstressed
+    assert np.all(f['frames/%08d' % 0]['stress'][:] == 0)" f.h5
+    pd-dump2vtk -q f.h5 -o vtk
+    "$PY" - f.h5 vtk/f_00000200.vtu <<'EOF'
+import sys, struct, h5py, numpy as np
+import xml.etree.ElementTree as ET
+raw = open(sys.argv[2], "rb").read()
+root = ET.fromstring(raw[:raw.index(b"<AppendedData")].decode() + "</VTKFile>")
+app = raw.index(b"_", raw.index(b'<AppendedData encoding="raw">')) + 1
+arrays = {}
+for a in root.iter("DataArray"):
+    at = app + int(a.get("offset"))
+    nbytes = struct.unpack("<Q", raw[at:at + 8])[0]
+    if a.get("type") == "Float64":
+        arrays[a.get("Name")] = (int(a.get("NumberOfComponents", "1")),
+                                 np.frombuffer(raw[at + 8:at + 8 + nbytes], "<f8"))
+with h5py.File(sys.argv[1]) as f:
+    g = f["frames/%08d" % 200]
+    for name, comp in (("stress", 9), ("von_mises", 1), ("strain_energy_density", 1)):
+        assert arrays[name][0] == comp, name
+        assert np.array_equal(arrays[name][1], g[name][:].ravel()), name
+print("ok")
+EOF
+}
+
 @test "two particles at the same reference position are refused by pd-bonds" {
     make_block
     cp lattice.h5 dup.h5
