@@ -25,7 +25,9 @@ struct options {
     int nregions;
     pd_lattice_params lp;
     int has_spacing, has_density;
-    int has_dimension, has_thickness; /* --dimension 2 needs --thickness */
+    int dimension;    /* 3, or 2 for a plate                          */
+    double thickness; /* --thickness H of a plate, m                  */
+    int has_thickness;
     const char *output;
     int quiet, debug;
 };
@@ -98,6 +100,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     memset(o, 0, sizeof *o);
     o->lp.material = 1;
     o->lp.seed = 1;
+    o->dimension = 3;
     o->output = "-";
     int c, rc, status = 0;
     int64_t iv;
@@ -146,11 +149,10 @@ static int parse_options(int argc, char **argv, struct options *o)
         case OPT_DIMENSION:
             if (!pd_parse_int64(optarg, &iv) || (iv != 2 && iv != 3))
                 return usage_error("--dimension must be 2 or 3, not", optarg);
-            o->lp.dimension = (int)iv;
-            o->has_dimension = 1;
+            o->dimension = (int)iv;
             break;
         case OPT_THICKNESS:
-            if (!pd_parse_double(optarg, &o->lp.thickness) || !(o->lp.thickness > 0))
+            if (!pd_parse_double(optarg, &o->thickness) || !(o->thickness > 0))
                 return usage_error("--thickness must be a positive number, not", optarg);
             o->has_thickness = 1;
             break;
@@ -172,9 +174,9 @@ static int parse_options(int argc, char **argv, struct options *o)
         return usage_error("--spacing is required", NULL);
     if (!o->has_density)
         return usage_error("--density is required", NULL);
-    if (o->lp.dimension == 2 && !o->has_thickness)
+    if (o->dimension == 2 && !o->has_thickness)
         return usage_error("--dimension 2 needs --thickness", NULL);
-    if (o->has_thickness && o->lp.dimension != 2)
+    if (o->has_thickness && o->dimension != 2)
         return usage_error("--thickness is for a plate: give --dimension 2", NULL);
     int adds = 0;
     for (int r = 0; r < o->nregions; r++)
@@ -198,7 +200,10 @@ int main(int argc, char **argv)
     remove_temps_on_signal();
 
     pd_particles *p = NULL;
-    if (pd_lattice_make(o.regions, o.nregions, &o.lp, &p) != PD_OK) {
+    pd_status made = o.dimension == 2
+                         ? pd_plate_make(o.regions, o.nregions, &o.lp, o.thickness, &p)
+                         : pd_lattice_make(o.regions, o.nregions, &o.lp, &p);
+    if (made != PD_OK) {
         free(cmdline);
         return fail();
     }

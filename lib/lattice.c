@@ -34,8 +34,10 @@ static int site_in_body(const pd_region *regions, int nregions, const double x[3
     return in;
 }
 
-pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_lattice_params *lp,
-                          pd_particles **out)
+/* The lattice of pd_lattice_make (plate 0) or of pd_plate_make (plate 1,
+ * thickness H). */
+static pd_status make(const pd_region *regions, int nregions, const pd_lattice_params *lp,
+                      int plate, double thickness, pd_particles **out)
 {
     const double h = lp->spacing;
     if (!(h > 0) || !isfinite(h))
@@ -44,10 +46,7 @@ pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_latti
         return pd_fail(PD_ERR_INVALID, "density must be a positive number");
     if (!(lp->perturb >= 0) || !isfinite(lp->perturb))
         return pd_fail(PD_ERR_INVALID, "perturbation must be zero or positive");
-    const int plate = lp->dimension == 2;
-    if (lp->dimension != 0 && lp->dimension != 2 && lp->dimension != 3)
-        return pd_fail(PD_ERR_INVALID, "dimension must be 2 or 3, not %d", lp->dimension);
-    if (plate && (!(lp->thickness > 0) || !isfinite(lp->thickness)))
+    if (plate && (!(thickness > 0) || !isfinite(thickness)))
         return pd_fail(PD_ERR_INVALID, "a plate's thickness must be a positive number");
 
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -94,9 +93,9 @@ pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_latti
                 return pd_fail(PD_ERR_NOMEM, "out of memory for %lld particles", (long long)n);
             p->spacing = h;
             p->dimension = plate ? 2 : 3;
-            p->thickness = plate ? lp->thickness : 0;
+            p->thickness = plate ? thickness : 0;
         }
-        const double volume = plate ? h * h * lp->thickness : h * h * h;
+        const double volume = plate ? h * h * thickness : h * h * h;
         int64_t k = 0;
         for (int64_t iz = nlo[2]; iz <= nhi[2]; iz++)
             for (int64_t iy = nlo[1]; iy <= nhi[1]; iy++)
@@ -140,4 +139,16 @@ pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_latti
         *out = p;
     }
     return PD_OK;
+}
+
+pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_lattice_params *lp,
+                          pd_particles **out)
+{
+    return make(regions, nregions, lp, 0, 0, out);
+}
+
+pd_status pd_plate_make(const pd_region *regions, int nregions, const pd_lattice_params *lp,
+                        double thickness, pd_particles **out)
+{
+    return make(regions, nregions, lp, 1, thickness, out);
 }

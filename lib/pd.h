@@ -113,8 +113,6 @@ typedef struct {
     int32_t material;   /* material id                     */
     double perturb;     /* amplitude of uniform perturbation, m (0 = none) */
     unsigned long seed; /* GSL mt19937 seed                */
-    int dimension;      /* 2: a plate (square lattice in z = 0); 0 or 3: 3-D */
-    double thickness;   /* plate thickness H, m (> 0 with dimension 2)      */
 } pd_lattice_params;
 
 /* Simple cubic lattice sites n*spacing (anchored at the origin, LAMMPS
@@ -122,11 +120,14 @@ typedef struct {
  * every subtract region; z outermost, x innermost, as LAMMPS create_atoms. */
 pd_status pd_lattice_make(const pd_region *regions, int nregions,
                           const pd_lattice_params *lp, pd_particles **out);
-/* With lp->dimension 2 it makes a plate instead: a square lattice of sites
+/* A 2-D plate of thickness H (m, > 0): the square lattice of sites
  * (i spacing, j spacing, 0), anchored at the origin, where the point
- * (x, y, 0) is in the body (the regions are cut at z = 0), y outermost and
- * x innermost; volume spacing^2 thickness, radius spacing/2, dimension 2,
- * and a perturbation only in x and y. */
+ * (x, y, 0) is in the body (the regions are cut at z = 0; none there is an
+ * error), y outermost and x innermost; volume spacing^2 H, radius
+ * spacing/2, dimension 2 and thickness H, and a perturbation only in x and
+ * y. */
+pd_status pd_plate_make(const pd_region *regions, int nregions, const pd_lattice_params *lp,
+                        double thickness, pd_particles **out);
 
 /* ---------------------------------------------------------------- cells */
 
