@@ -126,11 +126,13 @@ with h5py.File(sys.argv[1]) as f:
         assert ((d ** 2).sum(1) <= 9).all()
         if np.abs(x[i, :2]).max() <= 0.0085:
             assert len(fam) == 28, (i, len(fam))
-            # nu = (delta + r - |xi|)/(2r): 3 spacings away (4 bonds) 1/2 +
-            # 0.0001/0.5, everything else (sqrt 8 = 2.83 < delta - r) 1
+            # nu = (delta + r - |xi|)/(2r) beyond delta - r = 2.5002 dx (delta = 3.0002 dx)
+            # (sqrt 8 and 3 spacings away), 1 within
             v = vf[off[i]:off[i + 1]]
             r = np.sqrt((d ** 2).sum(1))
-            assert np.allclose(v[r == 3], 0.5 + 0.0001, rtol=1e-9) and (v[r < 3] == 1).all()
+            want = np.where(r <= 2.5002, 1, 3.0002 + 0.5 - r)
+            assert np.allclose(v, want, rtol=1e-9, atol=0), (v, want)
+            assert np.allclose(v[r == 3], 0.5002, rtol=1e-9)
 " model.h5
 }
 
