@@ -290,6 +290,7 @@ static int parse_options(int argc, char **argv, struct options *o)
             o->has_k = 1;
             o->has_c = 0;
             o->has_e = 0;
+            o->sc.youngs_modulus = 0;
             break;
         case OPT_E:
             if ((rc = positive("--youngs-modulus", optarg, &o->sc.youngs_modulus)))
@@ -409,7 +410,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     if (!o->has_steps)
         return usage_error("--steps is required", NULL);
     if (!o->has_c && !o->has_k && !o->has_e)
-        return usage_error("give the stiffness: --c, --bulk-modulus or --youngs-modulus", NULL);
+        return usage_error("give the stiffness: --c or --bulk-modulus (or --youngs-modulus)", NULL);
     if (o->restart) { /* the run file is the input and, without -o, the output */
         if (optind < argc)
             return usage_error("--restart takes no INPUT besides RUN.h5:", argv[optind]);

@@ -178,11 +178,13 @@ with h5py.File(sys.argv[1]) as f:
     s0 = math.sqrt(4 * math.pi * 250 / (9 * E * d))
     assert abs(s['s00'] / s0 - 1) < 1e-14, (s['s00'], s0)
     assert s['youngs_modulus'] == E and abs(s['bulk_modulus'] / (0.75 * E) - 1) < 1e-15" run.h5
-    # --bulk-modulus is the 2-D bulk modulus: K = 3E/4 gives the same c
-    run -0 pd-run -q --bulk-modulus 144e9 --steps 0 model.h5 -o runk.h5
+    # --bulk-modulus is the 2-D bulk modulus: K = 3E/4 gives the same c (and,
+    # given last, it wins over --youngs-modulus)
+    run -0 pd-run -q --youngs-modulus 1e9 --bulk-modulus 144e9 --steps 0 model.h5 -o runk.h5
     py "
 with h5py.File(sys.argv[1]) as a, h5py.File(sys.argv[2]) as b:
-    assert abs(a['scene'].attrs['c'] / b['scene'].attrs['c'] - 1) < 1e-14" run.h5 runk.h5
+    assert abs(a['scene'].attrs['c'] / b['scene'].attrs['c'] - 1) < 1e-14
+    assert 'youngs_modulus' not in b['scene'].attrs" run.h5 runk.h5
 }
 
 @test "pd-run --youngs-modulus in 3-D: K = 2E/3 (nu = 1/4), c = 18K/(pi delta^4)" {
@@ -198,7 +200,7 @@ with h5py.File(sys.argv[1]) as f:
     assert abs(c / want - 1) < 1e-14, (c, want)" run.h5
     expect_usage_error "--youngs-modulus must be a positive number" \
         pd-run --youngs-modulus -1 --steps 1 model.h5 -o x.h5
-    expect_usage_error "--c, --bulk-modulus or --youngs-modulus" pd-run --steps 1 model.h5 -o x.h5
+    expect_usage_error "--c or --bulk-modulus \(or --youngs-modulus\)" pd-run --steps 1 model.h5 -o x.h5
     [ ! -e x.h5 ]
 }
 
