@@ -5,6 +5,9 @@
  * `lattice sc`) inside the union of the given regions, minus the subtracted
  * ones; each particle gets volume spacing^3 and node radius spacing/2 (seed
  * 000, "Spatial Discretization", eq. 15).  Writes /particles of a pd-h5 file.
+ * With --dimension 2 it makes a plate: the square lattice of sites
+ * (i spacing, j spacing, 0) where the regions, cut at z = 0, hold the point;
+ * volume spacing^2 H for the thickness H of --thickness.
  */
 #include <getopt.h>
 #include <stdio.h>
@@ -22,6 +25,9 @@ struct options {
     int nregions;
     pd_lattice_params lp;
     int has_spacing, has_density;
+    int dimension;    /* 3, or 2 for a plate                          */
+    double thickness; /* --thickness H of a plate, m                  */
+    int has_thickness;
     const char *output;
     int quiet, debug;
 };
@@ -30,7 +36,8 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "Usage: " PROG " --spacing DX --density RHO REGION... [OPTION]... [-o FILE]\n"
-            "Make particles on a simple cubic lattice inside regions (pd-h5 /particles).\n"
+            "Make particles on a simple cubic lattice (a square one for a plate) inside\n"
+            "regions (pd-h5 /particles).\n"
             "\n"
             "Regions (several form a union):\n"
             "  --box XLO,XHI,YLO,YHI,ZLO,ZHI\n"
@@ -46,6 +53,10 @@ static void usage(FILE *out)
             "  --material ID     material id (default 1)\n"
             "  --perturb A       move each site by uniform noise in [-A,A] per axis, m\n"
             "  --seed N          seed of the perturbation (default 1)\n"
+            "  --dimension D     3 (default) or 2: a plate, the square lattice of sites\n"
+            "                    (i DX, j DX, 0) where the regions cut at z = 0 hold\n"
+            "                    the point (x, y, 0); needs --thickness\n"
+            "  --thickness H     the plate's thickness, m (> 0; volume DX^2 H)\n"
             "  -o, --output FILE output file, '-' for stdout (default '-')\n"
             "  -q, --quiet       no summary on stderr\n"
             "      --debug       print HDF5's own error stack\n"
@@ -69,7 +80,7 @@ static int add_region(struct options *o, pd_region_kind kind, const char *spec, 
 static int parse_options(int argc, char **argv, struct options *o)
 {
     enum { OPT_BOX = 256, OPT_CYL, OPT_SPHERE, OPT_SUB, OPT_SPACING, OPT_DENSITY, OPT_MATERIAL,
-           OPT_PERTURB, OPT_SEED };
+           OPT_PERTURB, OPT_SEED, OPT_DIMENSION, OPT_THICKNESS };
     static const struct option longopts[] = {
         {"box", required_argument, 0, OPT_BOX},
         {"cylinder", required_argument, 0, OPT_CYL},
@@ -80,6 +91,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"material", required_argument, 0, OPT_MATERIAL},
         {"perturb", required_argument, 0, OPT_PERTURB},
         {"seed", required_argument, 0, OPT_SEED},
+        {"dimension", required_argument, 0, OPT_DIMENSION},
+        {"thickness", required_argument, 0, OPT_THICKNESS},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -87,6 +100,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     memset(o, 0, sizeof *o);
     o->lp.material = 1;
     o->lp.seed = 1;
+    o->dimension = 3;
     o->output = "-";
     int c, rc, status = 0;
     int64_t iv;
@@ -132,6 +146,16 @@ static int parse_options(int argc, char **argv, struct options *o)
                 return usage_error("--seed must be a non-negative integer, not", optarg);
             o->lp.seed = (unsigned long)iv;
             break;
+        case OPT_DIMENSION:
+            if (!pd_parse_int64(optarg, &iv) || (iv != 2 && iv != 3))
+                return usage_error("--dimension must be 2 or 3, not", optarg);
+            o->dimension = (int)iv;
+            break;
+        case OPT_THICKNESS:
+            if (!pd_parse_double(optarg, &o->thickness) || !(o->thickness > 0))
+                return usage_error("--thickness must be a positive number, not", optarg);
+            o->has_thickness = 1;
+            break;
         case 'o':
             o->output = optarg;
             break;
@@ -150,6 +174,10 @@ static int parse_options(int argc, char **argv, struct options *o)
         return usage_error("--spacing is required", NULL);
     if (!o->has_density)
         return usage_error("--density is required", NULL);
+    if (o->dimension == 2 && !o->has_thickness)
+        return usage_error("--dimension 2 needs --thickness", NULL);
+    if (o->has_thickness && o->dimension != 2)
+        return usage_error("--thickness is for a plate: give --dimension 2", NULL);
     int adds = 0;
     for (int r = 0; r < o->nregions; r++)
         adds += !o->regions[r].subtract;
@@ -172,7 +200,10 @@ int main(int argc, char **argv)
     remove_temps_on_signal();
 
     pd_particles *p = NULL;
-    if (pd_lattice_make(o.regions, o.nregions, &o.lp, &p) != PD_OK) {
+    pd_status made = o.dimension == 2
+                         ? pd_plate_make(o.regions, o.nregions, &o.lp, o.thickness, &p)
+                         : pd_lattice_make(o.regions, o.nregions, &o.lp, &p);
+    if (made != PD_OK) {
         free(cmdline);
         return fail();
     }
@@ -192,7 +223,8 @@ int main(int argc, char **argv)
         return fail();
     }
     if (!o.quiet)
-        fprintf(stderr, PROG ": %lld particles, spacing %g m\n", (long long)p->n, p->spacing);
+        fprintf(stderr, PROG ": %lld particles, spacing %g m%s\n", (long long)p->n, p->spacing,
+                p->dimension == 2 ? ", a 2-D plate" : "");
     pd_particles_free(p);
     return 0;
 }

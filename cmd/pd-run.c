@@ -8,6 +8,8 @@
  * indenter (LAMMPS fix indent).  The time step defaults to the stable step
  * of seed 004 eq. 46 times a safety factor; a larger --dt is refused.
  * Writes the model, the resolved scene (/scene) and frames (/frames).
+ * A 2-D plate (/particles dimension 2) takes the plane-stress constants of
+ * lib/plate.c: its --bulk-modulus is the 2-D bulk modulus.
  */
 #include <getopt.h>
 #include <math.h>
@@ -26,6 +28,7 @@ struct options {
     pd_scene sc;
     int has_g0;      /* --failure-energy: s00 from G0 once c is known */
     double g0;       /* J/m^2                                       */
+    int has_e;       /* --youngs-modulus: K from E once the dimension is known */
     int has_c, has_k, has_dt, has_steps, force_dt, has_status, has_output;
     int64_t status_every;
     const char *input;
@@ -45,14 +48,21 @@ static void usage(FILE *out)
             "  --model pmb           prototype microelastic brittle (default)\n"
             "  --c C                 micromodulus, N/m^6\n"
             "  --bulk-modulus K      bulk modulus, Pa (c = 18K/(pi delta^4));\n"
-            "                        the last of --c and --bulk-modulus wins\n"
+            "                        the last of --c, --bulk-modulus and\n"
+            "                        --youngs-modulus wins; for a 2-D plate K is the\n"
+            "                        plane-stress bulk modulus and c = 12K/(pi H delta^3)\n"
+            "  --youngs-modulus E    Young's modulus, Pa: K = 2E/3 in 3-D (PMB has\n"
+            "                        nu = 1/4), K = 3E/4 for a 2-D plate (plane stress,\n"
+            "                        nu = 1/3: c = 9E/(pi H delta^3))\n"
             "Effects (each only when given):\n"
             "  --failure S00,ALPHA   critical stretch s0 = S00 - ALPHA s_min (both\n"
             "                        dimensionless)\n"
             "  --failure-energy G0[,ALPHA]\n"
             "                        the same with S00 from the fracture energy G0 (J/m^2):\n"
             "                        sqrt(10 G0/(pi c delta^5)) = sqrt(5 G0/(9 K delta))\n"
-            "                        (seed 004 eq. 27); ALPHA defaults to 0\n"
+            "                        (seed 004 eq. 27); for a 2-D plate\n"
+            "                        sqrt(4 G0/(c H delta^4)) = sqrt(4 pi G0/(9 E delta));\n"
+            "                        ALPHA defaults to 0\n"
             "  --contact             short-range contact forces\n"
             "  --contact-skin S      skin of the contact list, m (default spacing/2)\n"
             "  --indenter sphere,X,Y,Z,R,K,VX,VY,VZ\n"
@@ -230,11 +240,12 @@ static int parse_options(int argc, char **argv, struct options *o)
 {
     enum { OPT_MODEL = 256, OPT_C, OPT_K, OPT_FAILURE, OPT_CONTACT, OPT_SKIN, OPT_INDENTER,
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
-           OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0 };
+           OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
         {"bulk-modulus", required_argument, 0, OPT_K},
+        {"youngs-modulus", required_argument, 0, OPT_E},
         {"failure", required_argument, 0, OPT_FAILURE},
         {"failure-energy", required_argument, 0, OPT_G0},
         {"contact", no_argument, 0, OPT_CONTACT},
@@ -271,14 +282,24 @@ static int parse_options(int argc, char **argv, struct options *o)
         case OPT_C:
             if ((rc = positive("--c", optarg, &o->sc.c)))
                 return rc;
-            o->has_c = 1; /* the last of --c and --bulk-modulus wins */
+            o->has_c = 1; /* the last of --c, --bulk-modulus and --youngs-modulus wins */
             o->has_k = 0;
+            o->has_e = 0;
             break;
         case OPT_K:
             if ((rc = positive("--bulk-modulus", optarg, &o->sc.bulk_modulus)))
                 return rc;
             o->has_k = 1;
             o->has_c = 0;
+            o->has_e = 0;
+            o->sc.youngs_modulus = 0;
+            break;
+        case OPT_E:
+            if ((rc = positive("--youngs-modulus", optarg, &o->sc.youngs_modulus)))
+                return rc;
+            o->has_e = 1;
+            o->has_c = 0;
+            o->has_k = 0;
             break;
         case OPT_FAILURE: {
             double v[2];
@@ -390,8 +411,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         return status;
     if (!o->has_steps)
         return usage_error("--steps is required", NULL);
-    if (!o->has_c && !o->has_k)
-        return usage_error("give the stiffness: --c or --bulk-modulus", NULL);
+    if (!o->has_c && !o->has_k && !o->has_e)
+        return usage_error("give the stiffness: --c or --bulk-modulus (or --youngs-modulus)", NULL);
     if (o->restart) { /* the run file is the input and, without -o, the output */
         if (optind < argc)
             return usage_error("--restart takes no INPUT besides RUN.h5:", argv[optind]);
@@ -592,6 +613,30 @@ static void print_timing(const pd_sim *sim, double wall, double output)
                 wall > 0 ? 100.0 * t[k] / wall : 0.0);
 }
 
+/* The constants the run uses, and where they come from. */
+static void log_constants(const pd_particles *p, const pd_scene *sc, const struct options *o)
+{
+    if (p->dimension == 2)
+        fprintf(stderr,
+                PROG ": a 2-D plate of thickness %g m: plane-stress PMB constants (nu = 1/3), "
+                     "c = 12K/(pi H delta^3) = 9E/(pi H delta^3)\n",
+                p->thickness);
+    if (o->has_e)
+        fprintf(stderr, PROG ": Young's modulus %g Pa: bulk modulus %g Pa (%s), c %.6g N/m^6\n",
+                sc->youngs_modulus, sc->bulk_modulus,
+                p->dimension == 2 ? "K = 3E/4, plane stress" : "K = 2E/3, nu = 1/4", sc->c);
+    else if (o->has_k)
+        fprintf(stderr, PROG ": bulk modulus %g Pa%s: c %.6g N/m^6\n", sc->bulk_modulus,
+                p->dimension == 2 ? " (2-D, plane stress)" : "", sc->c);
+    if (o->has_g0)
+        fprintf(stderr,
+                PROG ": critical stretch s00 %.6g from the fracture energy G0 %g J/m^2 (%s), "
+                     "alpha %g\n",
+                sc->s00, o->g0,
+                p->dimension == 2 ? "2-D: sqrt(4 G0/(c H delta^4))" : "seed 004 eq. 27",
+                sc->alpha);
+}
+
 /* Free what main holds. */
 struct held {
     pd_file *in, *out;
@@ -672,10 +717,14 @@ int main(int argc, char **argv)
     pd_particles *p = h.p;
     pd_bonds *b = h.b;
     pd_scene *sc = &o.sc;
-    if (o.has_k)
-        sc->c = pd_pmb_c_from_bulk(sc->bulk_modulus, b->horizon);
+    if (o.has_e) /* PMB's fixed Poisson ratio: K from E by dimension */
+        sc->bulk_modulus = pd_pmb_bulk_from_youngs(sc->youngs_modulus, p->dimension);
+    if (o.has_k || o.has_e)
+        sc->c = pd_pmb_c_for(p, sc->bulk_modulus, b->horizon);
+    if (!o.has_k && !o.has_e)
+        sc->bulk_modulus = sc->youngs_modulus = 0; /* a scene's K or E that --c overrode */
     if (o.has_g0)
-        sc->s00 = pd_pmb_s0_from_energy(o.g0, sc->c, b->horizon);
+        sc->s00 = pd_pmb_s0_for(p, o.g0, sc->c, b->horizon);
     if (sc->has_contact && !(sc->contact_skin > 0))
         sc->contact_skin = 0.5 * p->spacing;
     if (!(sc->lost_margin > 0))
@@ -758,11 +807,8 @@ int main(int argc, char **argv)
                      ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
                 (long long)p->n, (long long)(b->count / 2), pd_sim_effects(sim), sc->dt,
                 sc->dt_stable, (long long)nsteps, restart ? " more" : "");
-    if (!o.quiet && o.has_g0)
-        fprintf(stderr,
-                PROG ": critical stretch s00 %.6g from the fracture energy G0 %g J/m^2 (seed "
-                     "004 eq. 27), alpha %g\n",
-                sc->s00, o.g0, sc->alpha);
+    if (!o.quiet)
+        log_constants(p, sc, &o);
     if (!o.quiet && restart)
         fprintf(stderr, PROG ": going on from step %lld of '%s'\n", (long long)first, o.restart);
 

@@ -9,6 +9,11 @@
  * node radius spacing/2 (seed 000, "Spatial Discretization" and eq. 15).
  * An optional perturbation moves each site by a uniform random amount in
  * [-A, A] per axis (GSL mt19937), breaking the lattice's symmetry.
+ *
+ * A plate (dimension 2) is the square lattice (i spacing, j spacing, 0) of
+ * the sites where (x, y, 0) is in the body: the regions are cut at z = 0.
+ * Each particle stands for a column of the plate's thickness H, volume
+ * spacing^2 H; the perturbation stays in the plane.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -29,8 +34,10 @@ static int site_in_body(const pd_region *regions, int nregions, const double x[3
     return in;
 }
 
-pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_lattice_params *lp,
-                          pd_particles **out)
+/* The lattice of pd_lattice_make (plate 0) or of pd_plate_make (plate 1,
+ * thickness H). */
+static pd_status make(const pd_region *regions, int nregions, const pd_lattice_params *lp,
+                      int plate, double thickness, pd_particles **out)
 {
     const double h = lp->spacing;
     if (!(h > 0) || !isfinite(h))
@@ -39,6 +46,8 @@ pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_latti
         return pd_fail(PD_ERR_INVALID, "density must be a positive number");
     if (!(lp->perturb >= 0) || !isfinite(lp->perturb))
         return pd_fail(PD_ERR_INVALID, "perturbation must be zero or positive");
+    if (plate && (!(thickness > 0) || !isfinite(thickness)))
+        return pd_fail(PD_ERR_INVALID, "a plate's thickness must be a positive number");
 
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     int nadd = 0;
@@ -63,6 +72,10 @@ pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_latti
         nhi[d] = (int64_t)ceil(hi[d] / h) + 1;
         sites *= (double)(nhi[d] - nlo[d] + 1);
     }
+    if (plate) { /* one layer of sites, at z = 0 */
+        sites /= (double)(nhi[2] - nlo[2] + 1);
+        nlo[2] = nhi[2] = 0;
+    }
     if (sites > 4e9)
         return pd_fail(PD_ERR_NOMEM, "the regions span %.3g lattice sites; spacing too small?",
                        sites);
@@ -73,13 +86,16 @@ pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_latti
         pd_particles *p = NULL;
         if (pass == 1) {
             if (n == 0)
-                return pd_fail(PD_ERR_INVALID, "the regions hold no lattice site");
+                return pd_fail(PD_ERR_INVALID, plate ? "the regions hold no lattice site at z = 0"
+                                                     : "the regions hold no lattice site");
             p = pd_particles_new(n);
             if (p == NULL)
                 return pd_fail(PD_ERR_NOMEM, "out of memory for %lld particles", (long long)n);
             p->spacing = h;
-            p->dimension = 3;
+            p->dimension = plate ? 2 : 3;
+            p->thickness = plate ? thickness : 0;
         }
+        const double volume = plate ? h * h * thickness : h * h * h;
         int64_t k = 0;
         for (int64_t iz = nlo[2]; iz <= nhi[2]; iz++)
             for (int64_t iy = nlo[1]; iy <= nhi[1]; iy++)
@@ -90,7 +106,7 @@ pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_latti
                     if (pass == 1) {
                         for (int d = 0; d < 3; d++)
                             p->x[d][k] = x[d];
-                        p->volume[k] = h * h * h;
+                        p->volume[k] = volume;
                         p->density[k] = lp->density;
                         p->radius[k] = 0.5 * h;
                         p->material[k] = lp->material;
@@ -116,11 +132,23 @@ pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_latti
             }
             gsl_rng_set(rng, lp->seed);
             for (int64_t i = 0; i < n; i++)
-                for (int d = 0; d < 3; d++)
+                for (int d = 0; d < (plate ? 2 : 3); d++)
                     p->x[d][i] += lp->perturb * (2.0 * gsl_rng_uniform(rng) - 1.0);
             gsl_rng_free(rng);
         }
         *out = p;
     }
     return PD_OK;
+}
+
+pd_status pd_lattice_make(const pd_region *regions, int nregions, const pd_lattice_params *lp,
+                          pd_particles **out)
+{
+    return make(regions, nregions, lp, 0, 0, out);
+}
+
+pd_status pd_plate_make(const pd_region *regions, int nregions, const pd_lattice_params *lp,
+                        double thickness, pd_particles **out)
+{
+    return make(regions, nregions, lp, 1, thickness, out);
 }

@@ -53,6 +53,12 @@ void pd_h5_debug(int on);
                                       Numerical Example": eps_machine, as in
                                       LAMMPS)                                  */
 #define PD_PMB_C_FACTOR 18.0       /* c = 18 K / (pi delta^4) (seed 000 eq. 6)  */
+#define PD_PMB_C_FACTOR_2D 12.0    /* c = 12 K / (pi H delta^3), 2-D plane
+                                      stress, K = E / (2 (1 - nu)) the 2-D
+                                      bulk modulus: 9 E / (pi H delta^3) (Ha &
+                                      Bobaru 2010; derivation in pd-run(1))   */
+#define PD_PMB_NU_3D 0.25          /* PMB's Poisson ratio in 3-D (seed 000)     */
+#define PD_PMB_NU_2D (1.0 / 3.0)   /* PMB's Poisson ratio in 2-D (seed 000)     */
 
 /* Numerical guards of a run (not from the seeds: pd's own choices). */
 #define PD_LOST_MARGIN_FAC 10.0 /* lost beyond 10 box edges outside the body */
@@ -70,7 +76,9 @@ typedef struct {
     int32_t *material; /* material id                                      */
     int64_t *id;       /* global id, 1-based, stable across files          */
     double spacing;    /* lattice spacing Delta x, m                       */
-    int dimension;     /* 3 (2 reserved for plates)                        */
+    int dimension;     /* 3, or 2 for a plate: sites in the plane z = 0    */
+    double thickness;  /* plate thickness H, m (dimension 2; 0 in 3-D):
+                          volumes are spacing^2 H                          */
 } pd_particles;
 
 pd_particles *pd_particles_new(int64_t n);
@@ -112,6 +120,14 @@ typedef struct {
  * every subtract region; z outermost, x innermost, as LAMMPS create_atoms. */
 pd_status pd_lattice_make(const pd_region *regions, int nregions,
                           const pd_lattice_params *lp, pd_particles **out);
+/* A 2-D plate of thickness H (m, > 0): the square lattice of sites
+ * (i spacing, j spacing, 0), anchored at the origin, where the point
+ * (x, y, 0) is in the body (the regions are cut at z = 0; none there is an
+ * error), y outermost and x innermost; volume spacing^2 H, radius
+ * spacing/2, dimension 2 and thickness H, and a perturbation only in x and
+ * y. */
+pd_status pd_plate_make(const pd_region *regions, int nregions, const pd_lattice_params *lp,
+                        double thickness, pd_particles **out);
 
 /* ---------------------------------------------------------------- cells */
 
@@ -261,6 +277,7 @@ typedef struct {
                               reference bounding box is lost, m (0: ten
                               times the box's largest edge)              */
     int threads;
+    double youngs_modulus; /* E, Pa (0 unless --youngs-modulus gave K)   */
 } pd_scene;
 
 /* ---------------------------------------------------------------- run */
@@ -285,6 +302,24 @@ double pd_pmb_c_from_bulk(double bulk_modulus, double horizon);
  * s0 = sqrt(10 G0 / (pi c delta^5)) (seed 004 eqs. 26-27; with
  * c = 18 K / (pi delta^4) this is sqrt(5 G0 / (9 K delta))). */
 double pd_pmb_s0_from_energy(double g0, double c, double horizon);
+
+/* 2-D plates, plane stress (lib/plate.c; the derivations in pd-run(1)).
+ * Matching the strain energy density of an isotropic in-plane stretch,
+ * c pi H delta^3 eps^2 / 6 = 2 K eps^2, gives
+ *   c = 12 K / (pi H delta^3) = 9 E / (pi H delta^3)    (nu = 1/3)
+ * with K = E / (2 (1 - nu)) the 2-D (plane-stress) bulk modulus, and the
+ * energy of the bonds across a unit area of crack, G0 = c s0^2 H delta^4 / 4,
+ * gives s0 = sqrt(4 G0 / (c H delta^4)) = sqrt(4 pi G0 / (9 E delta)). */
+double pd_pmb_c_from_bulk_2d(double bulk_modulus, double horizon, double thickness);
+double pd_pmb_s0_from_energy_2d(double g0, double c, double horizon, double thickness);
+/* The bulk modulus PMB has for Young's modulus E: with its fixed Poisson
+ * ratio, K = E / (3 (1 - 2 nu)) = 2E/3 in 3-D (nu = 1/4) and
+ * K = E / (2 (1 - nu)) = 3E/4 in 2-D plane stress (nu = 1/3). */
+double pd_pmb_bulk_from_youngs(double youngs_modulus, int dimension);
+/* c and s0 for the particles' dimension: the 3-D formulas above, or the
+ * 2-D ones with p->thickness. */
+double pd_pmb_c_for(const pd_particles *p, double bulk_modulus, double horizon);
+double pd_pmb_s0_for(const pd_particles *p, double g0, double c, double horizon);
 
 /* Stable step of seed 004 eq. 46 for the bonds of the scene's model. */
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s);

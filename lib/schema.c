@@ -164,6 +164,10 @@ pd_status pd_read_particles(const pd_file *f, pd_particles **out)
     s = pd_h5_read_attr_double(g, "spacing", &p->spacing);
     if (s == PD_OK && pd_h5_has_attr(g, "dimension"))
         s = pd_h5_read_attr_int(g, "dimension", &dim);
+    /* a plate (dimension 2) says its thickness */
+    int has_thickness = pd_h5_has_attr(g, "thickness");
+    if (s == PD_OK && dim == 2 && has_thickness)
+        s = pd_h5_read_attr_double(g, "thickness", &p->thickness);
     H5Gclose(g);
     if (s != PD_OK) {
         pd_particles_free(p);
@@ -172,13 +176,21 @@ pd_status pd_read_particles(const pd_file *f, pd_particles **out)
     p->dimension = (int)dim;
     if (!(p->spacing > 0) || !isfinite(p->spacing))
         s = pd_fail(PD_ERR_FORMAT, "'%s': /particles spacing must be positive", fn);
-    else if (dim != 3)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': /particles dimension %lld (this pd runs 3-D bodies)", fn,
-                    (long long)dim);
+    else if (dim != 3 && dim != 2)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /particles dimension %lld (this pd runs 3-D bodies and "
+                    "2-D plates)", fn, (long long)dim);
+    else if (dim == 2 && !has_thickness)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /particles of dimension 2 without a thickness", fn);
+    else if (dim == 2 && (!(p->thickness > 0) || !isfinite(p->thickness)))
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /particles thickness must be positive, not %g", fn,
+                    p->thickness);
     for (int64_t i = 0; i < n && s == PD_OK; i++) {
         if (!isfinite(p->x[0][i]) || !isfinite(p->x[1][i]) || !isfinite(p->x[2][i]))
             s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has a non-finite position", fn,
                         (long long)i);
+        else if (dim == 2 && p->x[2][i] != 0)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld of a plate (dimension 2) has z = %g, "
+                        "not 0", fn, (long long)i, p->x[2][i]);
         else if (!(p->volume[i] > 0) || !isfinite(p->volume[i]))
             s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has volume %g", fn, (long long)i,
                         p->volume[i]);
@@ -230,6 +242,8 @@ pd_status pd_write_particles(pd_file *f, const pd_particles *p)
             PD_OK &&
         (s = pd_h5_write_attr_doubles(g, "spacing", &p->spacing, 1)) == PD_OK)
         s = pd_h5_write_attr_int(g, "dimension", p->dimension);
+    if (s == PD_OK && p->dimension == 2)
+        s = pd_h5_write_attr_doubles(g, "thickness", &p->thickness, 1);
     free(pos);
     H5Gclose(g);
     return s;
@@ -546,6 +560,8 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
     TRY(pd_h5_write_attr_doubles(g, "c", &sc->c, 1));
     if (sc->bulk_modulus > 0)
         TRY(pd_h5_write_attr_doubles(g, "bulk_modulus", &sc->bulk_modulus, 1));
+    if (sc->youngs_modulus > 0)
+        TRY(pd_h5_write_attr_doubles(g, "youngs_modulus", &sc->youngs_modulus, 1));
     if (sc->has_failure) {
         TRY(pd_h5_write_attr_doubles(g, "s00", &sc->s00, 1));
         TRY(pd_h5_write_attr_doubles(g, "alpha", &sc->alpha, 1));
