@@ -55,8 +55,11 @@ pd_status pd_bc_parse(pd_bc_kind kind, const char *spec, pd_bc *bc)
                        spec, bc->set);
     bc->axis = c1[1] - 'x';
     pd_status s = pd_profile_parse(c1 + 3, &bc->profile);
-    if (s != PD_OK)
-        return pd_fail(s, "--%s: %s", pd_bc_option(kind), pd_errmsg());
+    if (s != PD_OK) {
+        char why[512]; /* the message is rewritten in place */
+        snprintf(why, sizeof why, "%s", pd_errmsg());
+        return pd_fail(s, "--%s %s: %s", pd_bc_option(kind), bc->set, why);
+    }
     return PD_OK;
 }
 
