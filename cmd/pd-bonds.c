@@ -142,8 +142,9 @@ int main(int argc, char **argv)
         return 1;
     }
     pd_bonds *b = NULL;
-    pd_status s = PD_OK;
-    if (!o.no_sort)
+    pd_sets *sets = NULL; /* carried through: by id, they survive the sort */
+    pd_status s = pd_read_sets(in, p, &sets);
+    if (s == PD_OK && !o.no_sort)
         s = pd_particles_sort_spatial(p, o.horizon);
     if (s == PD_OK)
         s = pd_bonds_build(p, o.horizon, &b);
@@ -159,6 +160,8 @@ int main(int argc, char **argv)
         s = pd_write_particles(out, p);
     if (s == PD_OK)
         s = pd_write_bonds(out, b);
+    if (s == PD_OK)
+        s = pd_write_sets(out, sets);
     if (s == PD_OK)
         s = pd_file_close(out);
     else
@@ -179,6 +182,7 @@ int main(int argc, char **argv)
             fprintf(stderr, PROG ": --crack %s: %lld bonds broken\n", o.crack_specs[c],
                     (long long)cut[c]);
     }
+    pd_sets_free(sets);
     pd_bonds_free(b);
     pd_particles_free(p);
     return s == PD_OK ? 0 : fail();

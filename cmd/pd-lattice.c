@@ -4,7 +4,9 @@
  * Sites n*spacing (integer n per axis, anchored at the origin like LAMMPS
  * `lattice sc`) inside the union of the given regions, minus the subtracted
  * ones; each particle gets volume spacing^3 and node radius spacing/2 (seed
- * 000, "Spatial Discretization", eq. 15).  Writes /particles of a pd-h5 file.
+ * 000, "Spatial Discretization", eq. 15).  Writes /particles of a pd-h5 file,
+ * and /sets: named sets of the particles made inside a region (--set), by
+ * global id, for the boundary conditions of pd-run.
  * With --dimension 2 it makes a plate: the square lattice of sites
  * (i spacing, j spacing, 0) where the regions, cut at z = 0, hold the point;
  * volume spacing^2 H for the thickness H of --thickness.
@@ -19,10 +21,14 @@
 #define PROG "pd-lattice"
 #include "cli.h"
 #define MAX_REGIONS 64
+#define MAX_SETS 64
 
 struct options {
     pd_region regions[MAX_REGIONS];
     int nregions;
+    char *set_names[MAX_SETS]; /* --set NAME=REGION, in order */
+    pd_region set_regions[MAX_SETS];
+    int nsets;
     pd_lattice_params lp;
     int has_spacing, has_density;
     int dimension;    /* 3, or 2 for a plate                          */
@@ -57,6 +63,11 @@ static void usage(FILE *out)
             "                    (i DX, j DX, 0) where the regions cut at z = 0 hold\n"
             "                    the point (x, y, 0); needs --thickness\n"
             "  --thickness H     the plate's thickness, m (> 0; volume DX^2 H)\n"
+            "  --set NAME=KIND,...\n"
+            "                    name the set of the particles made inside a region\n"
+            "                    (KIND box, cylinder or sphere, as --subtract), for\n"
+            "                    pd-run's boundary conditions; NAME of A-Z a-z 0-9 _ . -;\n"
+            "                    repeatable: --set top=box,0,1,0.9,1,0,1\n"
             "  -o, --output FILE output file, '-' for stdout (default '-')\n"
             "  -q, --quiet       no summary on stderr\n"
             "      --debug       print HDF5's own error stack\n"
@@ -77,10 +88,36 @@ static int add_region(struct options *o, pd_region_kind kind, const char *spec, 
     return 0;
 }
 
+/* --set NAME=KIND,...: a name and a region. */
+static int add_set(struct options *o, const char *arg)
+{
+    if (o->nsets == MAX_SETS)
+        return usage_error("too many sets", NULL);
+    const char *eq = strchr(arg, '=');
+    if (eq == NULL)
+        return usage_error("--set needs NAME=KIND,... (KIND box, cylinder or sphere), not", arg);
+    char name[PD_SET_NAME_MAX];
+    size_t len = (size_t)(eq - arg);
+    snprintf(name, sizeof name, "%.*s", (int)len, arg);
+    if (len >= sizeof name || !pd_set_name_ok(name))
+        return usage_error("--set NAME must be 1 to 63 of A-Z a-z 0-9 _ . - (not . or ..), not",
+                           arg);
+    for (int k = 0; k < o->nsets; k++)
+        if (strcmp(o->set_names[k], name) == 0)
+            return usage_error("--set: a name given twice:", name);
+    pd_region *r = &o->set_regions[o->nsets];
+    if (pd_region_parse_tagged(eq + 1, r) != PD_OK)
+        return usage_error(pd_errmsg(), NULL);
+    if ((o->set_names[o->nsets] = strdup(name)) == NULL)
+        return usage_error("out of memory", NULL);
+    o->nsets++;
+    return 0;
+}
+
 static int parse_options(int argc, char **argv, struct options *o)
 {
     enum { OPT_BOX = 256, OPT_CYL, OPT_SPHERE, OPT_SUB, OPT_SPACING, OPT_DENSITY, OPT_MATERIAL,
-           OPT_PERTURB, OPT_SEED, OPT_DIMENSION, OPT_THICKNESS };
+           OPT_PERTURB, OPT_SEED, OPT_DIMENSION, OPT_THICKNESS, OPT_SET };
     static const struct option longopts[] = {
         {"box", required_argument, 0, OPT_BOX},
         {"cylinder", required_argument, 0, OPT_CYL},
@@ -93,6 +130,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"seed", required_argument, 0, OPT_SEED},
         {"dimension", required_argument, 0, OPT_DIMENSION},
         {"thickness", required_argument, 0, OPT_THICKNESS},
+        {"set", required_argument, 0, OPT_SET},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -156,6 +194,10 @@ static int parse_options(int argc, char **argv, struct options *o)
                 return usage_error("--thickness must be a positive number, not", optarg);
             o->has_thickness = 1;
             break;
+        case OPT_SET:
+            if ((rc = add_set(o, optarg)))
+                return rc;
+            break;
         case 'o':
             o->output = optarg;
             break;
@@ -186,6 +228,12 @@ static int parse_options(int argc, char **argv, struct options *o)
     return 0;
 }
 
+static void free_set_names(struct options *o)
+{
+    for (int k = 0; k < o->nsets; k++)
+        free(o->set_names[k]);
+}
+
 int main(int argc, char **argv)
 {
     /* before getopt_long permutes argv */
@@ -193,6 +241,7 @@ int main(int argc, char **argv)
     struct options o;
     int rc = parse_options(argc, argv, &o);
     if (rc) {
+        free_set_names(&o);
         free(cmdline);
         return rc;
     }
@@ -200,31 +249,42 @@ int main(int argc, char **argv)
     remove_temps_on_signal();
 
     pd_particles *p = NULL;
-    pd_status made = o.dimension == 2
-                         ? pd_plate_make(o.regions, o.nregions, &o.lp, o.thickness, &p)
-                         : pd_lattice_make(o.regions, o.nregions, &o.lp, &p);
-    if (made != PD_OK) {
-        free(cmdline);
-        return fail();
-    }
+    pd_sets *sets = NULL;
+    pd_status s = o.dimension == 2
+                      ? pd_plate_make(o.regions, o.nregions, &o.lp, o.thickness, &p)
+                      : pd_lattice_make(o.regions, o.nregions, &o.lp, &p);
+    if (s == PD_OK && (sets = pd_sets_new()) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory");
+    for (int k = 0; k < o.nsets && s == PD_OK; k++)
+        s = pd_sets_add_region(sets, o.set_names[k], &o.set_regions[k], p);
     pd_file *out = NULL;
-    pd_status s = pd_file_create(o.output, &out);
+    if (s == PD_OK)
+        s = pd_file_create(o.output, &out);
     if (s == PD_OK)
         s = pd_write_header(out, NULL, cmdline ? cmdline : PROG);
     if (s == PD_OK)
         s = pd_write_particles(out, p);
     if (s == PD_OK)
+        s = pd_write_sets(out, sets);
+    if (s == PD_OK)
         s = pd_file_close(out);
     else
         pd_file_abort(out);
     free(cmdline);
+    free_set_names(&o);
     if (s != PD_OK) {
+        pd_sets_free(sets);
         pd_particles_free(p);
         return fail();
     }
-    if (!o.quiet)
+    if (!o.quiet) {
         fprintf(stderr, PROG ": %lld particles, spacing %g m%s\n", (long long)p->n, p->spacing,
                 p->dimension == 2 ? ", a 2-D plate" : "");
+        for (int k = 0; k < sets->count; k++)
+            fprintf(stderr, PROG ": set '%s': %lld particles\n", sets->set[k].name,
+                    (long long)sets->set[k].n);
+    }
+    pd_sets_free(sets);
     pd_particles_free(p);
     return 0;
 }

@@ -5,7 +5,9 @@
  * Velocity Verlet (seed 000 Algorithm 1) over the PMB bond force (seed 000
  * eqs. 5-7), with, only when declared: bond failure by critical stretch
  * (eqs. 8-9), short-range contact (eqs. 13-15) and a moving spherical
- * indenter (LAMMPS fix indent).  The time step defaults to the stable step
+ * indenter (LAMMPS fix indent), and boundary conditions on the particle
+ * sets of pd-lattice --set (seed 004 §2: body forces and prescribed
+ * velocity or displacement in a layer).  The time step defaults to the stable step
  * of seed 004 eq. 46 times a safety factor; a larger --dt is refused.
  * Writes the model, the resolved scene (/scene) and frames (/frames).
  * A 2-D plate (/particles dimension 2) takes the plane-stress constants of
@@ -23,6 +25,7 @@
 
 #define PROG "pd-run"
 #include "cli.h"
+#define MAX_BC 64
 
 struct options {
     pd_scene sc;
@@ -35,6 +38,8 @@ struct options {
     const char *output;
     const char *restart; /* --restart RUN.h5: go on from its last frame */
     int quiet, timing, debug;
+    pd_bc bc[MAX_BC]; /* --velocity-bc, --displacement-bc, --body-force */
+    int nbc;
 };
 
 static void usage(FILE *out)
@@ -69,6 +74,17 @@ static void usage(FILE *out)
             "                        moving spherical indenter: centre X,Y,Z (m) at t = 0,\n"
             "                        radius R (m), force density K (R-r)^2 with K in\n"
             "                        N/m^5, velocity VX,VY,VZ (m/s)\n"
+            "  --velocity-bc SET,AXIS,PROFILE\n"
+            "                        hold the AXIS (x|y|z) motion of the particles of SET\n"
+            "                        (pd-lattice --set): velocity PROFILE(t), m/s, and\n"
+            "                        position x + its integral; repeatable\n"
+            "  --displacement-bc SET,AXIS,PROFILE\n"
+            "                        hold the AXIS displacement at PROFILE(t), m\n"
+            "  --body-force SET,AXIS,PROFILE\n"
+            "                        add the force density PROFILE(t), N/m^3, along AXIS\n"
+            "                        PROFILE: a number; points:T0,V0,T1,V1,... (piecewise\n"
+            "                        linear); table:FILE ('time value' lines); or\n"
+            "                        pulses:V1,D1,V2,D2,... (V1 for D1 s from t = 0, ...)\n"
             "Time:\n"
             "  --steps N             number of steps\n"
             "  --dt DT               time step, s (default: stable step x safety)\n"
@@ -108,6 +124,27 @@ static int positive(const char *opt, const char *arg, double *out)
         return usage_error(msg, arg);
     }
     return 0;
+}
+
+/* --velocity-bc, --displacement-bc, --body-force SET,AXIS,PROFILE. */
+static int parse_bc(struct options *o, pd_bc_kind kind, const char *arg)
+{
+    if (o->nbc == MAX_BC)
+        return usage_error("too many boundary conditions", NULL);
+    pd_status s = pd_bc_parse(kind, arg, &o->bc[o->nbc]);
+    if (s == PD_ERR_IO || s == PD_ERR_NOMEM)
+        return fail(); /* an unreadable table: a runtime error */
+    if (s != PD_OK)
+        return usage_error(pd_errmsg(), NULL);
+    o->nbc++;
+    return 0;
+}
+
+static void free_bc(struct options *o)
+{
+    for (int k = 0; k < o->nbc; k++)
+        pd_profile_free(&o->bc[k].profile);
+    o->nbc = 0;
 }
 
 /* --fields LIST: the optional per-particle fields of the frames. */
@@ -240,7 +277,8 @@ static int parse_options(int argc, char **argv, struct options *o)
 {
     enum { OPT_MODEL = 256, OPT_C, OPT_K, OPT_FAILURE, OPT_CONTACT, OPT_SKIN, OPT_INDENTER,
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
-           OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E };
+           OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
+           OPT_BODY };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -262,6 +300,9 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"restart", required_argument, 0, OPT_RESTART},
         {"fields", required_argument, 0, OPT_FIELDS},
         {"lost-margin", required_argument, 0, OPT_LOST},
+        {"velocity-bc", required_argument, 0, OPT_VBC},
+        {"displacement-bc", required_argument, 0, OPT_DBC},
+        {"body-force", required_argument, 0, OPT_BODY},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -400,6 +441,15 @@ static int parse_options(int argc, char **argv, struct options *o)
             if ((rc = parse_fields(optarg, &o->sc.fields)))
                 return rc;
             break;
+        case OPT_VBC:
+        case OPT_DBC:
+        case OPT_BODY:
+            if ((rc = parse_bc(o, c == OPT_VBC   ? PD_BC_VELOCITY
+                                  : c == OPT_DBC ? PD_BC_DISPLACEMENT
+                                                 : PD_BC_BODY_FORCE,
+                               optarg)))
+                return rc;
+            break;
         case 'q':
             o->quiet = 1;
             break;
@@ -432,9 +482,21 @@ static int parse_options(int argc, char **argv, struct options *o)
 static char *scene_text(const pd_scene *s)
 {
     size_t cap = 2048;
+    char *prof[MAX_BC] = {NULL};
+    for (int k = 0; k < s->nbc; k++) { /* a table in resolved form */
+        if ((prof[k] = pd_profile_text(&s->bc[k].profile)) == NULL) {
+            for (int m = 0; m < k; m++)
+                free(prof[m]);
+            return NULL;
+        }
+        cap += strlen(prof[k]) + 2 * PD_SET_NAME_MAX;
+    }
     char *t = malloc(cap), *p = t;
-    if (t == NULL)
+    if (t == NULL) {
+        for (int k = 0; k < s->nbc; k++)
+            free(prof[k]);
         return NULL;
+    }
     p += sprintf(p, "model pmb\nc %.17g\n", s->c);
     if (s->has_failure)
         p += sprintf(p, "failure %.17g,%.17g\n", s->s00, s->alpha);
@@ -452,7 +514,12 @@ static char *scene_text(const pd_scene *s)
                      s->fields & PD_FIELD_STRESS ? "stress" : "");
     p += sprintf(p, "lost-margin %.17g\n", s->lost_margin);
     if (s->dt > s->dt_stable)
-        sprintf(p, "force-dt\n");
+        p += sprintf(p, "force-dt\n");
+    for (int k = 0; k < s->nbc; k++) {
+        p += sprintf(p, "%s %s,%c,%s\n", pd_bc_option(s->bc[k].kind), s->bc[k].set,
+                     'x' + s->bc[k].axis, prof[k]);
+        free(prof[k]);
+    }
     return t;
 }
 
@@ -643,10 +710,12 @@ struct held {
     pd_particles *p;
     pd_bonds *b;
     pd_sim *sim;
+    pd_sets *sets;
     pd_restart r;
     double *v0[3];
     uint64_t *bits0;
     char *cmdline, *text;
+    struct options *opts; /* its profiles */
 };
 
 static void release(struct held *h)
@@ -655,6 +724,7 @@ static void release(struct held *h)
         pd_file_close(h->in);
     pd_sim_free(h->sim);
     pd_bonds_free(h->b);
+    pd_sets_free(h->sets);
     pd_particles_free(h->p);
     pd_restart_free(&h->r);
     for (int d = 0; d < 3; d++)
@@ -662,6 +732,8 @@ static void release(struct held *h)
     free(h->bits0);
     free(h->cmdline);
     free(h->text);
+    if (h->opts)
+        free_bc(h->opts);
 }
 
 int main(int argc, char **argv)
@@ -688,9 +760,11 @@ int main(int argc, char **argv)
             rc = usage_error("--restart needs --steps N, the steps to add", NULL);
     }
     if (rc) {
+        free_bc(&o);
         free(h.cmdline);
         return rc;
     }
+    h.opts = &o;
     pd_h5_debug(o.debug);
     remove_temps_on_signal();
     if (o.sc.threads > 0)
@@ -705,6 +779,8 @@ int main(int argc, char **argv)
         s = pd_read_particles(h.in, &h.p);
     if (s == PD_OK)
         s = pd_read_bonds(h.in, h.p, &h.b);
+    if (s == PD_OK)
+        s = pd_read_sets(h.in, h.p, &h.sets);
     if (s != PD_OK) {
         if (restart)
             pd_file_abort(h.in);
@@ -717,6 +793,9 @@ int main(int argc, char **argv)
     pd_particles *p = h.p;
     pd_bonds *b = h.b;
     pd_scene *sc = &o.sc;
+    sc->nbc = o.nbc;
+    sc->bc = o.bc;
+    sc->sets = h.sets;
     if (o.has_e) /* PMB's fixed Poisson ratio: K from E by dimension */
         sc->bulk_modulus = pd_pmb_bulk_from_youngs(sc->youngs_modulus, p->dimension);
     if (o.has_k || o.has_e)
@@ -777,6 +856,8 @@ int main(int argc, char **argv)
             s = pd_write_particles(h.out, p);
         if (s == PD_OK)
             s = pd_write_bonds(h.out, b);
+        if (s == PD_OK)
+            s = pd_write_sets(h.out, h.sets);
     }
     if (s == PD_OK)
         s = pd_write_scene(h.out, sc, pd_sim_effects(h.sim), h.text ? h.text : "");
@@ -809,6 +890,17 @@ int main(int argc, char **argv)
                 sc->dt_stable, (long long)nsteps, restart ? " more" : "");
     if (!o.quiet)
         log_constants(p, sc, &o);
+    for (int k = 0; k < o.nbc && !o.quiet; k++) {
+        const pd_set *set = pd_sets_find(h.sets, o.bc[k].set);
+        char *prof = pd_profile_text(&o.bc[k].profile);
+        fprintf(stderr, PROG ": --%s %s,%c,%s on %lld particles (%s)\n",
+                pd_bc_option(o.bc[k].kind), o.bc[k].set, 'x' + o.bc[k].axis,
+                prof ? prof : "?", (long long)(set ? set->n : 0),
+                o.bc[k].kind == PD_BC_VELOCITY       ? "velocity held, m/s"
+                : o.bc[k].kind == PD_BC_DISPLACEMENT ? "displacement held, m"
+                                                     : "force density, N/m^3");
+        free(prof);
+    }
     if (!o.quiet && restart)
         fprintf(stderr, PROG ": going on from step %lld of '%s'\n", (long long)first, o.restart);
 

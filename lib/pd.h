@@ -278,6 +278,10 @@ typedef struct {
                               times the box's largest edge)              */
     int threads;
     double youngs_modulus; /* E, Pa (0 unless --youngs-modulus gave K)   */
+    int nbc;                     /* boundary conditions (pd_bc), in order   */
+    const struct pd_bc *bc;
+    const struct pd_sets *sets;  /* the model's particle sets (may be NULL
+                                    when nbc is 0)                         */
 } pd_scene;
 
 /* ---------------------------------------------------------------- run */
@@ -412,6 +416,105 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
 double *const *pd_sim_positions(const pd_sim *sim);
 double *const *pd_sim_velocities(const pd_sim *sim);
 const uint64_t *pd_sim_intact(const pd_sim *sim);
+
+/* ---------------------------------------------------------------- sets */
+
+/* Named particle sets (lib/sets.c), stored by global id so that they
+ * survive the reordering of rows (pd-bonds' spatial sort): /sets/NAME, an
+ * int64 dataset of ascending ids (man 5 pd-h5). */
+#define PD_SET_NAME_MAX 64 /* bytes of a set name, with the NUL */
+
+typedef struct pd_file pd_file; /* (repeated under files below) */
+
+typedef struct {
+    char name[PD_SET_NAME_MAX]; /* [A-Za-z0-9_.-]+, not "." or ".."        */
+    int64_t n;                  /* particles in the set, >= 1              */
+    int64_t *id;                /* n global ids, strictly ascending        */
+} pd_set;
+
+typedef struct pd_sets {
+    int count;
+    pd_set *set;
+} pd_sets;
+
+pd_sets *pd_sets_new(void);
+void pd_sets_free(pd_sets *s);
+/* Is `name` a valid set name? */
+int pd_set_name_ok(const char *name);
+/* Add the set `name` of the particles of p inside region r (its subtract
+ * flag is ignored).  PD_ERR_INVALID for a bad or taken name and for a set
+ * that holds no particle. */
+pd_status pd_sets_add_region(pd_sets *s, const char *name, const pd_region *r,
+                             const pd_particles *p);
+/* The set called `name`, or NULL. */
+const pd_set *pd_sets_find(const pd_sets *s, const char *name);
+/* The local rows of a set's particles (ascending ids order), malloc'ed;
+ * PD_ERR_INVALID when an id is not one of p's. */
+pd_status pd_set_rows(const pd_set *set, const pd_particles *p, int64_t **rows);
+/* Read /sets (an empty pd_sets when the file has none), checking every set
+ * against the particles p: names, type, rank, order, ids that exist. */
+pd_status pd_read_sets(const pd_file *f, const pd_particles *p, pd_sets **out);
+/* Write /sets (nothing when there is no set). */
+pd_status pd_write_sets(pd_file *f, const pd_sets *s);
+
+/* ---------------------------------------------------------------- profiles */
+
+/* A function of time g(t) (lib/profile.c) with its exact integral
+ * G(t) = int_0^t g and its derivative g'(t) where g is smooth (the right
+ * derivative at a corner; 0 at a jump).  Forms:
+ *   V                        constant V
+ *   points:T0,V0,T1,V1,...   piecewise linear through (T_k, V_k), times
+ *                            strictly increasing, held at V0 before T0 and
+ *                            at the last value after the last time
+ *   table:FILE               the same from a file of `time value` lines
+ *                            (`#` starts a comment)
+ *   pulses:V1,D1,V2,D2,...   V1 for 0 <= t < D1, V2 for the next D2, ...,
+ *                            0 before 0 and after the last (D_k > 0) */
+typedef enum { PD_PROFILE_CONSTANT, PD_PROFILE_POINTS, PD_PROFILE_PULSES } pd_profile_kind;
+
+typedef struct {
+    pd_profile_kind kind;
+    int64_t n;  /* points, or pulses                                        */
+    double *t;  /* n: points: times, s; pulses: start times (0, D1, ...), s */
+    double *v;  /* n: values (constant: one)                                */
+    double *G;  /* n+1: int_0^{t_k} g (pulses: G[n] at the last end)        */
+    double *d;  /* n: pulses: durations D_k, s                              */
+    double end; /* pulses: end of the last pulse, s                         */
+} pd_profile;
+
+/* Parse a profile; PD_ERR_INVALID for a malformed one, PD_ERR_IO for a
+ * table file that cannot be read.  Free with pd_profile_free. */
+pd_status pd_profile_parse(const char *spec, pd_profile *g);
+void pd_profile_free(pd_profile *g);
+double pd_profile_value(const pd_profile *g, double t);
+double pd_profile_integral(const pd_profile *g, double t);
+double pd_profile_rate(const pd_profile *g, double t);
+/* The profile in a form pd_profile_parse reads back to the same numbers
+ * (a table as points:..., %.17g); malloc'ed, NULL when out of memory. */
+char *pd_profile_text(const pd_profile *g);
+
+/* ---------------------------------------------------------------- boundary conditions */
+
+/* A boundary condition on a particle set (lib/bc.c), given to a run in
+ * pd_scene.bc.  For the particles of the set, along `axis`:
+ *   PD_BC_VELOCITY      y = x + G(t) and v = g(t), held exactly
+ *   PD_BC_DISPLACEMENT  y = x + g(t) and v = g'(t), held exactly
+ *   PD_BC_BODY_FORCE    a force density b = g(t), N/m^3, added to f
+ * Two prescribed motions of the same particle and axis are refused. */
+typedef enum { PD_BC_VELOCITY, PD_BC_DISPLACEMENT, PD_BC_BODY_FORCE } pd_bc_kind;
+
+typedef struct pd_bc {
+    pd_bc_kind kind;
+    char set[PD_SET_NAME_MAX];
+    int axis;            /* 0, 1, 2 for x, y, z */
+    pd_profile profile;
+} pd_bc;
+
+/* Parse "SET,AXIS,PROFILE" (AXIS x|y|z); the status of pd_profile_parse
+ * for the profile. */
+pd_status pd_bc_parse(pd_bc_kind kind, const char *spec, pd_bc *bc);
+/* The option that gives a condition, e.g. "velocity-bc". */
+const char *pd_bc_option(pd_bc_kind kind);
 
 /* ---------------------------------------------------------------- files */
 

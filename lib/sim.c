@@ -27,6 +27,7 @@ static pd_status add_effect(pd_sim *sim, const pd_effect *e)
             return s;
     }
     sim->neffects++;
+    sim->constrained |= e->constrain != NULL;
     size_t len = strlen(sim->names);
     snprintf(sim->names + len, sizeof sim->names - len, "%s%s", len ? " " : "", e->name);
     return PD_OK;
@@ -117,6 +118,15 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
         st = add_effect(sim, &pd_effect_contact);
     if (st == PD_OK && s->has_indenter)
         st = add_effect(sim, &pd_effect_indenter);
+    int body = 0, held = 0;
+    for (int k = 0; k < s->nbc; k++) {
+        body |= s->bc[k].kind == PD_BC_BODY_FORCE;
+        held |= s->bc[k].kind != PD_BC_BODY_FORCE;
+    }
+    if (st == PD_OK && body)
+        st = add_effect(sim, &pd_effect_body_force);
+    if (st == PD_OK && held)
+        st = add_effect(sim, &pd_effect_prescribed);
     if (st != PD_OK) {
         pd_sim_free(sim);
         return st;
@@ -175,6 +185,8 @@ static pd_status compute_forces(pd_sim *sim)
     for (int d = 0; d < 3; d++)
         memset(sim->f[d], 0, (size_t)sim->n * sizeof(double));
     for (int k = 0; k < sim->neffects; k++) {
+        if (sim->effects[k]->force == NULL)
+            continue;
         double t0 = pd_wtime();
         pd_status s = sim->effects[k]->force(sim, sim->state[k]);
         sim->timers[sim->effects[k]->timer] += pd_wtime() - t0;
@@ -201,10 +213,27 @@ static inline int outside(const pd_sim *sim, int64_t i)
     return out;
 }
 
+/* The constrain hooks of the effects at a phase of the step (nothing to
+ * do, and no cost, when no effect holds prescribed motion). */
+static pd_status constrain(pd_sim *sim, int phase)
+{
+    if (!sim->constrained)
+        return PD_OK;
+    double t0 = pd_wtime();
+    pd_status s = PD_OK;
+    for (int k = 0; k < sim->neffects && s == PD_OK; k++)
+        if (sim->effects[k]->constrain)
+            s = sim->effects[k]->constrain(sim, sim->state[k], phase);
+    sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
+    return s;
+}
+
 pd_status pd_sim_setup(pd_sim *sim)
 {
     sim->setup = 1;
-    pd_status s = compute_forces(sim);
+    pd_status s = constrain(sim, PD_PHASE_SETUP);
+    if (s == PD_OK)
+        s = compute_forces(sim);
     sim->setup = 0;
     pd_energy e;
     if (s == PD_OK && (s = pd_sim_energy(sim, &e, NULL)) == PD_OK)
@@ -294,6 +323,9 @@ pd_status pd_sim_step(pd_sim *sim)
     const double dt = sim->sc.dt;
     const uint8_t *lost = sim->lost;
     half_kick(sim);
+    pd_status s = constrain(sim, PD_PHASE_KICK1);
+    if (s != PD_OK)
+        return s;
     int away = 0;
 #pragma omp parallel for schedule(static) reduction(| : away)
     for (int64_t i = 0; i < sim->n; i++) {
@@ -305,7 +337,9 @@ pd_status pd_sim_step(pd_sim *sim)
     sim->step++;
     sim->time = (double)sim->step * dt;
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
-    pd_status s = away ? take_lost(sim) : PD_OK;
+    s = constrain(sim, PD_PHASE_DRIFT);
+    if (s == PD_OK && away)
+        s = take_lost(sim);
     if (s != PD_OK)
         return s;
     s = compute_forces(sim);
@@ -314,6 +348,8 @@ pd_status pd_sim_step(pd_sim *sim)
     t0 = pd_wtime();
     int bad = half_kick(sim);
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
+    if (!bad && (s = constrain(sim, PD_PHASE_KICK2)) != PD_OK)
+        return s;
     return bad ? not_finite(sim) : PD_OK;
 }
 

@@ -24,7 +24,16 @@ typedef struct pd_effect {
     /* Add each particle's peridynamic stress from the effect's bonds, Pa,
      * to s[9i + 3a + b] (pd_sim_stress); NULL: the effect adds none. */
     void (*stress)(const pd_sim *sim, void *state, double *s);
+    /* Hold prescribed motion at a phase of the step (pd_phase); NULL:
+     * none.  The work it does goes into sim->work. */
+    pd_status (*constrain)(pd_sim *sim, void *state, int phase);
 } pd_effect;
+
+/* Where pd_effect.constrain is called: in pd_sim_setup before the first
+ * forces, and in pd_sim_step after the first half kick, after the drift
+ * (step and time already n+1, before the forces) and after the second
+ * half kick. */
+enum { PD_PHASE_SETUP, PD_PHASE_KICK1, PD_PHASE_DRIFT, PD_PHASE_KICK2 };
 
 /* Deterministic parallel sums: fixed chunks, summed in order. */
 #define PD_SUM_CHUNK 4096
@@ -99,6 +108,7 @@ struct pd_sim {
     char names[256];
     double timers[PD_T_COUNT];
     int64_t contact_builds;
+    int constrained;    /* some effect has a constrain hook              */
 };
 
 /* Break every bond of particle i (both halves). */
@@ -111,5 +121,7 @@ extern const pd_effect pd_effect_pmb;
 extern const pd_effect pd_effect_pmb_failure;
 extern const pd_effect pd_effect_contact;
 extern const pd_effect pd_effect_indenter;
+extern const pd_effect pd_effect_body_force;
+extern const pd_effect pd_effect_prescribed;
 
 #endif
