@@ -108,5 +108,7 @@ extern const pd_effect pd_effect_pmb;
 extern const pd_effect pd_effect_pmb_failure;
 extern const pd_effect pd_effect_contact;
 extern const pd_effect pd_effect_indenter;
+extern const pd_effect pd_effect_lps;
+extern const pd_effect pd_effect_lps_failure;
 
 #endif
