@@ -33,6 +33,7 @@ struct options {
     double g0;       /* J/m^2                                       */
     int has_e;       /* --youngs-modulus: K from E once the dimension is known */
     int has_c, has_k, has_dt, has_steps, force_dt, has_status, has_output;
+    int has_g, has_influence; /* --shear-modulus, --influence (LPS) */
     int64_t status_every;
     const char *input;
     const char *output;
@@ -50,22 +51,26 @@ static void usage(FILE *out)
             "Integrate a peridynamic model (pd-h5 with /bonds); INPUT '-' is stdin.\n"
             "\n"
             "Model:\n"
-            "  --model pmb           prototype microelastic brittle (default)\n"
-            "  --c C                 micromodulus, N/m^6\n"
+            "  --model pmb|lps       prototype microelastic brittle (default) or linear\n"
+            "                        peridynamic solid\n"
+            "  --c C                 micromodulus, N/m^6 (pmb)\n"
             "  --bulk-modulus K      bulk modulus, Pa (c = 18K/(pi delta^4));\n"
             "                        the last of --c, --bulk-modulus and\n"
             "                        --youngs-modulus wins; for a 2-D plate K is the\n"
             "                        plane-stress bulk modulus and c = 12K/(pi H delta^3)\n"
-            "  --youngs-modulus E    Young's modulus, Pa: K = 2E/3 in 3-D (PMB has\n"
+            "  --youngs-modulus E    Young's modulus, Pa (pmb): K = 2E/3 in 3-D (PMB has\n"
             "                        nu = 1/4), K = 3E/4 for a 2-D plate (plane stress,\n"
             "                        nu = 1/3: c = 9E/(pi H delta^3))\n"
+            "  --shear-modulus G     shear modulus, Pa (lps, required there)\n"
+            "  --influence W         influence function of lps: 1/r (default), 1 or\n"
+            "                        gaussian (exp(-|xi|^2/delta^2)); lps is 3-D only\n"
             "Effects (each only when given):\n"
             "  --failure S00,ALPHA   critical stretch s0 = S00 - ALPHA s_min (both\n"
             "                        dimensionless)\n"
             "  --failure-energy G0[,ALPHA]\n"
             "                        the same with S00 from the fracture energy G0 (J/m^2):\n"
             "                        sqrt(10 G0/(pi c delta^5)) = sqrt(5 G0/(9 K delta))\n"
-            "                        (seed 004 eq. 27); for a 2-D plate\n"
+            "                        (seed 004 eq. 27; pmb only); for a 2-D plate\n"
             "                        sqrt(4 G0/(c H delta^4)) = sqrt(4 pi G0/(9 E delta));\n"
             "                        ALPHA defaults to 0\n"
             "  --contact             short-range contact forces\n"
@@ -278,12 +283,14 @@ static int parse_options(int argc, char **argv, struct options *o)
     enum { OPT_MODEL = 256, OPT_C, OPT_K, OPT_FAILURE, OPT_CONTACT, OPT_SKIN, OPT_INDENTER,
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
-           OPT_BODY };
+           OPT_BODY, OPT_G, OPT_INFLUENCE };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
         {"bulk-modulus", required_argument, 0, OPT_K},
         {"youngs-modulus", required_argument, 0, OPT_E},
+        {"shear-modulus", required_argument, 0, OPT_G},
+        {"influence", required_argument, 0, OPT_INFLUENCE},
         {"failure", required_argument, 0, OPT_FAILURE},
         {"failure-energy", required_argument, 0, OPT_G0},
         {"contact", no_argument, 0, OPT_CONTACT},
@@ -317,9 +324,26 @@ static int parse_options(int argc, char **argv, struct options *o)
     while ((c = next_option(argc, argv, "o:qhV", longopts, usage, &o->debug, &status)) != -1) {
         switch (c) {
         case OPT_MODEL:
-            if (strcmp(optarg, "pmb") != 0)
-                return usage_error("unknown --model (this pd knows: pmb)", optarg);
+            if (strcmp(optarg, "pmb") == 0)
+                o->sc.model = PD_MODEL_PMB;
+            else if (strcmp(optarg, "lps") == 0)
+                o->sc.model = PD_MODEL_LPS;
+            else
+                return usage_error("unknown --model (this pd knows: pmb, lps)", optarg);
             break;
+        case OPT_G:
+            if ((rc = positive("--shear-modulus", optarg, &o->sc.shear_modulus)))
+                return rc;
+            o->has_g = 1;
+            break;
+        case OPT_INFLUENCE: {
+            int w = pd_influence_parse(optarg);
+            if (w < 0)
+                return usage_error("--influence takes 1/r, 1 or gaussian, not", optarg);
+            o->sc.influence = (pd_influence)w;
+            o->has_influence = 1;
+            break;
+        }
         case OPT_C:
             if ((rc = positive("--c", optarg, &o->sc.c)))
                 return rc;
@@ -461,6 +485,26 @@ static int parse_options(int argc, char **argv, struct options *o)
         return status;
     if (!o->has_steps)
         return usage_error("--steps is required", NULL);
+    if (o->sc.model == PD_MODEL_LPS) {
+        if (o->has_e)
+            return usage_error("--youngs-modulus is for pmb (Poisson ratio 1/4); --model lps "
+                               "takes --bulk-modulus and --shear-modulus",
+                               NULL);
+        if (o->has_c)
+            return usage_error("--c is the PMB micromodulus; --model lps takes --bulk-modulus "
+                               "and --shear-modulus",
+                               NULL);
+        if (!o->has_k || !o->has_g)
+            return usage_error("--model lps needs --bulk-modulus and --shear-modulus", NULL);
+        if (o->has_g0)
+            return usage_error("--failure-energy derives s00 for PMB (seed 004 eq. 27); with "
+                               "--model lps give --failure S00,ALPHA",
+                               NULL);
+    } else if (o->has_g || o->has_influence)
+        return usage_error(o->has_g ? "--shear-modulus is for --model lps (PMB has Poisson "
+                                      "ratio 1/4: only K)"
+                                    : "--influence is for --model lps",
+                           NULL);
     if (!o->has_c && !o->has_k && !o->has_e)
         return usage_error("give the stiffness: --c or --bulk-modulus (or --youngs-modulus)", NULL);
     if (o->restart) { /* the run file is the input and, without -o, the output */
@@ -497,7 +541,11 @@ static char *scene_text(const pd_scene *s)
             free(prof[k]);
         return NULL;
     }
-    p += sprintf(p, "model pmb\nc %.17g\n", s->c);
+    if (s->model == PD_MODEL_LPS)
+        p += sprintf(p, "model lps\nbulk-modulus %.17g\nshear-modulus %.17g\ninfluence %s\n",
+                     s->bulk_modulus, s->shear_modulus, pd_influence_name(s->influence));
+    else
+        p += sprintf(p, "model pmb\nc %.17g\n", s->c);
     if (s->has_failure)
         p += sprintf(p, "failure %.17g,%.17g\n", s->s00, s->alpha);
     if (s->has_contact)
@@ -802,6 +850,14 @@ int main(int argc, char **argv)
         sc->c = pd_pmb_c_for(p, sc->bulk_modulus, b->horizon);
     if (!o.has_k && !o.has_e)
         sc->bulk_modulus = sc->youngs_modulus = 0; /* a scene's K or E that --c overrode */
+    if (sc->model == PD_MODEL_LPS && p->dimension == 2) {
+        fprintf(stderr, PROG ": error: --model lps is for 3-D bodies; '%s' is a 2-D plate (run "
+                             "it with pmb)\n", o.input);
+        if (restart)
+            pd_file_abort(h.in), h.in = NULL;
+        release(&h);
+        return 1;
+    }
     if (o.has_g0)
         sc->s00 = pd_pmb_s0_for(p, o.g0, sc->c, b->horizon);
     if (sc->has_contact && !(sc->contact_skin > 0))
@@ -901,6 +957,11 @@ int main(int argc, char **argv)
                                                      : "force density, N/m^3");
         free(prof);
     }
+    if (!o.quiet && sc->model == PD_MODEL_LPS)
+        fprintf(stderr,
+                PROG ": model lps (seed 000 eqs. 3-4, Algorithms 2-4): K %g Pa, G %g Pa, "
+                     "influence %s; contact stiffness from c = 18K/(pi delta^4)\n",
+                sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence));
     if (!o.quiet && restart)
         fprintf(stderr, PROG ": going on from step %lld of '%s'\n", (long long)first, o.restart);
 

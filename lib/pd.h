@@ -59,6 +59,7 @@ void pd_h5_debug(int on);
                                       Bobaru 2010; derivation in pd-run(1))   */
 #define PD_PMB_NU_3D 0.25          /* PMB's Poisson ratio in 3-D (seed 000)     */
 #define PD_PMB_NU_2D (1.0 / 3.0)   /* PMB's Poisson ratio in 2-D (seed 000)     */
+#define PD_LPS_SHEAR_FACTOR 15.0   /* alpha = 15 G / m (seed 000 eq. 3)         */
 
 /* Numerical guards of a run (not from the seeds: pd's own choices). */
 #define PD_LOST_MARGIN_FAC 10.0 /* lost beyond 10 box edges outside the body */
@@ -251,7 +252,14 @@ pd_status pd_particles_sort_spatial(pd_particles *p, double cell);
 
 /* ---------------------------------------------------------------- scene */
 
-typedef enum { PD_MODEL_PMB = 0 } pd_model_kind;
+typedef enum { PD_MODEL_PMB = 0, PD_MODEL_LPS } pd_model_kind;
+
+/* Influence functions omega(|xi|) of the LPS model (seed 000 eq. 4). */
+typedef enum {
+    PD_INFLUENCE_INV_R = 0, /* 1/|xi| (LAMMPS peri/lps, the default)       */
+    PD_INFLUENCE_ONE,       /* 1                                           */
+    PD_INFLUENCE_GAUSSIAN   /* exp(-|xi|^2/delta^2)                        */
+} pd_influence;
 
 typedef struct {
     pd_model_kind model;
@@ -282,6 +290,8 @@ typedef struct {
     const struct pd_bc *bc;
     const struct pd_sets *sets;  /* the model's particle sets (may be NULL
                                     when nbc is 0)                         */
+    double shear_modulus;  /* G, Pa (LPS)                                   */
+    pd_influence influence;/* LPS influence function                       */
 } pd_scene;
 
 /* ---------------------------------------------------------------- run */
@@ -327,6 +337,24 @@ double pd_pmb_s0_for(const pd_particles *p, double g0, double c, double horizon)
 
 /* Stable step of seed 004 eq. 46 for the bonds of the scene's model. */
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s);
+
+/* LPS (lib/lps.c).  The influence function omega(|xi|) for a horizon. */
+double pd_lps_influence(pd_influence w, double length, double horizon);
+/* The weighted volume of every particle, m_i = sum_j omega |xi|^2 nu_ij V_j
+ * over the reference family (seed 000 eq. 4, Algorithm 3), into m (n). */
+void pd_lps_weighted_volume(const pd_particles *p, const pd_bonds *b, pd_influence w,
+                            double *m);
+/* The stable step of the LPS model (the analogue of seed 004 eq. 46; see
+ * lib/lps.c); pd_stable_dt calls it for PD_MODEL_LPS. */
+double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s);
+/* Name of an influence function ("1/r", "1", "gaussian"), and back (-1:
+ * unknown). */
+const char *pd_influence_name(pd_influence w);
+int pd_influence_parse(const char *name);
+/* The dilatation theta of every particle at the run's current positions
+ * and bond states (seed 000 Algorithm 4), into theta (n); LPS runs only
+ * (PD_ERR_INVALID otherwise). */
+pd_status pd_sim_dilatation(const pd_sim *sim, double *theta);
 
 /* Compute the forces of the initial state (step 0). */
 pd_status pd_sim_setup(pd_sim *sim);

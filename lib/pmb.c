@@ -396,6 +396,8 @@ const pd_effect pd_effect_pmb_failure = {
 
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
 {
+    if (s->model == PD_MODEL_LPS)
+        return pd_lps_stable_dt(p, b, s);
     /* seed 004 eq. 46: dt < sqrt(2 rho_i / sum_p V_p C_ip), C_ip = c/|xi|
      * for PMB (|df/deta| of f = c s), here with the partial volume nu V_p
      * that the discrete force uses; the smallest over all particles. */

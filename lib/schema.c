@@ -554,7 +554,7 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
         if (s == PD_OK)                                                                            \
             s = (call);                                                                            \
     } while (0)
-    TRY(pd_h5_write_attr_string(g, "model", "pmb"));
+    TRY(pd_h5_write_attr_string(g, "model", sc->model == PD_MODEL_LPS ? "lps" : "pmb"));
     TRY(pd_h5_write_attr_string(g, "effects", effects));
     TRY(pd_h5_write_attr_string(g, "options", options_text));
     TRY(pd_h5_write_attr_doubles(g, "c", &sc->c, 1));
@@ -580,6 +580,10 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
     TRY(pd_h5_write_attr_int(g, "steps", sc->steps));
     TRY(pd_h5_write_attr_int(g, "every", sc->every));
     TRY(pd_h5_write_attr_int(g, "threads", sc->threads));
+    if (sc->model == PD_MODEL_LPS) {
+        TRY(pd_h5_write_attr_doubles(g, "shear_modulus", &sc->shear_modulus, 1));
+        TRY(pd_h5_write_attr_string(g, "influence", pd_influence_name(sc->influence)));
+    }
 #undef TRY
     H5Gclose(g);
     return s;

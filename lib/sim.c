@@ -113,7 +113,10 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
     lost_box(sim);
 
     /* The step is assembled from the declared effects only. */
-    pd_status st = add_effect(sim, s->has_failure ? &pd_effect_pmb_failure : &pd_effect_pmb);
+    const pd_effect *model = s->has_failure ? &pd_effect_pmb_failure : &pd_effect_pmb;
+    if (s->model == PD_MODEL_LPS)
+        model = s->has_failure ? &pd_effect_lps_failure : &pd_effect_lps;
+    pd_status st = add_effect(sim, model);
     if (st == PD_OK && s->has_contact)
         st = add_effect(sim, &pd_effect_contact);
     if (st == PD_OK && s->has_indenter)

@@ -123,5 +123,7 @@ extern const pd_effect pd_effect_contact;
 extern const pd_effect pd_effect_indenter;
 extern const pd_effect pd_effect_body_force;
 extern const pd_effect pd_effect_prescribed;
+extern const pd_effect pd_effect_lps;
+extern const pd_effect pd_effect_lps_failure;
 
 #endif

@@ -181,3 +181,78 @@ with h5py.File(sys.argv[1]) as h:
     assert_failure 1
     assert_line --partial "FAIL: positions"
 }
+
+# ---------------------------------------------------------------- LPS
+# The same disk with pair_style peri/lps (K, G; LAMMPS's influence function
+# 1/r, pd's default).  3K - 5G is far from 0 in both scenes, so the
+# dilatation term of the force (seed 000 Algorithm 2) is exercised.
+K=14.9e9
+
+# run_lps DIR G STEPS EVERY IND FAILURE: pd and LAMMPS on DIR/model.h5
+# (FAILURE "none": no bond breaks; LAMMPS gets s00 = 1e300), both with
+# contact (LAMMPS's peri styles always have it).
+run_lps() {
+    local dir=$1 g=$2 steps=$3 every=$4 ind=$5 failure=$6 pdfail=() lmpfail=()
+    if [ "$failure" = none ]; then
+        lmpfail=(--no-failure)
+    else
+        pdfail=(--failure "$failure")
+        lmpfail=(--failure "$failure")
+    fi
+    pd-run "$dir/model.h5" --model lps --bulk-modulus "$K" --shear-modulus "$g" "${pdfail[@]}" \
+        --contact --dt "$DT" --threads 1 --indenter "$ind" --steps "$steps" --every "$every" -q \
+        -o "$dir/run.h5" && pd-damage "$dir/run.h5" >/dev/null || return 1
+    "$PY" "$LMPTOOLS/pd2lmp.py" "$dir/model.h5" -d "$dir/data.lmp" -i "$dir/in.lmp" \
+        --dump dump.lmp --model lps --bulk-modulus "$K" --shear-modulus "$g" \
+        --horizon "$DISK_HORIZON" "${lmpfail[@]}" --dt "$DT" --steps "$steps" --every "$every" \
+        --indenter "$ind" || return 1
+    grep -q "^pair_style *peri/lps" "$dir/in.lmp" || return 1
+    (cd "$dir" && lmp -in in.lmp -log none >lmp.out 2>&1) || {
+        cat "$dir/lmp.out"
+        return 1
+    }
+}
+
+@test "pd-run --model lps agrees with LAMMPS peri/lps: elastic disk pressed by the sphere" {
+    local d=$BATS_TEST_TMPDIR/lps-elastic
+    make_disk "$d"
+    run_lps "$d" 5e9 100 50 sphere,0,0.0050,0,0.005,1e17,0,-20,0 none
+    for step in 50 100; do
+        compare "$d/run.h5" "$d/dump.lmp" --step "$step"
+        assert_success
+        assert_line --partial "OK"
+        assert_line --regexp "^broken +pd 0  lammps 0$"
+    done
+    # a shear modulus 1e-5 off is seen (negative control of this scene)
+    pd-run "$d/model.h5" --model lps --bulk-modulus "$K" --shear-modulus 5.00005e9 --contact \
+        --dt "$DT" --threads 1 --indenter sphere,0,0.0050,0,0.005,1e17,0,-20,0 --steps 100 -q \
+        -o "$d/off.h5"
+    compare "$d/off.h5" "$d/dump.lmp" --step 100
+    assert_failure 1
+    assert_line --partial "FAIL: displacements"
+}
+
+@test "pd-run --model lps agrees with LAMMPS peri/lps: failure, contact and the indenter" {
+    local d=$BATS_TEST_TMPDIR/lps-failure
+    make_disk "$d"
+    run_lps "$d" 8e9 100 50 "$IND_SEED" "$FAILURE"
+    compare "$d/run.h5" "$d/dump.lmp" --step 50
+    assert_success
+    compare "$d/run.h5" "$d/dump.lmp" --step 100 --min-damaged 100
+    assert_success
+    assert_damage_in_both
+}
+
+@test "pd-run --model lps agrees with LAMMPS peri/lps on a perturbed lattice, crushed" {
+    # unequal bond lengths and partial volumes; a stiff fast sphere brings
+    # particles within the contact distance.  It starts 30 um above the top
+    # face: LAMMPS peri/lps breaks every bond stretched at all in the first
+    # step (its s0 is not +inf there, unlike peri/pmb and seed 000
+    # Algorithm 2, which pd follows), so nothing may stretch in step 1.
+    local d=$BATS_TEST_TMPDIR/lps-perturbed
+    make_disk "$d" --perturb 1e-5 --seed 3
+    run_lps "$d" 8e9 100 100 sphere,0,0.00503,0,0.005,1e18,0,-200,0 "$FAILURE"
+    compare "$d/run.h5" "$d/dump.lmp" --step 100 --min-damaged 100
+    assert_success
+    assert_damage_in_both
+}

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""pd2lmp.py -- write a pd model or run file as a LAMMPS peri/pmb scene.
+"""pd2lmp.py -- write a pd model or run file as a LAMMPS peri/pmb or peri/lps scene.
 
 Usage:
   /usr/bin/python3 tests/lammps/pd2lmp.py [options] INPUT.h5 -d DATA -i INPUT.lmp
@@ -27,6 +27,11 @@ LAMMPS peri/pmb always has contact (its short-range forces) and failure;
 a scene without --failure is written with s00 = 1e300, alpha = 0 (no bond
 ever breaks); a scene without --contact cannot be written (LAMMPS would
 add contact forces pd does not have) unless --allow-contact is given.
+
+With --model lps (or a run file whose /scene says model lps) the pair
+style is peri/lps with pair_coeff K G horizon s00 alpha (--bulk-modulus,
+--shear-modulus); LAMMPS's influence function is 1/r, so a pd run with
+another --influence cannot be written.
 
 Run the result with: lmp -in INPUT.lmp -log none -screen none
 (the dump goes to the file given by --dump, default dump.lmp, relative to
@@ -65,6 +70,8 @@ def main(argv):
     ap.add_argument("--dump", default="dump.lmp", help="dump file named in the script (default dump.lmp)")
     ap.add_argument("--c", type=float, help="micromodulus c, N/m^6")
     ap.add_argument("--bulk-modulus", type=float, help="bulk modulus K, Pa (c = 18K/(pi delta^4))")
+    ap.add_argument("--model", choices=("pmb", "lps"), help="material model (default: /scene's, or pmb)")
+    ap.add_argument("--shear-modulus", type=float, help="shear modulus G, Pa (lps)")
     ap.add_argument("--horizon", type=float, help="horizon delta, m (default /bonds horizon)")
     ap.add_argument("--spacing", type=float, help="lattice constant, m (default /particles spacing)")
     ap.add_argument("--failure", metavar="S00,ALPHA", help="critical stretch parameters")
@@ -102,6 +109,14 @@ def main(argv):
     effects = str(scene("effects") or "")
     has_scene = bool(sc)
 
+    model = a.model or str(scene("model") or "pmb")
+    K = a.bulk_modulus if a.bulk_modulus is not None else scene("bulk_modulus")
+    G = a.shear_modulus if a.shear_modulus is not None else scene("shear_modulus")
+    if model == "lps":
+        if K is None or G is None:
+            raise SystemExit("pd2lmp.py: error: lps needs --bulk-modulus and --shear-modulus")
+        if str(scene("influence") or "1/r") != "1/r":
+            raise SystemExit("pd2lmp.py: error: LAMMPS peri/lps has the influence function 1/r only")
     # micromodulus
     c = a.c
     if c is None and a.bulk_modulus is not None:
@@ -134,6 +149,8 @@ def main(argv):
     if not every:
         every = steps
 
+    if model == "lps":
+        c = 0.0  # not used by peri/lps
     missing = [n for n, v in (("--c", c), ("--horizon", horizon), ("--spacing", spacing),
                               ("--failure", s00), ("--dt", dt), ("--steps", steps))
                if v is None]
@@ -172,9 +189,15 @@ def main(argv):
     L.append("neigh_modify    every 1 delay 0 check yes")
     L.append("lattice         sc %s" % fmt(spacing))
     L.append("read_data       %s" % a.data)
-    L.append("pair_style      peri/pmb")
-    L.append("#               <type1> <type2> <c> <horizon> <s00> <alpha>")
-    L.append("pair_coeff      * * %s %s %s %s" % (fmt(c), fmt(horizon), fmt(s00), fmt(alpha)))
+    if model == "lps":
+        L.append("pair_style      peri/lps")
+        L.append("#               <type1> <type2> <K> <G> <horizon> <s00> <alpha>")
+        L.append("pair_coeff      * * %s %s %s %s %s"
+                 % (fmt(K), fmt(G), fmt(horizon), fmt(s00), fmt(alpha)))
+    else:
+        L.append("pair_style      peri/pmb")
+        L.append("#               <type1> <type2> <c> <horizon> <s00> <alpha>")
+        L.append("pair_coeff      * * %s %s %s %s" % (fmt(c), fmt(horizon), fmt(s00), fmt(alpha)))
     L.append("velocity        all set 0.0 0.0 0.0 sum no units box")
     L.append("fix             F1 all nve")
     if ind is not None:

@@ -1,0 +1,439 @@
+/*
+ * lps.c -- the linear peridynamic solid (LPS), seed 000 eqs. 3-4 and
+ * Algorithms 2-4 (Silling 2007), with the choices of LAMMPS peri/lps.
+ *
+ * With K the bulk and G the shear modulus, omega = omega(|xi|) the
+ * influence function, nu_ij the partial-volume factor and e = |y_j - y_i|
+ * - |xi| the extension of bond i-j:
+ *   m_i     = sum_j omega |xi|^2 nu_ij V_j            weighted volume, over
+ *             the reference family, once (Algorithm 3; it does not change
+ *             as bonds break: seed 000, the note after eq. 4)
+ *   theta_i = 3/m_i sum_{j intact} omega |xi| e nu_ij V_j   dilatation
+ *             (Algorithm 4; 0 when m_i = 0)
+ *   t_ij    = (3K - 5G) (omega theta_i/m_i + omega theta_j/m_j) |xi|
+ *             + 15G (omega/m_i + omega/m_j) e         (Algorithm 2)
+ *   f_i    += t_ij nu_ij V_j (y_j - y_i) / |y_j - y_i|
+ * with e set to 0 when |e| < eps_machine (PD_NEAR_ZERO, as PMB) and no
+ * force when |y_j - y_i| = 0.  Every product is taken in the order LAMMPS
+ * peri/lps takes it, so both codes round alike.  Seed 000 eq. 3 writes the
+ * force state as 3K theta/m omega x + alpha omega e^d with alpha = 15G/m;
+ * Algorithm 2 is its pair form (with e^d = e - theta |xi|/3).
+ *
+ * Within one step: theta is computed from the bonds intact at the start of
+ * the step; the forces use it; then each bond is tested against
+ * min(s0_i, s0_j) of the previous step (seed 000 eq. 9, as PMB: a bond that
+ * breaks carries its force in the step it breaks), and s0 of the next step
+ * is max over the intact bonds of s00 - alpha s (eq. 9, not Algorithm 2's
+ * min line, as LAMMPS).  No bond breaks at step 0 (s0 = +inf).
+ *
+ * Strain energy.  For a whole family the seed's W_i = K/2 theta_i^2 +
+ * 15G/(2 m_i) sum_j omega (e^d)^2 nu V_j equals
+ *   W*_i = (K/2 - 5G/6) theta_i^2 + 15G/(2 m_i) sum_{j intact} omega e^2 nu V_j
+ * (expand (e^d)^2 and use sum omega |xi|^2 nu V = m).  pd books W* (times
+ * V_i): it is the energy whose gradient is the force above also after bonds
+ * break (the identity needs the whole family), so the energy balance holds.
+ * When bonds break, the energy released is the drop of W* of both ends at
+ * the step's positions as the bonds go.
+ *
+ * Each particle walks its own (directed) family and writes only its own
+ * force, theta and s0: no scatter, so the sums are in a fixed order and
+ * the result does not depend on the thread count.  The bond states stay
+ * in the run's half bonds (sim->half), reached through a map from the
+ * directed bonds.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim.h"
+
+typedef struct {
+    double *m;         /* n: weighted volume m_i, m^5 times omega's unit */
+    double *theta;     /* n: dilatation of this step                     */
+    double *omega;     /* directed bonds: omega(|xi|)                    */
+    int64_t *half;     /* directed bond -> its half bond in sim->half    */
+    uint8_t *kill;     /* directed bonds: breaks in this step            */
+    uint8_t *touched;  /* n: particle with a bond breaking in this step  */
+    double *released;  /* n: energy released at each particle, J         */
+} lps_state;
+
+const char *pd_influence_name(pd_influence w)
+{
+    return w == PD_INFLUENCE_ONE ? "1" : w == PD_INFLUENCE_GAUSSIAN ? "gaussian" : "1/r";
+}
+
+int pd_influence_parse(const char *name)
+{
+    if (strcmp(name, "1/r") == 0)
+        return PD_INFLUENCE_INV_R;
+    if (strcmp(name, "1") == 0)
+        return PD_INFLUENCE_ONE;
+    if (strcmp(name, "gaussian") == 0)
+        return PD_INFLUENCE_GAUSSIAN;
+    return -1;
+}
+
+double pd_lps_influence(pd_influence w, double length, double horizon)
+{
+    switch (w) {
+    case PD_INFLUENCE_ONE:
+        return 1.0;
+    case PD_INFLUENCE_GAUSSIAN:
+        return exp(-(length * length) / (horizon * horizon));
+    default:
+        return 1.0 / length; /* LAMMPS peri/lps (seed 000, the note on omega) */
+    }
+}
+
+void pd_lps_weighted_volume(const pd_particles *p, const pd_bonds *b, pd_influence w, double *m)
+{
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < b->n; i++) {
+        double sum = 0;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            const int32_t j = b->neighbor[k];
+            const double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
+                         dz = p->x[2][i] - p->x[2][j];
+            const double rsq = dx * dx + dy * dy + dz * dz;
+            sum += pd_lps_influence(w, b->length[k], b->horizon) * rsq * p->volume[j] *
+                   b->vfactor[k];
+        }
+        m[i] = sum;
+    }
+}
+
+static void lps_free(void *state)
+{
+    lps_state *st = state;
+    if (st == NULL)
+        return;
+    free(st->m);
+    free(st->theta);
+    free(st->omega);
+    free(st->half);
+    free(st->kill);
+    free(st->touched);
+    free(st->released);
+    free(st);
+}
+
+static pd_status lps_init(pd_sim *sim, void **state)
+{
+    const pd_bonds *b = sim->b;
+    size_t n = (size_t)(sim->n > 0 ? sim->n : 1), nb = (size_t)(b->count > 0 ? b->count : 1);
+    lps_state *st = calloc(1, sizeof *st);
+    if (st == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS state");
+    st->m = malloc(n * sizeof(double));
+    st->theta = calloc(n, sizeof(double));
+    st->omega = malloc(nb * sizeof(double));
+    st->half = malloc(nb * sizeof(int64_t));
+    st->kill = calloc(nb, 1);
+    st->touched = calloc(n, 1);
+    st->released = calloc(n, sizeof(double));
+    if (!st->m || !st->theta || !st->omega || !st->half || !st->kill || !st->touched ||
+        !st->released) {
+        lps_free(st);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS state of %lld bonds",
+                       (long long)b->count);
+    }
+    pd_lps_weighted_volume(sim->p, b, sim->sc.influence, st->m);
+    for (int64_t k = 0; k < b->count; k++)
+        st->omega[k] = pd_lps_influence(sim->sc.influence, b->length[k], b->horizon);
+    /* the half bond of each directed bond: row i meets its bonds to j < i
+     * in ascending i for each j, so a cursor per row finds them */
+    const pd_half_bonds *h = &sim->half;
+    for (int64_t i = 0; i < sim->n; i++)
+        h->cursor[i] = h->offset[i];
+    for (int64_t i = 0; i < sim->n; i++) {
+        int64_t own = h->offset[i];
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            const int32_t j = b->neighbor[k];
+            st->half[k] = j < i ? h->cursor[j]++ : own++;
+        }
+    }
+    *state = st;
+    return PD_OK;
+}
+
+/* |y_j - y_i| - |xi| of directed bond k of row i, 0 below eps_machine;
+ * r = |y_j - y_i| and the components go back through the pointers. */
+static inline double extension(const pd_sim *sim, int64_t i, int64_t k, double d[3], double *r)
+{
+    const int32_t j = sim->b->neighbor[k];
+    d[0] = sim->y[0][j] - sim->y[0][i];
+    d[1] = sim->y[1][j] - sim->y[1][i];
+    d[2] = sim->y[2][j] - sim->y[2][i];
+    *r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    const double e = *r - sim->b->length[k];
+    return fabs(e) < PD_NEAR_ZERO ? 0.0 : e;
+}
+
+/* theta_i over the bonds intact in `bits` (half bonds), Algorithm 4. */
+static double theta_row(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i)
+{
+    const pd_bonds *b = sim->b;
+    const double *V = sim->p->volume;
+    double sum = 0, d[3], r;
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        if (!pd_bond_intact(bits, st->half[k]))
+            continue;
+        const double e = extension(sim, i, k, d, &r);
+        sum += st->omega[k] * b->length[k] * e * V[b->neighbor[k]] * b->vfactor[k];
+    }
+    return st->m[i] != 0.0 ? (3.0 / st->m[i]) * sum : 0.0;
+}
+
+/* V_i W*_i over the bonds intact in `bits`, J (see the top). */
+static double energy_row(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i)
+{
+    const pd_bonds *b = sim->b;
+    const double *V = sim->p->volume, K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
+    if (st->m[i] == 0.0)
+        return 0.0;
+    double sum = 0, d[3], r;
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        if (!pd_bond_intact(bits, st->half[k]))
+            continue;
+        const double e = extension(sim, i, k, d, &r);
+        sum += st->omega[k] * e * e * V[b->neighbor[k]] * b->vfactor[k];
+    }
+    const double th = theta_row(sim, st, bits, i);
+    return V[i] * ((0.5 * K - 5.0 * G / 6.0) * th * th +
+                   0.5 * PD_LPS_SHEAR_FACTOR * G / st->m[i] * sum);
+}
+
+/* The force density on i (Algorithm 2) from theta of this step, and with
+ * `failure` the breaking test (into st->kill) and s0_new[i]. */
+static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
+{
+    const pd_bonds *b = sim->b;
+    const uint64_t *bits = sim->half.intact;
+    const double *V = sim->p->volume, *m = st->m, *theta = st->theta;
+    const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
+    const double dil = (3.0 * K) - (5.0 * G), s00 = sim->sc.s00, alpha = sim->sc.alpha;
+    const double s0i = failure ? sim->s0[i] : 0;
+    double fx = 0, fy = 0, fz = 0, s0_new = -INFINITY, d[3], r;
+    int broke = 0;
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        if (!pd_bond_intact(bits, st->half[k]))
+            continue;
+        const int32_t j = b->neighbor[k];
+        const double e = extension(sim, i, k, d, &r);
+        const double om = st->omega[k], len = b->length[k];
+        double t = dil * V[j] * b->vfactor[k] * ((om * theta[i] / m[i]) + (om * theta[j] / m[j])) *
+                   len;
+        t += PD_LPS_SHEAR_FACTOR * (G * V[j] * b->vfactor[k]) * ((om / m[i]) + (om / m[j])) * e;
+        const double fb = r > 0.0 ? t / r : 0.0;
+        fx += d[0] * fb;
+        fy += d[1] * fb;
+        fz += d[2] * fb;
+        if (failure) {
+            const double s = e / len;
+            if (s > fmin(s0i, sim->s0[j])) {
+                st->kill[k] = 1;
+                broke = 1;
+            }
+            s0_new = fmax(s0_new, s00 - (alpha * s));
+        }
+    }
+    sim->f[0][i] += fx;
+    sim->f[1][i] += fy;
+    sim->f[2][i] += fz;
+    if (failure) {
+        sim->s0_new[i] = s0_new == -INFINITY ? DBL_MAX : s0_new; /* no intact bond: +inf */
+        st->touched[i] = (uint8_t)broke;
+    }
+}
+
+/* Break the bonds the force pass marked, booking the drop of W* of every
+ * particle that loses a bond; returns the energy released, J. */
+static double break_marked(pd_sim *sim, lps_state *st)
+{
+    const pd_bonds *b = sim->b;
+    uint64_t *bits = sim->half.intact;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++)
+        st->released[i] = st->touched[i] ? energy_row(sim, st, bits, i) : 0.0;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        if (!st->touched[i])
+            continue;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            if (!st->kill[k])
+                continue;
+            st->kill[k] = 0;
+            if (b->neighbor[k] > i) { /* each half bond once (both ends marked it) */
+                const int64_t q = st->half[k];
+                const uint64_t keep = ~(UINT64_C(1) << (q & 63));
+#pragma omp atomic
+                bits[q >> 6] &= keep;
+            }
+        }
+    }
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++)
+        if (st->touched[i]) {
+            st->released[i] -= energy_row(sim, st, bits, i);
+            st->touched[i] = 0;
+        }
+    return pd_sum_fixed(st->released, sim->n);
+}
+
+static void lps_kernel(pd_sim *sim, lps_state *st, int failure)
+{
+    const uint64_t *bits = sim->half.intact;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++)
+        st->theta[i] = theta_row(sim, st, bits, i);
+    int broke = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(| : broke)
+    for (int64_t i = 0; i < sim->n; i++) {
+        force_row(sim, st, i, failure);
+        broke |= failure && st->touched[i];
+    }
+    if (broke)
+        sim->released += break_marked(sim, st);
+}
+
+static pd_status lps_force(pd_sim *sim, void *state)
+{
+    lps_kernel(sim, state, 0);
+    return PD_OK;
+}
+
+static pd_status lps_failure_force(pd_sim *sim, void *state)
+{
+    if (sim->setup) { /* step 0: forces only; s0 stays +inf */
+        lps_kernel(sim, state, 0);
+        return PD_OK;
+    }
+    lps_kernel(sim, state, 1);
+    double *t = sim->s0;
+    sim->s0 = sim->s0_new;
+    sim->s0_new = t;
+    sim->intact_stale = 1;
+    return PD_OK;
+}
+
+static void lps_energy(const pd_sim *sim, void *state, double *e)
+{
+    const lps_state *st = state;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++)
+        e[i] += energy_row(sim, st, sim->half.intact, i);
+}
+
+/* The static virial of each particle's intact bonds (pd_sim_stress):
+ * s_i += 1/2 sum_j (t_ij / r) (y_j - y_i) (x) xi_ij, t_ij the pair force
+ * of Algorithm 2 as force_row computes it (V_j nu included), with theta of
+ * the current positions and bond states.  Each row its own sum. */
+static void lps_stress(const pd_sim *sim, void *state, double *out)
+{
+    const lps_state *st = state;
+    const pd_bonds *b = sim->b;
+    const uint64_t *bits = sim->half.intact;
+    const double *V = sim->p->volume, *m = st->m;
+    const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
+    const double dil = (3.0 * K) - (5.0 * G);
+    double *const *x = sim->p->x;
+    double *theta = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
+    if (theta == NULL) /* no stress rather than a wrong one */
+        return;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++)
+        theta[i] = theta_row(sim, st, bits, i);
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        double sum[9] = {0}, d[3], r;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            if (!pd_bond_intact(bits, st->half[k]))
+                continue;
+            const int32_t j = b->neighbor[k];
+            const double e = extension(sim, i, k, d, &r);
+            if (!(r > 0.0))
+                continue;
+            const double om = st->omega[k], w = V[j] * b->vfactor[k];
+            const double t = dil * w * (om * theta[i] / m[i] + om * theta[j] / m[j]) * b->length[k] +
+                             PD_LPS_SHEAR_FACTOR * G * w * (om / m[i] + om / m[j]) * e;
+            const double xi[3] = {x[0][j] - x[0][i], x[1][j] - x[1][i], x[2][j] - x[2][i]};
+            for (int a = 0; a < 3; a++)
+                for (int c = 0; c < 3; c++)
+                    sum[3 * a + c] += 0.5 * t / r * d[a] * xi[c];
+        }
+        for (int q = 0; q < 9; q++)
+            out[9 * i + q] += sum[q];
+    }
+    free(theta);
+}
+
+const pd_effect pd_effect_lps = {
+    .name = "lps", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+const pd_effect pd_effect_lps_failure = {
+    .name = "lps+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+
+pd_status pd_sim_dilatation(const pd_sim *sim, double *theta)
+{
+    for (int k = 0; k < sim->neffects; k++)
+        if (sim->effects[k] == &pd_effect_lps || sim->effects[k] == &pd_effect_lps_failure) {
+            const lps_state *st = sim->state[k];
+#pragma omp parallel for schedule(static)
+            for (int64_t i = 0; i < sim->n; i++)
+                theta[i] = theta_row(sim, st, sim->half.intact, i);
+            return PD_OK;
+        }
+    return pd_fail(PD_ERR_INVALID, "the run has no LPS model, so no dilatation");
+}
+
+/*
+ * The stable step, in the form of seed 004 eq. 46, dt < sqrt(2 rho_i /
+ * sum_p V_p C_ip), with C_ip bounding the stiffness that particle p's
+ * displacement puts on i (eq. 46 is Gershgorin's bound on the PMB
+ * stiffness rows).  The deviatoric term of the LPS pair force is a bond
+ * of stiffness 15G omega (1/m_i + 1/m_p) nu per unit extension; the
+ * dilatation term couples i to p through theta_i and theta_p, with
+ * |d theta_q / d u| <= 3/m_q (S_q + the bond's share), S_q = sum omega
+ * |xi| nu V over q's family.  Together:
+ *   C_ip = omega nu [15G (1/m_i + 1/m_p) + 3 |3K - 5G| |xi| (S_i/m_i^2 + S_p/m_p^2)]
+ * For G = 3K/5 (Poisson ratio 1/4) in an interior family with omega =
+ * 1/|xi| this is PMB's c/|xi| with c = 18K/(pi delta^4).
+ */
+double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
+{
+    const int64_t n = b->n;
+    double *m = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
+    double *S = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
+    if (m == NULL || S == NULL) {
+        free(m);
+        free(S);
+        return NAN;
+    }
+    pd_lps_weighted_volume(p, b, s->influence, m);
+    for (int64_t i = 0; i < n; i++) {
+        S[i] = 0;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
+            S[i] += pd_lps_influence(s->influence, b->length[k], b->horizon) * b->length[k] *
+                    b->vfactor[k] * p->volume[b->neighbor[k]];
+    }
+    const double G = s->shear_modulus, dil = fabs(3.0 * s->bulk_modulus - 5.0 * G);
+    double best = INFINITY;
+    for (int64_t i = 0; i < n; i++) {
+        double sum = 0;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            const int32_t j = b->neighbor[k];
+            const double om = pd_lps_influence(s->influence, b->length[k], b->horizon);
+            const double C = om * b->vfactor[k] *
+                             (PD_LPS_SHEAR_FACTOR * G * (1.0 / m[i] + 1.0 / m[j]) +
+                              3.0 * dil * b->length[k] * (S[i] / (m[i] * m[i]) + S[j] / (m[j] * m[j])));
+            sum += p->volume[j] * C;
+        }
+        if (sum > 0)
+            best = fmin(best, sqrt(2.0 * p->density[i] / sum));
+    }
+    free(m);
+    free(S);
+    return best;
+}
