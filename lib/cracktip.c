@@ -78,7 +78,7 @@ void pd_crack_extension(int64_t n, const double *tip, int sign, double *da)
         else if (!isfinite(tip[k]))
             da[k] = NAN;
         else
-            da[k] = sign * (tip[k] - tip[first]);
+            da[k] = sign > 0 ? tip[k] - tip[first] : tip[first] - tip[k]; /* no -0 */
     }
 }
 
