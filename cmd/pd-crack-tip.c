@@ -277,6 +277,9 @@ static void gp_quoted(FILE *gp, const char *s)
  * temporary beside `png` and renamed over it when gnuplot succeeded. */
 static pd_status plot(const struct series *s, const struct options *o)
 {
+    if (s->n == 0)
+        return pd_fail(PD_ERR_INVALID, "cannot draw '%s': the run has no complete frame yet",
+                       o->plot);
     if (!on_path("gnuplot"))
         return pd_fail(PD_ERR_IO, "cannot draw '%s': gnuplot is not on PATH", o->plot);
     size_t len = strlen(o->plot) + 64;
@@ -403,23 +406,20 @@ static void frame_data_free(struct frame_data *d)
     free(d->rows);
 }
 
-/* A run has damage data when it has bonds and at least one complete frame;
- * a model (pd-lattice, pd-bonds) has none. */
+/* A run has damage data when it has bonds and /frames; a model (pd-lattice,
+ * pd-bonds) has none.  A run killed before its first frame has /frames but
+ * no complete frame yet: not an error, a table of no rows (as for every pd
+ * reader). */
 static pd_status check_damage_data(const pd_file *f, const char *name, int64_t *nframes,
                                    char ***frames)
 {
-    pd_status st;
     if (!pd_file_has_frames(f))
         return pd_fail(PD_ERR_FORMAT, "'%s' has no damage data: no /frames (not a run of pd-run)",
                        name);
     if (!pd_file_has_bonds(f))
-        return pd_fail(PD_ERR_FORMAT, "'%s' has no damage data: no /bonds", name);
-    if ((st = pd_list_frames(f, nframes, frames)) != PD_OK)
-        return st;
-    if (*nframes == 0)
-        return pd_fail(PD_ERR_FORMAT,
-                       "'%s' has no damage data: no complete frame (a run killed early?)", name);
-    return PD_OK;
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no damage data: no /bonds (run pd-bonds first)",
+                       name);
+    return pd_list_frames(f, nframes, frames);
 }
 
 /* Read frame k and put its tips or front into the series. */
@@ -481,7 +481,7 @@ int main(int argc, char **argv)
     if (st == PD_OK && (st = pd_read_particles(f, &p)) == PD_OK &&
         (st = check_damage_data(f, o.input, &nframes, &frames)) == PD_OK &&
         (st = frame_data_alloc(&d, p->n)) == PD_OK && (st = series_alloc(&s, nframes)) == PD_OK &&
-        (files = calloc((size_t)nframes, sizeof *files)) == NULL)
+        (files = calloc((size_t)(nframes ? nframes : 1), sizeof *files)) == NULL)
         st = pd_fail(PD_ERR_NOMEM, "out of memory");
     if (st == PD_OK && o.front && !o.has_center) /* the centroid of the body */
         for (int c = 0; c < 3; c++) {
