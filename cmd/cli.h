@@ -104,6 +104,21 @@ static inline int next_option(int argc, char **argv, const char *shortopts,
     }
 }
 
+/* The one operand of a program that reads one file, named `what` in the
+ * usage (e.g. "RUN.h5"), after the options: *input = argv[optind] and 0,
+ * or a usage error (exit status 2) "missing WHAT" when there is none and
+ * "give exactly one WHAT" when there are more. */
+static inline int one_input(int argc, char **argv, const char *what, const char **input)
+{
+    if (optind == argc - 1) {
+        *input = argv[optind];
+        return 0;
+    }
+    char msg[128];
+    snprintf(msg, sizeof msg, "%s %s", optind < argc ? "give exactly one" : "missing", what);
+    return usage_error(msg, NULL);
+}
+
 /* A runtime or data error from libpd: one line on stderr, exit status 1. */
 static inline int fail(void)
 {

@@ -87,9 +87,8 @@ static int parse_options(int argc, char **argv, struct options *o)
     }
     if (status)
         return status;
-    if (optind != argc - 1)
-        return usage_error(optind < argc ? "give exactly one RUN.h5" : "missing RUN.h5", NULL);
-    o->input = argv[optind];
+    if ((status = one_input(argc, argv, "RUN.h5", &o->input)) != 0)
+        return status;
     if (o->no_write && o->output)
         return usage_error("--no-write and -o exclude each other", NULL);
     if (!o->no_write && !o->output && strcmp(o->input, "-") == 0)

@@ -82,9 +82,8 @@ static int parse_options(int argc, char **argv, struct options *o)
     }
     if (status)
         return status;
-    if (optind != argc - 1)
-        return usage_error(optind < argc ? "give exactly one RUN.h5" : "missing RUN.h5", NULL);
-    o->input = argv[optind];
+    if ((status = one_input(argc, argv, "RUN.h5", &o->input)) != 0)
+        return status;
     if (o->dir == NULL)
         return usage_error("missing -o DIR", NULL);
     if (o->dir[0] == '\0')
@@ -218,7 +217,7 @@ static pd_status dump_frame(const pd_file *f, const pd_particles *p, const char 
     if (has_mises)
         extra[nextra++] = (pd_vtk_field){"von_mises", 1, d->mises};
     pd_vtk_frame fr = {p->n, d->pos, d->disp, d->vel, d->damage, p->material, p->id,
-                       has_run ? d->damage_run : NULL, nextra, extra};
+                       has_run ? d->damage_run : NULL, NULL, 0, NULL, nextra, extra};
     s = pd_vtk_write(path, &fr);
     free(path);
     return s;

@@ -587,6 +587,9 @@ pd_status pd_read_history(const pd_file *f, char **out);
 pd_status pd_read_particles(const pd_file *f, pd_particles **out);
 pd_status pd_write_particles(pd_file *f, const pd_particles *p);
 int pd_file_has_bonds(const pd_file *f);
+/* Whether the file has a /frames group (a run of pd-run), complete frames
+ * or not. */
+int pd_file_has_frames(const pd_file *f);
 pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out);
 pd_status pd_write_bonds(pd_file *f, const pd_bonds *b);
 pd_status pd_write_scene(pd_file *f, const pd_scene *s, const char *effects,
@@ -687,6 +690,13 @@ typedef struct {
     const int32_t *material;
     const int64_t *id;
     const double *damage_run;     /* damage without the pre-crack    */
+    const int64_t *select;        /* NULL: all n points; else only the
+                                     nselect rows select[0..nselect-1]
+                                     of the arrays above, in that order
+                                     (e.g. a crack path)               */
+    int64_t nselect;
+    const uint8_t *front;         /* point data "front" (0/1), e.g.
+                                     pd_crack_front; NULL skips        */
     int nextra;                   /* more point data:                */
     const struct pd_vtk_field *extra;
 } pd_vtk_frame;
@@ -713,6 +723,51 @@ pd_status pd_pvd_write(const char *path, int64_t nfiles, char *const *files,
  * NaN when there is none. */
 pd_status pd_crack_tip(const pd_particles *p, double *const u[3], const double *damage, int axis,
                        double threshold, double *tip, int64_t *ndamaged);
+
+/* Both tips of a crack along `axis` (a centre crack grows both ways): among
+ * the particles with damage > threshold, *lower is the smallest and *upper
+ * the largest current coordinate x + u along the axis (u NULL: reference
+ * positions), in m, both NaN when there is none; *ndamaged counts them.
+ * *upper is pd_crack_tip's tip.  A pre-crack counts like any other damage
+ * when `damage` includes it (pd_damage): its ends are where growth starts. */
+pd_status pd_crack_tips(const pd_particles *p, double *const u[3], const double *damage, int axis,
+                        double threshold, double *lower, double *upper, int64_t *ndamaged);
+/* Crack extension Delta a (seed 004 Fig. 7) of a tip series tip[0..n-1]
+ * (frames in time order, NaN where no particle was damaged): with f the
+ * first frame with a finite tip,
+ *   da[k] = sign (tip[k] - tip[f])   for k >= f (NaN where tip[k] is NaN),
+ *   da[k] = 0                         for k < f (no crack yet),
+ * sign = +1 for an upper tip, -1 for a lower one, so that both grow
+ * positive.  All zero when no frame has a tip. */
+void pd_crack_extension(int64_t n, const double *tip, int sign, double *da);
+/* Crack speed, m/s: speed[k] is the slope of the least-squares line
+ * da = c0 + c1 t (gsl_fit_linear) through the frames j with |j - k| <=
+ * window and finite time[j] and da[j] (fewer at the ends of the series);
+ * NaN when da[k] is NaN, when fewer than two frames remain or when their
+ * times are all equal.  A tip moving at a constant speed gets that speed
+ * exactly (to rounding); on a lattice the window smooths the steps of one
+ * spacing.  window >= 1. */
+pd_status pd_crack_speed(int64_t n, const double *time, const double *da, int window,
+                         double *speed);
+/* The crack front of a 3-D body, the outline of the damaged zone:
+ * front[i] = 1 when damage_i > threshold and at least one particle j of
+ * i's reference family (every bond of b, intact or not) has damage_j <=
+ * threshold; else 0.  *nfront counts the front. */
+pd_status pd_crack_front(const pd_particles *p, const pd_bonds *b, const double *damage,
+                         double threshold, uint8_t *front, int64_t *nfront);
+/* Measures of a front at the current positions y = x + u (u NULL:
+ * reference positions).  With from_axis, r is the distance of y from the
+ * line through `center` along `axis` (the radius of a ring or penny crack
+ * around that axis); otherwise its distance from the point `center`. */
+typedef struct {
+    int64_t n;     /* particles on the front                               */
+    double r_max;  /* largest r over the front, m (NaN when n = 0)          */
+    double r_mean; /* mean r over the front, m (NaN when n = 0)             */
+    double lo, hi; /* smallest and largest y along `axis`, m (NaN: n = 0)   */
+} pd_crack_front_info;
+pd_status pd_crack_front_stats(const pd_particles *p, double *const u[3], const uint8_t *front,
+                               const double center[3], int axis, int from_axis,
+                               pd_crack_front_info *fi);
 
 /* ---------------------------------------------------------------- utilities */
 

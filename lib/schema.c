@@ -256,6 +256,11 @@ int pd_file_has_bonds(const pd_file *f)
     return pd_h5_has_link(f->fid, "/bonds");
 }
 
+int pd_file_has_frames(const pd_file *f)
+{
+    return pd_h5_has_link(f->fid, "/frames");
+}
+
 /* Packed little-endian bits (bond b = bit b%8 of byte b/8) <-> words. */
 static void bytes_to_words(const uint8_t *bytes, int64_t count, uint64_t *words)
 {

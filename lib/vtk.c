@@ -5,7 +5,8 @@
  * y = x + u, one vertex cell (VTK type 1) per particle (connectivity 0..N-1,
  * offsets 1..N), and point data displacement, velocity (3 components),
  * damage, damage_run (damage without the pre-crack, when given), material,
- * id.  Data are binary and appended (encoding "raw"): each
+ * id, front (when given).  A subset of the particles (`select`, e.g. the
+ * damaged zone of a crack path) gives a grid of only those points.  Data are binary and appended (encoding "raw"): each
  * array is a UInt64 byte count followed by its values, little-endian
  * whatever the host, so the XML header can state every array's offset before
  * any byte is written.  A time series is a ParaView collection (.pvd) that
@@ -117,7 +118,8 @@ typedef enum {
     SRC_I32,      /* int32, i32[i]                           */
     SRC_I64,      /* int64, i64[i]                           */
     SRC_SEQUENCE, /* int64, i + start                        */
-    SRC_CONSTANT  /* uint8, the value `start`                */
+    SRC_CONSTANT, /* uint8, the value `start`                */
+    SRC_U8        /* uint8, u8[i]                            */
 } source;
 
 typedef struct {
@@ -130,6 +132,8 @@ typedef struct {
     const double *f64;
     const int32_t *i32;
     const int64_t *i64;
+    const uint8_t *u8;
+    const int64_t *select; /* row of tuple i: select[i] (NULL: i) */
     int64_t start;
     uint64_t offset;   /* byte offset in the appended block  */
 } varray;
@@ -145,30 +149,34 @@ static uint64_t value_bits(const varray *a, int64_t i, int c)
 {
     uint64_t bits = 0;
     double v;
+    int64_t row = a->select ? a->select[i] : i;
     switch (a->src) {
     case SRC_SOA:
-        v = a->soa[c][i];
+        v = a->soa[c][row];
         memcpy(&bits, &v, sizeof bits);
         break;
     case SRC_F64:
-        v = a->f64[i];
+        v = a->f64[row];
         memcpy(&bits, &v, sizeof bits);
         break;
     case SRC_AOS:
-        v = a->f64[(int64_t)a->ncomp * i + c];
+        v = a->f64[(int64_t)a->ncomp * row + c];
         memcpy(&bits, &v, sizeof bits);
         break;
     case SRC_I32:
-        bits = (uint32_t)a->i32[i];
+        bits = (uint32_t)a->i32[row];
         break;
     case SRC_I64:
-        bits = (uint64_t)a->i64[i];
+        bits = (uint64_t)a->i64[row];
         break;
     case SRC_SEQUENCE:
         bits = (uint64_t)(i + a->start);
         break;
     case SRC_CONSTANT:
         bits = (uint64_t)a->start;
+        break;
+    case SRC_U8:
+        bits = a->u8[row];
         break;
     }
     return bits;
@@ -222,6 +230,16 @@ pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr)
     int64_t n = fr->n;
     if (n < 0 || n > INT64_MAX / 64)
         return pd_fail(PD_ERR_INVALID, "VTK frame with %lld points", (long long)n);
+    if (fr->select) {
+        if (fr->nselect < 0 || fr->nselect > n)
+            return pd_fail(PD_ERR_INVALID, "VTK frame with %lld of %lld points selected",
+                           (long long)fr->nselect, (long long)n);
+        for (int64_t k = 0; k < fr->nselect; k++)
+            if (fr->select[k] < 0 || fr->select[k] >= n)
+                return pd_fail(PD_ERR_INVALID, "VTK frame selects row %lld of %lld",
+                               (long long)fr->select[k], (long long)n);
+        n = fr->nselect;
+    }
 
     /* Point data first, then Points, then Cells: the order of the XML and
      * of the appended block. */
@@ -231,7 +249,7 @@ pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr)
         if (fr->extra[k].name == NULL || fr->extra[k].values == NULL ||
             fr->extra[k].ncomp < 1 || fr->extra[k].ncomp > 9)
             return pd_fail(PD_ERR_INVALID, "VTK frame field %d is incomplete", k);
-    varray a[10 + 64];
+    varray a[11 + 64];
     int na = 0, npoint = 0;
     if (fr->displacement)
         a[na++] = (varray){"displacement", "Float64", 3, 8, SRC_SOA, .soa = fr->displacement};
@@ -245,11 +263,15 @@ pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr)
         a[na++] = (varray){"material", "Int32", 1, 4, SRC_I32, .i32 = fr->material};
     if (fr->id)
         a[na++] = (varray){"id", "Int64", 1, 8, SRC_I64, .i64 = fr->id};
+    if (fr->front)
+        a[na++] = (varray){"front", "UInt8", 1, 1, SRC_U8, .u8 = fr->front};
     for (int k = 0; k < fr->nextra; k++)
         a[na++] = (varray){fr->extra[k].name, "Float64", fr->extra[k].ncomp, 8, SRC_AOS,
                            .f64 = fr->extra[k].values};
-    npoint = na;
     a[na++] = (varray){"Points", "Float64", 3, 8, SRC_SOA, .soa = fr->position};
+    npoint = na - 1;
+    for (int k = 0; k < na; k++)
+        a[k].select = fr->select;
     a[na++] = (varray){"connectivity", "Int64", 1, 8, SRC_SEQUENCE, .start = 0};
     a[na++] = (varray){"offsets", "Int64", 1, 8, SRC_SEQUENCE, .start = 1};
     a[na++] = (varray){"types", "UInt8", 1, 1, SRC_CONSTANT, .start = VTK_VERTEX};

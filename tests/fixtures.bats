@@ -13,13 +13,16 @@ setup() {
     cd "$FIXTURES"
 }
 
-# refused FILE MESSAGE: pd-damage, pd-dump2vtk and pd-crack-tip all exit 1
-# with "PROG: error: MESSAGE" and nothing else on stderr; pd-dump2vtk writes
+# refused FILE MESSAGE [TIP_MESSAGE]: pd-damage, pd-dump2vtk and pd-crack-tip
+# all exit 1 with "PROG: error: MESSAGE" (pd-crack-tip: TIP_MESSAGE when
+# given) and nothing else on stderr; pd-dump2vtk writes
 # no collection (.pvd), which it writes last, only for a complete export.
 # (Rows or .vtu files of the frames before a bad frame may remain.)
 refused() {
-    local file=$1 msg=$2 out=$BATS_TEST_TMPDIR/out
+    local file=$1 out=$BATS_TEST_TMPDIR/out msg
     for prog in pd-damage pd-crack-tip pd-dump2vtk; do
+        msg=$2
+        [ "$prog" = pd-crack-tip ] && msg=${3:-$2}
         case $prog in
         pd-damage) run --separate-stderr pd-damage -n "$file" ;;
         pd-crack-tip) run --separate-stderr pd-crack-tip "$file" ;;
@@ -112,7 +115,8 @@ refused_by_run() {
 }
 
 @test "a run without bonds (the wrong stage)" {
-    refused_by_run no-bonds.h5 "'no-bonds.h5' has no /bonds (run pd-bonds first)"
+    refused_by_run no-bonds.h5 "'no-bonds.h5' has no /bonds (run pd-bonds first)" \
+        "'no-bonds.h5' has no damage data: no /bonds (run pd-bonds first)"
 }
 
 @test "a frame without its step" {
