@@ -261,6 +261,13 @@ typedef struct {
                               reference bounding box is lost, m (0: ten
                               times the box's largest edge)              */
     int threads;
+    int has_projectile;    /* a rigid sphere moved by the contact force     */
+    double proj_center[3]; /* its centre at t = 0, m                        */
+    double proj_radius;    /* m                                             */
+    double proj_mass;      /* kg                                            */
+    double proj_velocity[3];/* at t = 0, m/s                                */
+    double proj_k;         /* K of the force density K (R - r)^2, N/m^5 (0:
+                              pd_projectile_default_k)                   */
 } pd_scene;
 
 /* ---------------------------------------------------------------- run */
@@ -311,6 +318,7 @@ typedef struct {
     double released; /* the elastic energy bonds held when they broke         */
     double lost;     /* the kinetic energy lost particles carried away        */
     double work;     /* work done on the body by the moving indenter          */
+    double projectile; /* kinetic energy of the projectile, 1/2 M |V|^2     */
 } pd_energy;
 
 /* The energies of the current state; with `density` (n values, may be
@@ -318,7 +326,8 @@ typedef struct {
  * the energy of each of its bonds, per its volume).  Sums are taken in a
  * fixed order: the same figures at any thread count. */
 pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density);
-/* The balance kinetic + elastic + contact + released + lost - work. */
+/* The balance kinetic + elastic + contact + released + lost - work
+ * (+ projectile, the sphere's kinetic energy, with --projectile). */
 double pd_energy_total(const pd_energy *e);
 int64_t pd_sim_broken(const pd_sim *sim);      /* broken bonds (pairs) */
 double pd_sim_max_damage(const pd_sim *sim);
@@ -342,6 +351,9 @@ typedef struct {
     double energy0;              /* kinetic + elastic + contact at
                                     step 0, J                         */
     uint8_t *lost;               /* n flags: particle lost (NULL: none) */
+    int has_projectile;
+    double projectile[9];        /* the projectile's centre (m), velocity
+                                    (m/s) and the force on it (N)     */
 } pd_restart;
 /* The run's accumulated energies, power and lost particles, for its
  * restart data (r->lost points into the run). */
@@ -367,6 +379,17 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
 double *const *pd_sim_positions(const pd_sim *sim);
 double *const *pd_sim_velocities(const pd_sim *sim);
 const uint64_t *pd_sim_intact(const pd_sim *sim);
+
+/* The projectile (pd_scene.has_projectile, lib/projectile.c): a rigid
+ * sphere of mass M that pushes the particles inside it with the indenter's
+ * force density K (R - r)^2 and feels the reaction F = -sum V_i f_i.
+ * The default K makes the penalty's tangent stiffness 2 K p at a
+ * penetration p = PD_PROJECTILE_DEPTH x spacing equal the largest bond
+ * stiffness sum of seed 004 eq. 46, max_i sum_p V_p nu c/|xi|. */
+#define PD_PROJECTILE_DEPTH 0.25
+double pd_projectile_default_k(const pd_particles *p, const pd_bonds *b, const pd_scene *s);
+/* The projectile's centre (m) and velocity (m/s) now; 0 when there is none. */
+int pd_sim_projectile(const pd_sim *sim, double x[3], double v[3]);
 
 /* ---------------------------------------------------------------- files */
 
@@ -426,11 +449,16 @@ typedef struct {
     int64_t lost;      /* lost particles */
     pd_energy energy;  /* J; attributes kinetic_energy, elastic_energy,
                           contact_energy, released_energy, lost_energy,
-                          external_work */
+                          external_work (and projectile_energy)      */
+    int has_projectile;             /* attributes projectile_position, */
+    double projectile_position[3];  /* m, and projectile_velocity, m/s */
+    double projectile_velocity[3];
 } pd_frame_info;
 
 /* Optional per-particle fields of frames, asked for with pd-run --output. */
 enum { PD_FIELD_ENERGY = 1 /* strain_energy_density (N), J/m^3 */ };
+/* Not a field: frames laid out with the projectile's attributes. */
+enum { PD_FRAME_PROJECTILE = 1u << 16 };
 
 /* Lay out every frame a run will write (steps[k] at times[k]) before the
  * first step, so that writing them later changes no structure of the file;
@@ -442,6 +470,9 @@ pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
 pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact);
 pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart *r);
 pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart *r);
+/* Lay out the projectile's state in both restart slots (after
+ * pd_plan_restart; nothing when it is there already). */
+pd_status pd_plan_restart_projectile(pd_file *f);
 void pd_restart_free(pd_restart *r);
 /* Remove frames laid out but never completed. */
 pd_status pd_drop_incomplete_frames(pd_file *f);
