@@ -5,7 +5,8 @@
  * Velocity Verlet (seed 000 Algorithm 1) over the PMB bond force (seed 000
  * eqs. 5-7), with, only when declared: bond failure by critical stretch
  * (eqs. 8-9), short-range contact (eqs. 13-15) and a moving spherical
- * indenter (LAMMPS fix indent).  The time step defaults to the stable step
+ * indenter (LAMMPS fix indent), and a projectile the body pushes back
+ * (lib/projectile.c, seed 004 section 6).  The time step defaults to the stable step
  * of seed 004 eq. 46 times a safety factor; a larger --dt is refused.
  * Writes the model, the resolved scene (/scene) and frames (/frames).
  */
