@@ -367,8 +367,9 @@ static pd_status write_path(const struct options *o, const pd_particles *p, doub
     }
     snprintf(path, len, "%s_%08lld.vtu", o->path, (long long)step);
     snprintf(*file, len, "%s", slash ? path + (slash - o->path) + 1 : path);
-    pd_vtk_frame fr = {p->n,      pos,   disp, NULL, damage, p->material, p->id, NULL,
-                       rows,      m,     front};
+    pd_vtk_frame fr = {.n = p->n, .position = pos, .displacement = disp, .damage = damage,
+                       .material = p->material, .id = p->id, .select = rows, .nselect = m,
+                       .front = front};
     pd_status s = pd_vtk_write(path, &fr);
     free(path);
     return s;

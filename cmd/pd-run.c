@@ -5,9 +5,10 @@
  * Velocity Verlet (seed 000 Algorithm 1) over the PMB bond force (seed 000
  * eqs. 5-7), with, only when declared: bond failure by critical stretch
  * (eqs. 8-9), short-range contact (eqs. 13-15) and a moving spherical
- * indenter (LAMMPS fix indent), and boundary conditions on the particle
- * sets of pd-lattice --set (seed 004 §2: body forces and prescribed
- * velocity or displacement in a layer).  The time step defaults to the stable step
+ * indenter (LAMMPS fix indent), a projectile the body pushes back
+ * (lib/projectile.c, seed 004 section 6), and boundary conditions on the
+ * particle sets of pd-lattice --set (seed 004 §2: body forces and
+ * prescribed velocity or displacement in a layer).  The time step defaults to the stable step
  * of seed 004 eq. 46 times a safety factor; a larger --dt is refused.
  * Writes the model, the resolved scene (/scene) and frames (/frames).
  * A 2-D plate (/particles dimension 2) takes the plane-stress constants of
@@ -32,6 +33,7 @@ struct options {
     int has_g0;      /* --failure-energy: s00 from G0 once c is known */
     double g0;       /* J/m^2                                       */
     int has_e;       /* --youngs-modulus: K from E once the dimension is known */
+    int has_proj_k;  /* --projectile with its K                     */
     int has_c, has_k, has_dt, has_steps, force_dt, has_status, has_output;
     int has_g, has_influence; /* --shear-modulus, --influence (LPS) */
     int64_t status_every;
@@ -90,6 +92,11 @@ static void usage(FILE *out)
             "                        PROFILE: a number; points:T0,V0,T1,V1,... (piecewise\n"
             "                        linear); table:FILE ('time value' lines); or\n"
             "                        pulses:V1,D1,V2,D2,... (V1 for D1 s from t = 0, ...)\n"
+            "  --projectile sphere,X,Y,Z,R,MASS,VX,VY,VZ[,K]\n"
+            "                        rigid sphere the body pushes back: centre X,Y,Z (m)\n"
+            "                        at t = 0, radius R (m), mass MASS (kg), velocity\n"
+            "                        VX,VY,VZ (m/s); the indenter's force law, K in N/m^5\n"
+            "                        (default: from the bond stiffness, see pd-run(1))\n"
             "Time:\n"
             "  --steps N             number of steps\n"
             "  --dt DT               time step, s (default: stable step x safety)\n"
@@ -283,7 +290,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     enum { OPT_MODEL = 256, OPT_C, OPT_K, OPT_FAILURE, OPT_CONTACT, OPT_SKIN, OPT_INDENTER,
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
-           OPT_BODY, OPT_G, OPT_INFLUENCE };
+           OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -310,6 +317,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"velocity-bc", required_argument, 0, OPT_VBC},
         {"displacement-bc", required_argument, 0, OPT_DBC},
         {"body-force", required_argument, 0, OPT_BODY},
+        {"projectile", required_argument, 0, OPT_PROJECTILE},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -474,6 +482,27 @@ static int parse_options(int argc, char **argv, struct options *o)
                                optarg)))
                 return rc;
             break;
+        case OPT_PROJECTILE: {
+            double v[9]; /* X,Y,Z,R,MASS,VX,VY,VZ and maybe K */
+            int hk = strncmp(optarg, "sphere,", 7) == 0 && pd_parse_doubles(optarg + 7, v, 9);
+            if (!hk && (strncmp(optarg, "sphere,", 7) != 0 || !pd_parse_doubles(optarg + 7, v, 8)))
+                return usage_error("--projectile needs sphere,X,Y,Z,R,MASS,VX,VY,VZ[,K], not",
+                                   optarg);
+            if (!(v[3] > 0) || !(v[4] > 0) || (hk && !(v[8] > 0)))
+                return usage_error("--projectile radius R, mass MASS and stiffness K must be "
+                                   "positive in",
+                                   optarg);
+            o->sc.has_projectile = 1;
+            for (int d = 0; d < 3; d++) {
+                o->sc.proj_center[d] = v[d];
+                o->sc.proj_velocity[d] = v[5 + d];
+            }
+            o->sc.proj_radius = v[3];
+            o->sc.proj_mass = v[4];
+            o->sc.proj_k = hk ? v[8] : 0;
+            o->has_proj_k = hk;
+            break;
+        }
         case 'q':
             o->quiet = 1;
             break;
@@ -554,6 +583,12 @@ static char *scene_text(const pd_scene *s)
         p += sprintf(p, "indenter sphere,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
                      s->ind_center[0], s->ind_center[1], s->ind_center[2], s->ind_radius, s->ind_k,
                      s->ind_velocity[0], s->ind_velocity[1], s->ind_velocity[2]);
+    if (s->has_projectile)
+        p += sprintf(p,
+                     "projectile sphere,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
+                     s->proj_center[0], s->proj_center[1], s->proj_center[2], s->proj_radius,
+                     s->proj_mass, s->proj_velocity[0], s->proj_velocity[1], s->proj_velocity[2],
+                     s->proj_k);
     p += sprintf(p, "dt %.17g\nsteps %lld\nevery %lld\n", s->dt, (long long)s->steps,
                  (long long)s->every);
     if (s->fields)
@@ -664,6 +699,11 @@ static void status_line(const pd_sim *sim, int64_t steps, int tty)
             tty ? "\r\033[K" : "", (long long)pd_sim_stepno(sim), (long long)steps,
             pd_sim_time(sim), e.kinetic, e.elastic, e.contact, e.released, e.work,
             pd_energy_total(&e), (long long)pd_sim_broken(sim), pd_sim_max_damage(sim));
+    double px[3], pv[3];
+    if (pd_sim_projectile(sim, px, pv))
+        fprintf(stderr, PROG ": projectile at (%.6e, %.6e, %.6e) m, velocity (%.6e, %.6e, %.6e) "
+                        "m/s, kinetic energy %.6e J\n",
+                px[0], px[1], px[2], pv[0], pv[1], pv[2], e.projectile);
     if (e.lost > 0 || pd_sim_lost(sim) > 0)
         fprintf(stderr, PROG ": %lld particles lost so far, carrying %.6e J\n",
                 (long long)pd_sim_lost(sim), e.lost);
@@ -675,6 +715,7 @@ static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds
     double t0 = pd_wtime();
     pd_frame_info fi = {.step = pd_sim_stepno(sim), .time = pd_sim_time(sim),
                         .broken = pd_sim_broken(sim), .lost = pd_sim_lost(sim)};
+    fi.has_projectile = pd_sim_projectile(sim, fi.projectile_position, fi.projectile_velocity);
     size_t n = (size_t)(p->n > 0 ? p->n : 1);
     double *density = NULL, *stress = NULL, *mises = NULL;
     if ((fields & PD_FIELD_ENERGY) && (density = malloc(n * sizeof(double))) == NULL)
@@ -865,6 +906,8 @@ int main(int argc, char **argv)
     if (!(sc->lost_margin > 0))
         sc->lost_margin = pd_lost_margin_default(p);
     sc->dt_stable = pd_stable_dt(p, b, sc);
+    if (sc->has_projectile && !o.has_proj_k)
+        sc->proj_k = pd_projectile_default_k(p, b, sc);
     if (!o.has_dt) {
         if (!isfinite(sc->dt_stable)) {
             fprintf(stderr, PROG ": error: no bonds, so no stable time step; give --dt\n");
@@ -920,9 +963,13 @@ int main(int argc, char **argv)
     /* every frame laid out now, then the file under its final name: a run
      * killed at any moment leaves it readable with its complete frames */
     if (s == PD_OK)
-        s = plan_frames(h.out, p, b, sc, o.sc.fields, first, !restart);
+        s = plan_frames(h.out, p, b, sc,
+                        o.sc.fields | (sc->has_projectile ? PD_FRAME_PROJECTILE : 0), first,
+                        !restart);
     if (s == PD_OK)
         s = pd_plan_restart(h.out, p->n, sc->has_failure, sc->has_contact);
+    if (s == PD_OK && sc->has_projectile)
+        s = pd_plan_restart_projectile(h.out);
     if (s == PD_OK)
         s = pd_file_publish(h.out);
     if (!restart) {
@@ -962,6 +1009,12 @@ int main(int argc, char **argv)
                 PROG ": model lps (seed 000 eqs. 3-4, Algorithms 2-4): K %g Pa, G %g Pa, "
                      "influence %s; contact stiffness from c = 18K/(pi delta^4)\n",
                 sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence));
+    if (!o.quiet && sc->has_projectile && !restart)
+        fprintf(stderr,
+                PROG ": projectile: mass %g kg, radius %g m, stiffness K %.6g N/m^5%s\n",
+                sc->proj_mass, sc->proj_radius, sc->proj_k,
+                o.has_proj_k ? "" : " (default: 2 K p = the largest bond stiffness sum of "
+                                    "seed 004 eq. 46 at p = spacing/4)");
     if (!o.quiet && restart)
         fprintf(stderr, PROG ": going on from step %lld of '%s'\n", (long long)first, o.restart);
 

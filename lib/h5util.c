@@ -103,6 +103,25 @@ static pd_status read_attr_scalar(hid_t loc, const char *name, H5T_class_t cls, 
     return s;
 }
 
+/* A float attribute of exactly n values. */
+pd_status pd_h5_read_attr_doubles(hid_t loc, const char *name, double *out, int n)
+{
+    hid_t a = open_attr(loc, name);
+    if (a < 0)
+        return pd_fail(PD_ERR_FORMAT, "missing attribute '%s'", name);
+    hid_t t = H5Aget_type(a);
+    hid_t sp = H5Aget_space(a);
+    pd_status s = PD_OK;
+    if (H5Tget_class(t) != H5T_FLOAT || H5Sget_simple_extent_npoints(sp) != n)
+        s = pd_fail(PD_ERR_FORMAT, "attribute '%s' has the wrong type or shape", name);
+    else if (H5Aread(a, H5T_NATIVE_DOUBLE, out) < 0)
+        s = pd_fail(PD_ERR_FORMAT, "cannot read attribute '%s'", name);
+    H5Sclose(sp);
+    H5Tclose(t);
+    H5Aclose(a);
+    return s;
+}
+
 pd_status pd_h5_read_attr_int(hid_t loc, const char *name, int64_t *out)
 {
     return read_attr_scalar(loc, name, H5T_INTEGER, H5T_NATIVE_INT64, out);

@@ -25,6 +25,7 @@ int pd_h5_has_link(hid_t loc, const char *path);
 pd_status pd_h5_read_attr_string(hid_t loc, const char *name, char **out);
 pd_status pd_h5_read_attr_int(hid_t loc, const char *name, int64_t *out);
 pd_status pd_h5_read_attr_double(hid_t loc, const char *name, double *out);
+pd_status pd_h5_read_attr_doubles(hid_t loc, const char *name, double *out, int n);
 pd_status pd_h5_write_attr_string(hid_t loc, const char *name, const char *value);
 pd_status pd_h5_write_attr_int(hid_t loc, const char *name, int64_t value);
 pd_status pd_h5_write_attr_doubles(hid_t loc, const char *name, const double *v, int n);

@@ -292,6 +292,13 @@ typedef struct {
                                     when nbc is 0)                         */
     double shear_modulus;  /* G, Pa (LPS)                                   */
     pd_influence influence;/* LPS influence function                       */
+    int has_projectile;    /* a rigid sphere moved by the contact force     */
+    double proj_center[3]; /* its centre at t = 0, m                        */
+    double proj_radius;    /* m                                             */
+    double proj_mass;      /* kg                                            */
+    double proj_velocity[3];/* at t = 0, m/s                                */
+    double proj_k;         /* K of the force density K (R - r)^2, N/m^5 (0:
+                              pd_projectile_default_k)                   */
 } pd_scene;
 
 /* ---------------------------------------------------------------- run */
@@ -378,6 +385,7 @@ typedef struct {
     double released; /* the elastic energy bonds held when they broke         */
     double lost;     /* the kinetic energy lost particles carried away        */
     double work;     /* work done on the body by the moving indenter          */
+    double projectile; /* kinetic energy of the projectile, 1/2 M |V|^2     */
 } pd_energy;
 
 /* The energies of the current state; with `density` (n values, may be
@@ -395,7 +403,8 @@ pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density);
 pd_status pd_sim_stress(const pd_sim *sim, double *stress);
 /* The von Mises stress of a 3x3 tensor (of its symmetric part), Pa. */
 double pd_von_mises(const double s[9]);
-/* The balance kinetic + elastic + contact + released + lost - work. */
+/* The balance kinetic + elastic + contact + released + lost - work
+ * (+ projectile, the sphere's kinetic energy, with --projectile). */
 double pd_energy_total(const pd_energy *e);
 int64_t pd_sim_broken(const pd_sim *sim);      /* broken bonds (pairs) */
 double pd_sim_max_damage(const pd_sim *sim);
@@ -419,6 +428,9 @@ typedef struct {
     double energy0;              /* kinetic + elastic + contact at
                                     step 0, J                         */
     uint8_t *lost;               /* n flags: particle lost (NULL: none) */
+    int has_projectile;
+    double projectile[9];        /* the projectile's centre (m), velocity
+                                    (m/s) and the force on it (N)     */
 } pd_restart;
 /* The run's accumulated energies, power and lost particles, for its
  * restart data (r->lost points into the run). */
@@ -543,6 +555,16 @@ typedef struct pd_bc {
 pd_status pd_bc_parse(pd_bc_kind kind, const char *spec, pd_bc *bc);
 /* The option that gives a condition, e.g. "velocity-bc". */
 const char *pd_bc_option(pd_bc_kind kind);
+/* The projectile (pd_scene.has_projectile, lib/projectile.c): a rigid
+ * sphere of mass M that pushes the particles inside it with the indenter's
+ * force density K (R - r)^2 and feels the reaction F = -sum V_i f_i.
+ * The default K makes the penalty's tangent stiffness 2 K p at a
+ * penetration p = PD_PROJECTILE_DEPTH x spacing equal the largest bond
+ * stiffness sum of seed 004 eq. 46, max_i sum_p V_p nu c/|xi|. */
+#define PD_PROJECTILE_DEPTH 0.25
+double pd_projectile_default_k(const pd_particles *p, const pd_bonds *b, const pd_scene *s);
+/* The projectile's centre (m) and velocity (m/s) now; 0 when there is none. */
+int pd_sim_projectile(const pd_sim *sim, double x[3], double v[3]);
 
 /* ---------------------------------------------------------------- files */
 
@@ -605,7 +627,10 @@ typedef struct {
     int64_t lost;      /* lost particles */
     pd_energy energy;  /* J; attributes kinetic_energy, elastic_energy,
                           contact_energy, released_energy, lost_energy,
-                          external_work */
+                          external_work (and projectile_energy)      */
+    int has_projectile;             /* attributes projectile_position, */
+    double projectile_position[3];  /* m, and projectile_velocity, m/s */
+    double projectile_velocity[3];
 } pd_frame_info;
 
 /* Optional per-particle fields of frames, asked for with pd-run --fields. */
@@ -621,6 +646,8 @@ typedef struct {
                                      stress[9i + 3a + b], row a, column b  */
     const double *von_mises;      /* N values, Pa                           */
 } pd_frame_fields;
+/* Not a field: frames laid out with the projectile's attributes. */
+enum { PD_FRAME_PROJECTILE = 1u << 16 };
 
 /* Lay out every frame a run will write (steps[k] at times[k]) before the
  * first step, so that writing them later changes no structure of the file;
@@ -632,6 +659,9 @@ pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
 pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact);
 pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart *r);
 pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart *r);
+/* Lay out the projectile's state in both restart slots (after
+ * pd_plan_restart; nothing when it is there already). */
+pd_status pd_plan_restart_projectile(pd_file *f);
 void pd_restart_free(pd_restart *r);
 /* Remove frames laid out but never completed. */
 pd_status pd_drop_incomplete_frames(pd_file *f);

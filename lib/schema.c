@@ -579,6 +579,12 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
                          sc->ind_velocity[1], sc->ind_velocity[2]};
         TRY(pd_h5_write_attr_doubles(g, "indenter", ind, 8));
     }
+    if (sc->has_projectile) {
+        double pr[9] = {sc->proj_center[0],   sc->proj_center[1],   sc->proj_center[2],
+                         sc->proj_radius,      sc->proj_mass,        sc->proj_velocity[0],
+                         sc->proj_velocity[1], sc->proj_velocity[2], sc->proj_k};
+        TRY(pd_h5_write_attr_doubles(g, "projectile", pr, 9));
+    }
     TRY(pd_h5_write_attr_doubles(g, "dt", &sc->dt, 1));
     TRY(pd_h5_write_attr_doubles(g, "dt_stable", &sc->dt_stable, 1));
     TRY(pd_h5_write_attr_doubles(g, "safety", &sc->safety, 1));
@@ -664,6 +670,11 @@ static pd_status lay_out_frame(pd_file *f, int64_t n, int64_t nbonds, int64_t st
     if (s == PD_OK && (fields & PD_FIELD_STRESS) &&
         (s = pd_h5_reserve_data(g, "stress", H5T_IEEE_F64LE, 3, d3)) == PD_OK)
         s = pd_h5_reserve_data(g, "von_mises", H5T_IEEE_F64LE, 1, d1);
+    double zeros[3] = {0, 0, 0};
+    if (s == PD_OK && (fields & PD_FRAME_PROJECTILE) &&
+        (s = pd_h5_write_attr_doubles(g, "projectile_position", zeros, 3)) == PD_OK &&
+        (s = pd_h5_write_attr_doubles(g, "projectile_velocity", zeros, 3)) == PD_OK)
+        s = pd_h5_write_attr_doubles(g, "projectile_energy", zeros, 1);
     H5Gclose(g);
     return s;
 }
@@ -688,7 +699,8 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
     frame_name(fi->step, path, sizeof path);
     if (!pd_h5_has_link(f->fid, path)) { /* not laid out: lay out this one */
         unsigned fields = (ff->energy_density ? PD_FIELD_ENERGY : 0) |
-                          (ff->stress && ff->von_mises ? PD_FIELD_STRESS : 0);
+                          (ff->stress && ff->von_mises ? PD_FIELD_STRESS : 0) |
+                          (fi->has_projectile ? PD_FRAME_PROJECTILE : 0);
         pd_status s = lay_out_frame(f, p->n, nbonds, fi->step, fi->time, fields);
         if (s != PD_OK)
             return s;
@@ -726,6 +738,15 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
         s = pd_h5_update_attr(g, "broken_bonds", H5T_NATIVE_INT64, &fi->broken);
     if (s == PD_OK)
         s = pd_h5_update_attr(g, "lost_particles", H5T_NATIVE_INT64, &fi->lost);
+    if (s == PD_OK && fi->has_projectile) {
+        pd_frame_info pf = *fi;
+        if ((s = pd_h5_update_attr(g, "projectile_position", H5T_NATIVE_DOUBLE,
+                                   pf.projectile_position)) == PD_OK &&
+            (s = pd_h5_update_attr(g, "projectile_velocity", H5T_NATIVE_DOUBLE,
+                                   pf.projectile_velocity)) == PD_OK)
+            s = pd_h5_update_attr(g, "projectile_energy", H5T_NATIVE_DOUBLE,
+                                  &pf.energy.projectile);
+    }
     /* the frame whole on disk first, then marked complete */
     if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
         s = pd_fail(PD_ERR_IO, "cannot write frame %s (disk full?)", path);
@@ -860,6 +881,14 @@ pd_status pd_read_frame_info(const pd_file *f, const char *name, pd_frame_info *
         s = pd_h5_read_attr_int(g, "broken_bonds", &fi->broken);
     if (s == PD_OK && pd_h5_has_attr(g, "lost_particles"))
         s = pd_h5_read_attr_int(g, "lost_particles", &fi->lost);
+    if (s == PD_OK && pd_h5_has_attr(g, "projectile_position")) {
+        fi->has_projectile = 1;
+        if ((s = pd_h5_read_attr_doubles(g, "projectile_position", fi->projectile_position, 3)) ==
+                PD_OK &&
+            (s = pd_h5_read_attr_doubles(g, "projectile_velocity", fi->projectile_velocity, 3)) ==
+                PD_OK)
+            s = pd_h5_read_attr_double(g, "projectile_energy", &fi->energy.projectile);
+    }
     H5Gclose(g);
     if (s != PD_OK)
         return pd_fail(PD_ERR_FORMAT, "'%s': frame '%s': %s", f->name, name, pd_errmsg());
@@ -1138,6 +1167,8 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
         s = pd_h5_write_into(g, "lost", H5T_NATIVE_UINT8, r->lost);
     if (s == PD_OK)
         s = pd_h5_update_attr(g, "lost_particles", H5T_NATIVE_INT64, &nlost);
+    if (s == PD_OK && r->has_projectile)
+        s = pd_h5_update_attr(g, "projectile", H5T_NATIVE_DOUBLE, sums.projectile);
     if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
         s = pd_fail(PD_ERR_IO, "cannot write restart data (disk full?)");
     if (s == PD_OK)
@@ -1211,6 +1242,10 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
         int64_t nlost = 0;
         if (s == PD_OK && pd_h5_has_attr(g, "lost_particles"))
             s = pd_h5_read_attr_int(g, "lost_particles", &nlost);
+        if (s == PD_OK && pd_h5_has_attr(g, "projectile")) {
+            r->has_projectile = 1;
+            s = pd_h5_read_attr_doubles(g, "projectile", r->projectile, 9);
+        }
         H5Gclose(g);
         if (s == PD_OK && nlost > 0) {
             char path[64];
@@ -1222,6 +1257,23 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
     }
     if (s != PD_OK)
         pd_restart_free(r);
+    return s;
+}
+
+pd_status pd_plan_restart_projectile(pd_file *f)
+{
+    double zeros[9] = {0};
+    pd_status s = PD_OK;
+    for (int k = 0; k < 2 && s == PD_OK; k++) {
+        char path[32];
+        snprintf(path, sizeof path, "/restart/%d", k);
+        hid_t g = pd_h5_has_link(f->fid, path) ? H5Gopen2(f->fid, path, H5P_DEFAULT) : -1;
+        if (g < 0)
+            return pd_fail(PD_ERR_IO, "'%s' has no %s", f->name, path);
+        if (!pd_h5_has_attr(g, "projectile"))
+            s = pd_h5_write_attr_doubles(g, "projectile", zeros, 9);
+        H5Gclose(g);
+    }
     return s;
 }
 

@@ -130,6 +130,20 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
         st = add_effect(sim, &pd_effect_body_force);
     if (st == PD_OK && held)
         st = add_effect(sim, &pd_effect_prescribed);
+    if (st == PD_OK && s->has_projectile) {
+        if (!(s->proj_radius > 0) || !(s->proj_mass > 0) || !(s->proj_k >= 0))
+            st = pd_fail(PD_ERR_INVALID, "the projectile's radius, mass and stiffness must be "
+                                         "positive");
+        if (st == PD_OK && !(s->proj_k > 0))
+            sim->sc.proj_k = pd_projectile_default_k(p, b, s);
+        sim->has_projectile = 1;
+        for (int d = 0; d < 3; d++) {
+            sim->proj_x[d] = s->proj_center[d];
+            sim->proj_v[d] = s->proj_velocity[d];
+        }
+        if (st == PD_OK)
+            st = add_effect(sim, &pd_effect_projectile);
+    }
     if (st != PD_OK) {
         pd_sim_free(sim);
         return st;
@@ -240,7 +254,7 @@ pd_status pd_sim_setup(pd_sim *sim)
     sim->setup = 0;
     pd_energy e;
     if (s == PD_OK && (s = pd_sim_energy(sim, &e, NULL)) == PD_OK)
-        sim->energy0 = e.kinetic + e.elastic + e.contact;
+        sim->energy0 = e.kinetic + e.elastic + e.contact + e.projectile;
     return s;
 }
 
@@ -329,6 +343,8 @@ pd_status pd_sim_step(pd_sim *sim)
     pd_status s = constrain(sim, PD_PHASE_KICK1);
     if (s != PD_OK)
         return s;
+    if (sim->has_projectile)
+        pd_projectile_kick(sim);
     int away = 0;
 #pragma omp parallel for schedule(static) reduction(| : away)
     for (int64_t i = 0; i < sim->n; i++) {
@@ -337,6 +353,8 @@ pd_status pd_sim_step(pd_sim *sim)
         sim->y[2][i] += dt * sim->v[2][i];
         away |= outside(sim, i) && !(lost && lost[i]);
     }
+    if (sim->has_projectile)
+        pd_projectile_drift(sim);
     sim->step++;
     sim->time = (double)sim->step * dt;
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
@@ -350,6 +368,11 @@ pd_status pd_sim_step(pd_sim *sim)
         return s;
     t0 = pd_wtime();
     int bad = half_kick(sim);
+    if (sim->has_projectile && pd_projectile_kick(sim))
+        return pd_fail(PD_ERR_UNSTABLE,
+                       "the projectile's velocity is not finite at step %lld: the time step "
+                       "may be too large for its stiffness",
+                       (long long)sim->step);
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
     if (!bad && (s = constrain(sim, PD_PHASE_KICK2)) != PD_OK)
         return s;
@@ -421,6 +444,10 @@ pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density)
     e->released = sim->released;
     e->lost = sim->lost_energy;
     e->work = sim->work;
+    if (sim->has_projectile)
+        e->projectile = 0.5 * sim->sc.proj_mass *
+                        (sim->proj_v[0] * sim->proj_v[0] + sim->proj_v[1] * sim->proj_v[1] +
+                         sim->proj_v[2] * sim->proj_v[2]);
     free(buf);
     return PD_OK;
 }
@@ -443,7 +470,8 @@ double pd_von_mises(const double s[9])
 
 double pd_energy_total(const pd_energy *e)
 {
-    return e->kinetic + e->elastic + e->contact + e->released + e->lost - e->work;
+    return e->kinetic + e->elastic + e->contact + e->released + e->lost - e->work +
+           e->projectile;
 }
 
 void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
@@ -454,6 +482,12 @@ void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
     r->lost_energy = sim->lost_energy;
     r->energy0 = sim->energy0;
     r->lost = sim->lost;
+    r->has_projectile = sim->has_projectile;
+    for (int d = 0; d < 3 && sim->has_projectile; d++) {
+        r->projectile[d] = sim->proj_x[d];
+        r->projectile[3 + d] = sim->proj_v[d];
+        r->projectile[6 + d] = sim->proj_f[d];
+    }
 }
 
 int64_t pd_sim_lost(const pd_sim *sim)
@@ -563,6 +597,15 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
         sim->nlost = 0;
         for (int64_t i = 0; i < sim->n; i++)
             sim->nlost += sim->lost[i] != 0;
+    }
+    if (sim->has_projectile) {
+        if (!r->has_projectile)
+            return pd_fail(PD_ERR_FORMAT, "the restart data have no projectile, the scene has one");
+        for (int d = 0; d < 3; d++) {
+            sim->proj_x[d] = r->projectile[d];
+            sim->proj_v[d] = r->projectile[3 + d];
+            sim->proj_f[d] = r->projectile[6 + d];
+        }
     }
     void *cs = effect_state(sim, &pd_effect_contact);
     if (cs && r->contact_builds > 0) {

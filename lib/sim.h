@@ -109,6 +109,12 @@ struct pd_sim {
     double timers[PD_T_COUNT];
     int64_t contact_builds;
     int constrained;    /* some effect has a constrain hook              */
+    /* the projectile (lib/projectile.c), a rigid sphere of mass
+     * sc.proj_mass, integrated with the particles                     */
+    int has_projectile;
+    double proj_x[3];   /* centre, m                                     */
+    double proj_v[3];   /* velocity, m/s                                 */
+    double proj_f[3];   /* force on it at the last force evaluation, N   */
 };
 
 /* Break every bond of particle i (both halves). */
@@ -125,5 +131,11 @@ extern const pd_effect pd_effect_body_force;
 extern const pd_effect pd_effect_prescribed;
 extern const pd_effect pd_effect_lps;
 extern const pd_effect pd_effect_lps_failure;
+extern const pd_effect pd_effect_projectile;
+
+/* The projectile's half kick V += dt/(2M) F (1 when V is not finite) and
+ * its drift X += dt V, in step with the particles'. */
+int pd_projectile_kick(pd_sim *sim);
+void pd_projectile_drift(pd_sim *sim);
 
 #endif

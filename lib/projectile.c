@@ -1,0 +1,139 @@
+/*
+ * projectile.c -- a rigid spherical projectile that the body pushes back
+ * (pd-run --projectile; seed 004 §6, the Hertzian cone crack: a sphere of
+ * given mass and velocity that slows, stops and rebounds).
+ *
+ * The force law on the particles is the indenter's (lib/indenter.c): every
+ * particle inside the sphere, r = |y_i - X| < R, feels the force density
+ *   f_i += K (R - r)^2 (y_i - X) / r,                       N/m^3,
+ * and the sphere, of mass M, feels the reaction
+ *   F = - sum_i V_i f_i,                                    N,
+ * so that the particles and the sphere together exchange no momentum with
+ * the outside.  The sphere moves by velocity Verlet with the particles'
+ * step (lib/sim.c pd_sim_step): half kick V += dt/(2M) F, drift
+ * X += dt V together with the particles, forces at the new positions, half
+ * kick.  Its penalty energy sum V_i K (R - r)^3 / 3 is contact energy and
+ * 1/2 M |V|^2 its own term of the balance (pd_energy.projectile); it does
+ * no external work.  Lost particles are left out.
+ *
+ * Default K (no K given).  The penalty's tangent stiffness per unit
+ * volume, d|f_i|/dp = 2 K p at a penetration p = R - r, grows with the
+ * penetration; the bonds' is bounded by the sum of seed 004 eq. 46,
+ * S_i = sum_p V_p nu c/|xi|, which sets the stable step.  K is chosen so
+ * that 2 K p equals max_i S_i at p = PD_PROJECTILE_DEPTH x spacing (a
+ * quarter of the spacing): the sphere stops within a fraction of a
+ * particle spacing of the surface it first meets (a hard contact, as
+ * Hertz's), while at the penetrations an impact reaches the penalty adds
+ * about as much stiffness as the bonds, which the 0.8 safety factor and
+ * eq. 46's conservatism in 3-D (a factor of about 2, pd-run(1)) absorb.
+ */
+#include <math.h>
+
+#include "sim.h"
+
+double pd_projectile_default_k(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
+{
+    double smax = 0;
+    for (int64_t i = 0; i < b->n; i++) {
+        double sum = 0;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
+            sum += p->volume[b->neighbor[k]] * b->vfactor[k] * s->c / b->length[k];
+        smax = fmax(smax, sum);
+    }
+    return smax / (2.0 * PD_PROJECTILE_DEPTH * p->spacing);
+}
+
+/* The force densities on the particles inside the sphere, and the reaction
+ * on the sphere, summed in fixed chunks (the same at any thread count). */
+static pd_status projectile_force(pd_sim *sim, void *state)
+{
+    (void)state;
+    const double R = sim->sc.proj_radius, K = sim->sc.proj_k;
+    const double c[3] = {sim->proj_x[0], sim->proj_x[1], sim->proj_x[2]};
+    const double *V = sim->p->volume;
+    const uint8_t *lost = sim->lost;
+    double *const *y = sim->y;
+    const int64_t n = sim->n, nchunks = (n + PD_SUM_CHUNK - 1) / PD_SUM_CHUNK;
+    double F[3] = {0, 0, 0};
+    for (int64_t g = 0; g < nchunks; g += 64) {
+        const int64_t m = nchunks - g < 64 ? nchunks - g : 64;
+        double part[64][3];
+#pragma omp parallel for schedule(static)
+        for (int64_t ch = 0; ch < m; ch++) {
+            const int64_t lo = (g + ch) * PD_SUM_CHUNK;
+            const int64_t hi = lo + PD_SUM_CHUNK < n ? lo + PD_SUM_CHUNK : n;
+            double sx = 0, sy = 0, sz = 0;
+            for (int64_t i = lo; i < hi; i++) {
+                const double dx = y[0][i] - c[0], dy = y[1][i] - c[1], dz = y[2][i] - c[2];
+                const double r2 = dx * dx + dy * dy + dz * dz;
+                if (r2 >= R * R || (lost && lost[i]))
+                    continue;
+                const double r = sqrt(r2);
+                const double dr = r - R;
+                if (dr >= 0.0 || r <= 0.0)
+                    continue;
+                const double fmag = K * dr * dr;
+                const double f0 = dx * fmag / r, f1 = dy * fmag / r, f2 = dz * fmag / r;
+                sim->f[0][i] += f0;
+                sim->f[1][i] += f1;
+                sim->f[2][i] += f2;
+                sx += V[i] * f0;
+                sy += V[i] * f1;
+                sz += V[i] * f2;
+            }
+            part[ch][0] = sx;
+            part[ch][1] = sy;
+            part[ch][2] = sz;
+        }
+        for (int64_t ch = 0; ch < m; ch++)
+            for (int d = 0; d < 3; d++)
+                F[d] += part[ch][d];
+    }
+    for (int d = 0; d < 3; d++)
+        sim->proj_f[d] = -F[d];
+    return PD_OK;
+}
+
+/* The penalty energy, V_i K (R - r)^3 / 3 (contact energy). */
+static void projectile_energy(const pd_sim *sim, void *state, double *e)
+{
+    (void)state;
+    const double R = sim->sc.proj_radius, K = sim->sc.proj_k;
+    const double *c = sim->proj_x;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        const double dx = sim->y[0][i] - c[0], dy = sim->y[1][i] - c[1], dz = sim->y[2][i] - c[2];
+        const double r = sqrt(dx * dx + dy * dy + dz * dz);
+        if (r < R && !(sim->lost && sim->lost[i]))
+            e[i] += sim->p->volume[i] * K * (R - r) * (R - r) * (R - r) / 3.0;
+    }
+}
+
+int pd_projectile_kick(pd_sim *sim)
+{
+    const double h = 0.5 * sim->sc.dt / sim->sc.proj_mass;
+    for (int d = 0; d < 3; d++)
+        sim->proj_v[d] += h * sim->proj_f[d];
+    return !isfinite(sim->proj_v[0] + sim->proj_v[1] + sim->proj_v[2]);
+}
+
+void pd_projectile_drift(pd_sim *sim)
+{
+    for (int d = 0; d < 3; d++)
+        sim->proj_x[d] += sim->sc.dt * sim->proj_v[d];
+}
+
+int pd_sim_projectile(const pd_sim *sim, double x[3], double v[3])
+{
+    if (!sim->has_projectile)
+        return 0;
+    for (int d = 0; d < 3; d++) {
+        x[d] = sim->proj_x[d];
+        v[d] = sim->proj_v[d];
+    }
+    return 1;
+}
+
+const pd_effect pd_effect_projectile = {
+    .name = "projectile", .timer = PD_T_INDENTER, .force = projectile_force,
+    .energy = projectile_energy, .kind = PD_ENERGY_CONTACT};
