@@ -284,6 +284,9 @@ static pd_status make_temp(const char *path, char **tmp)
         free(t);
         return pd_fail(PD_ERR_IO, "cannot write '%s': is a directory", path);
     }
+    /* registered before it exists: mkstemp writes the name before it
+     * creates the file, so a signal at any moment removes whatever exists */
+    temp_register(t);
     int fd = mkstemp(t);
     if (fd >= 0) {
         /* mkstemp makes 0600; a published file gets 0666 less the umask */
@@ -297,6 +300,7 @@ static pd_status make_temp(const char *path, char **tmp)
     }
     if (fd < 0) {
         pd_status s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", path, strerror(errno));
+        temp_forget(t);
         free(copy);
         free(base);
         free(t);
@@ -305,7 +309,6 @@ static pd_status make_temp(const char *path, char **tmp)
     close(fd);
     free(copy);
     free(base);
-    temp_register(t);
     *tmp = t;
     return PD_OK;
 }

@@ -23,30 +23,21 @@ static void centre(const pd_sim *sim, double c[3])
         c[d] = s->ind_center[d] + t * s->ind_velocity[d];
 }
 
-/* Forces, and the power the moving sphere puts in: its potential
- * U = sum V_i K (R - r)^3 / 3 depends on time through c(t), and
- * dU/dt = v . sum V_i f_i (pd_energy.work integrates it).  The power is
- * summed in fixed chunks, the same at any thread count. */
-static pd_status indenter_force(pd_sim *sim, void *state)
+void pd_sphere_push(pd_sim *sim, const double c[3], double R, double K, double F[3])
 {
-    (void)state;
-    const pd_scene *s = &sim->sc;
-    double c[3];
-    centre(sim, c);
-    const double R = s->ind_radius, K = s->ind_k;
     const double *V = sim->p->volume;
     const uint8_t *lost = sim->lost;
     double *const *y = sim->y;
     const int64_t n = sim->n, nchunks = (n + PD_SUM_CHUNK - 1) / PD_SUM_CHUNK;
-    double power = 0;
+    F[0] = F[1] = F[2] = 0;
     for (int64_t g = 0; g < nchunks; g += 64) {
         const int64_t m = nchunks - g < 64 ? nchunks - g : 64;
-        double part[64];
+        double part[64][3];
 #pragma omp parallel for schedule(static)
         for (int64_t ch = 0; ch < m; ch++) {
             const int64_t lo = (g + ch) * PD_SUM_CHUNK;
             const int64_t hi = lo + PD_SUM_CHUNK < n ? lo + PD_SUM_CHUNK : n;
-            double fv = 0;
+            double sx = 0, sy = 0, sz = 0;
             for (int64_t i = lo; i < hi; i++) {
                 const double dx = y[0][i] - c[0], dy = y[1][i] - c[1], dz = y[2][i] - c[2];
                 const double r2 = dx * dx + dy * dy + dz * dz;
@@ -61,15 +52,43 @@ static pd_status indenter_force(pd_sim *sim, void *state)
                 sim->f[0][i] += f0;
                 sim->f[1][i] += f1;
                 sim->f[2][i] += f2;
-                fv += V[i] * (f0 * s->ind_velocity[0] + f1 * s->ind_velocity[1] +
-                              f2 * s->ind_velocity[2]);
+                sx += V[i] * f0;
+                sy += V[i] * f1;
+                sz += V[i] * f2;
             }
-            part[ch] = fv;
+            part[ch][0] = sx;
+            part[ch][1] = sy;
+            part[ch][2] = sz;
         }
         for (int64_t ch = 0; ch < m; ch++)
-            power += part[ch];
+            for (int d = 0; d < 3; d++)
+                F[d] += part[ch][d];
     }
-    sim->power += power;
+}
+
+void pd_sphere_energy(const pd_sim *sim, const double c[3], double R, double K, double *e)
+{
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        const double dx = sim->y[0][i] - c[0], dy = sim->y[1][i] - c[1], dz = sim->y[2][i] - c[2];
+        const double r = sqrt(dx * dx + dy * dy + dz * dz);
+        if (r < R && !(sim->lost && sim->lost[i]))
+            e[i] += sim->p->volume[i] * K * (R - r) * (R - r) * (R - r) / 3.0;
+    }
+}
+
+/* Forces, and the power the moving sphere puts in: its potential
+ * U = sum V_i K (R - r)^3 / 3 depends on time through c(t), and
+ * dU/dt = v . sum V_i f_i (pd_energy.work integrates it). */
+static pd_status indenter_force(pd_sim *sim, void *state)
+{
+    (void)state;
+    const pd_scene *s = &sim->sc;
+    double c[3], F[3];
+    centre(sim, c);
+    pd_sphere_push(sim, c, s->ind_radius, s->ind_k, F);
+    sim->power += s->ind_velocity[0] * F[0] + s->ind_velocity[1] * F[1] +
+                  s->ind_velocity[2] * F[2];
     return PD_OK;
 }
 
@@ -79,14 +98,7 @@ static void indenter_energy(const pd_sim *sim, void *state, double *e)
     (void)state;
     double c[3];
     centre(sim, c);
-    const double R = sim->sc.ind_radius, K = sim->sc.ind_k;
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++) {
-        const double dx = sim->y[0][i] - c[0], dy = sim->y[1][i] - c[1], dz = sim->y[2][i] - c[2];
-        const double r = sqrt(dx * dx + dy * dy + dz * dz);
-        if (r < R && !(sim->lost && sim->lost[i]))
-            e[i] += sim->p->volume[i] * K * (R - r) * (R - r) * (R - r) / 3.0;
-    }
+    pd_sphere_energy(sim, c, sim->sc.ind_radius, sim->sc.ind_k, e);
 }
 
 const pd_effect pd_effect_indenter = {

@@ -530,7 +530,8 @@ double pd_profile_value(const pd_profile *g, double t);
 double pd_profile_integral(const pd_profile *g, double t);
 double pd_profile_rate(const pd_profile *g, double t);
 /* The profile in a form pd_profile_parse reads back to the same numbers
- * (a table as points:..., %.17g); malloc'ed, NULL when out of memory. */
+ * (a table as points:..., each number in the shortest form that reads back
+ * to it); malloc'ed, NULL when out of memory. */
 char *pd_profile_text(const pd_profile *g);
 
 /* ---------------------------------------------------------------- boundary conditions */

@@ -394,6 +394,14 @@ const pd_effect pd_effect_pmb_failure = {
     .name = "pmb+failure", .timer = PD_T_BONDS, .force = pmb_failure_force,
     .energy = pmb_energy, .kind = PD_ENERGY_ELASTIC, .stress = pmb_stress};
 
+double pd_bond_stiffness(const pd_particles *p, const pd_bonds *b, double c, int64_t i)
+{
+    double sum = 0;
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
+        sum += p->volume[b->neighbor[k]] * b->vfactor[k] * c / b->length[k];
+    return sum;
+}
+
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
 {
     if (s->model == PD_MODEL_LPS)
@@ -403,9 +411,7 @@ double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
      * that the discrete force uses; the smallest over all particles. */
     double best = INFINITY;
     for (int64_t i = 0; i < b->n; i++) {
-        double sum = 0;
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-            sum += p->volume[b->neighbor[k]] * b->vfactor[k] * s->c / b->length[k];
+        double sum = pd_bond_stiffness(p, b, s->c, i);
         if (sum > 0)
             best = fmin(best, sqrt(2.0 * p->density[i] / sum));
     }

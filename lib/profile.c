@@ -293,6 +293,18 @@ double pd_profile_rate(const pd_profile *g, double t)
     return (g->v[k + 1] - g->v[k]) / (g->t[k + 1] - g->t[k]);
 }
 
+/* The shortest %g form of x that reads back to x exactly (at most 17
+ * digits), so that a log shows 5e-06 and not 5.0000000000000004e-06. */
+static int shortest(char *buf, size_t len, double x)
+{
+    for (int prec = 1; prec < 17; prec++) {
+        int n = snprintf(buf, len, "%.*g", prec, x);
+        if (strtod(buf, NULL) == x)
+            return n;
+    }
+    return snprintf(buf, len, "%.17g", x);
+}
+
 char *pd_profile_text(const pd_profile *g)
 {
     size_t cap = 64 + (size_t)g->n * 2 * 26;
@@ -300,7 +312,7 @@ char *pd_profile_text(const pd_profile *g)
     if (s == NULL)
         return NULL;
     if (g->kind == PD_PROFILE_CONSTANT) {
-        snprintf(s, cap, "%.17g", g->v[0]);
+        shortest(s, cap, g->v[0]);
         return s;
     }
     p += sprintf(p, "%s", g->kind == PD_PROFILE_POINTS ? "points:" : "pulses:");
@@ -309,7 +321,10 @@ char *pd_profile_text(const pd_profile *g)
          * same start times */
         double a = g->kind == PD_PROFILE_POINTS ? g->t[k] : g->v[k];
         double b = g->kind == PD_PROFILE_POINTS ? g->v[k] : g->d[k];
-        p += sprintf(p, "%s%.17g,%.17g", k ? "," : "", a, b);
+        p += sprintf(p, "%s", k ? "," : "");
+        p += shortest(p, 26, a);
+        *p++ = ',';
+        p += shortest(p, 26, b);
     }
     return s;
 }

@@ -34,61 +34,18 @@
 double pd_projectile_default_k(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
 {
     double smax = 0;
-    for (int64_t i = 0; i < b->n; i++) {
-        double sum = 0;
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-            sum += p->volume[b->neighbor[k]] * b->vfactor[k] * s->c / b->length[k];
-        smax = fmax(smax, sum);
-    }
+    for (int64_t i = 0; i < b->n; i++)
+        smax = fmax(smax, pd_bond_stiffness(p, b, s->c, i));
     return smax / (2.0 * PD_PROJECTILE_DEPTH * p->spacing);
 }
 
 /* The force densities on the particles inside the sphere, and the reaction
- * on the sphere, summed in fixed chunks (the same at any thread count). */
+ * on the sphere (pd_sphere_push: the same at any thread count). */
 static pd_status projectile_force(pd_sim *sim, void *state)
 {
     (void)state;
-    const double R = sim->sc.proj_radius, K = sim->sc.proj_k;
-    const double c[3] = {sim->proj_x[0], sim->proj_x[1], sim->proj_x[2]};
-    const double *V = sim->p->volume;
-    const uint8_t *lost = sim->lost;
-    double *const *y = sim->y;
-    const int64_t n = sim->n, nchunks = (n + PD_SUM_CHUNK - 1) / PD_SUM_CHUNK;
-    double F[3] = {0, 0, 0};
-    for (int64_t g = 0; g < nchunks; g += 64) {
-        const int64_t m = nchunks - g < 64 ? nchunks - g : 64;
-        double part[64][3];
-#pragma omp parallel for schedule(static)
-        for (int64_t ch = 0; ch < m; ch++) {
-            const int64_t lo = (g + ch) * PD_SUM_CHUNK;
-            const int64_t hi = lo + PD_SUM_CHUNK < n ? lo + PD_SUM_CHUNK : n;
-            double sx = 0, sy = 0, sz = 0;
-            for (int64_t i = lo; i < hi; i++) {
-                const double dx = y[0][i] - c[0], dy = y[1][i] - c[1], dz = y[2][i] - c[2];
-                const double r2 = dx * dx + dy * dy + dz * dz;
-                if (r2 >= R * R || (lost && lost[i]))
-                    continue;
-                const double r = sqrt(r2);
-                const double dr = r - R;
-                if (dr >= 0.0 || r <= 0.0)
-                    continue;
-                const double fmag = K * dr * dr;
-                const double f0 = dx * fmag / r, f1 = dy * fmag / r, f2 = dz * fmag / r;
-                sim->f[0][i] += f0;
-                sim->f[1][i] += f1;
-                sim->f[2][i] += f2;
-                sx += V[i] * f0;
-                sy += V[i] * f1;
-                sz += V[i] * f2;
-            }
-            part[ch][0] = sx;
-            part[ch][1] = sy;
-            part[ch][2] = sz;
-        }
-        for (int64_t ch = 0; ch < m; ch++)
-            for (int d = 0; d < 3; d++)
-                F[d] += part[ch][d];
-    }
+    double F[3];
+    pd_sphere_push(sim, sim->proj_x, sim->sc.proj_radius, sim->sc.proj_k, F);
     for (int d = 0; d < 3; d++)
         sim->proj_f[d] = -F[d];
     return PD_OK;
@@ -98,15 +55,7 @@ static pd_status projectile_force(pd_sim *sim, void *state)
 static void projectile_energy(const pd_sim *sim, void *state, double *e)
 {
     (void)state;
-    const double R = sim->sc.proj_radius, K = sim->sc.proj_k;
-    const double *c = sim->proj_x;
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++) {
-        const double dx = sim->y[0][i] - c[0], dy = sim->y[1][i] - c[1], dz = sim->y[2][i] - c[2];
-        const double r = sqrt(dx * dx + dy * dy + dz * dz);
-        if (r < R && !(sim->lost && sim->lost[i]))
-            e[i] += sim->p->volume[i] * K * (R - r) * (R - r) * (R - r) / 3.0;
-    }
+    pd_sphere_energy(sim, sim->proj_x, sim->sc.proj_radius, sim->sc.proj_k, e);
 }
 
 int pd_projectile_kick(pd_sim *sim)

@@ -117,6 +117,18 @@ struct pd_sim {
     double proj_f[3];   /* force on it at the last force evaluation, N   */
 };
 
+/* A rigid sphere (centre c, radius R, m) pushing the particles inside it,
+ * r = |y_i - c| < R, with the force density K (R - r)^2 (y_i - c)/r (LAMMPS
+ * fix indent; K in N/m^5), lost particles left out: adds to sim->f and
+ * returns in F the sum of V_i f_i, N, summed in fixed chunks (the same at
+ * any thread count).  The indenter and the projectile (lib/indenter.c). */
+void pd_sphere_push(pd_sim *sim, const double c[3], double R, double K, double F[3]);
+/* Its penalty energy V_i K (R - r)^3 / 3, J, added to e[i]. */
+void pd_sphere_energy(const pd_sim *sim, const double c[3], double R, double K, double *e);
+/* The PMB bond stiffness sum of seed 004 eq. 46 of particle i,
+ * sum_p V_p nu c / |xi| over its family, N/m^4 per unit volume (lib/pmb.c). */
+double pd_bond_stiffness(const pd_particles *p, const pd_bonds *b, double c, int64_t i);
+
 /* Break every bond of particle i (both halves). */
 void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i);
 

@@ -218,7 +218,7 @@ for k in sorted(f['frames'], key=int):
     pd-run "${K[@]}" "${C[@]}" --steps 40 --every 20 --threads 2 -q bar.h5 -o run.h5
     rm ramp.txt
     run -0 --separate-stderr pd-run --restart run.h5 --steps 20 --threads 2
-    [[ "$stderr" =~ --velocity-bc\ right,x,points:0,0,1.9999999999999999e-06,3 ]]
+    [[ "$stderr" =~ --velocity-bc\ right,x,points:0,0,2e-06,3 ]]
     py "
 a, b = h5py.File(sys.argv[1], 'r'), h5py.File(sys.argv[2], 'r')
 assert sorted(a['frames']) == sorted(b['frames'])
