@@ -126,7 +126,7 @@ for fn in sys.argv[2:]:
     run -0 --separate-stderr pd-run "${K[@]}" --steps 200 --every 20 --threads 2 \
         --velocity-bc right,x,pulses:20,5e-6,-20,5e-6 --velocity-bc left,y,points:0,0,1e-5,2 bar.h5 -o run.h5
     [[ "$stderr" =~ effects:\ pmb\ prescribed-motion ]]
-    [[ "$stderr" =~ --velocity-bc\ right,x,pulses:20,5.0000000000000004e-06,-20,5.0000000000000004e-06\ on\ 75\ particles ]]
+    [[ "$stderr" =~ --velocity-bc\ right,x,pulses:20,5e-06,-20,5e-06\ on\ 75\ particles ]]
     py "
 f = h5py.File(sys.argv[1], 'r')
 ids, x = f['particles/id'][:], f['particles/position'][:]
