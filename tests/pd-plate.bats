@@ -226,7 +226,7 @@ with h5py.File(sys.argv[1]) as f:
     # the pre-crack ends at x = 0; the crack runs from there along +x
     py "
 rows = [l.split() for l in sys.stdin.read().splitlines() if not l.startswith('#')]
-tips = [float(r[2]) for r in rows]
+tips = [float(r[3]) for r in rows]  # upper_m: the tip that runs along +x
 assert abs(tips[0]) <= $DELTA, tips
 assert tips[-1] > tips[0] + 0.0005, tips" <<<"$output"
     run -0 pd-dump2vtk -q run.h5 -o vtk
