@@ -66,6 +66,11 @@ static void usage(FILE *out)
             "  --shear-modulus G     shear modulus, Pa (lps, required there)\n"
             "  --influence W         influence function of lps: 1/r (default), 1 or\n"
             "                        gaussian (exp(-|xi|^2/delta^2)); lps is 3-D only\n"
+            "  --ellipsoid UX,UY,UZ,A,B,ROLL\n"
+            "                        anisotropic influence (lps; up to 8, the largest\n"
+            "                        wins): omega times the distance to an ellipsoid\n"
+            "                        with semi-axes 1, A, B (A, B in (0,1]) along U and\n"
+            "                        two normals rolled ROLL radians about U (seed 002)\n"
             "Effects (each only when given):\n"
             "  --failure S00,ALPHA   critical stretch s0 = S00 - ALPHA s_min (both\n"
             "                        dimensionless)\n"
@@ -290,7 +295,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     enum { OPT_MODEL = 256, OPT_C, OPT_K, OPT_FAILURE, OPT_CONTACT, OPT_SKIN, OPT_INDENTER,
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
-           OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE };
+           OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -318,6 +323,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"displacement-bc", required_argument, 0, OPT_DBC},
         {"body-force", required_argument, 0, OPT_BODY},
         {"projectile", required_argument, 0, OPT_PROJECTILE},
+        {"ellipsoid", required_argument, 0, OPT_ELLIPSOID},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -503,6 +509,15 @@ static int parse_options(int argc, char **argv, struct options *o)
             o->has_proj_k = hk;
             break;
         }
+        case OPT_ELLIPSOID:
+            if (o->sc.nellipsoids == PD_ELLIPSOID_MAX)
+                return usage_error("--ellipsoid is given at most 8 times; one more:", optarg);
+            if (pd_ellipsoid_parse(optarg, &o->sc.ellipsoid[o->sc.nellipsoids]) != PD_OK)
+                return usage_error("--ellipsoid needs UX,UY,UZ,A,B,ROLL with U nonzero and A, B "
+                                   "in (0, 1], not",
+                                   optarg);
+            o->sc.nellipsoids++;
+            break;
         case 'q':
             o->quiet = 1;
             break;
@@ -534,6 +549,10 @@ static int parse_options(int argc, char **argv, struct options *o)
                                       "ratio 1/4: only K)"
                                     : "--influence is for --model lps",
                            NULL);
+    if (o->sc.nellipsoids > 0 && o->sc.model == PD_MODEL_PMB)
+        return usage_error("--ellipsoid is an influence function of the state-based models "
+                           "(--model lps)",
+                           NULL);
     if (!o->has_c && !o->has_k && !o->has_e)
         return usage_error("give the stiffness: --c or --bulk-modulus (or --youngs-modulus)", NULL);
     if (o->restart) { /* the run file is the input and, without -o, the output */
@@ -554,7 +573,7 @@ static int parse_options(int argc, char **argv, struct options *o)
 /* The resolved scene in scene-file form, enough to rerun. */
 static char *scene_text(const pd_scene *s)
 {
-    size_t cap = 2048;
+    size_t cap = 2048 + 160 * (size_t)s->nellipsoids;
     char *prof[MAX_BC] = {NULL};
     for (int k = 0; k < s->nbc; k++) { /* a table in resolved form */
         if ((prof[k] = pd_profile_text(&s->bc[k].profile)) == NULL) {
@@ -575,6 +594,10 @@ static char *scene_text(const pd_scene *s)
                      s->bulk_modulus, s->shear_modulus, pd_influence_name(s->influence));
     else
         p += sprintf(p, "model pmb\nc %.17g\n", s->c);
+    for (int k = 0; k < s->nellipsoids; k++)
+        p += sprintf(p, "ellipsoid %.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", s->ellipsoid[k].u[0],
+                     s->ellipsoid[k].u[1], s->ellipsoid[k].u[2], s->ellipsoid[k].a,
+                     s->ellipsoid[k].b, s->ellipsoid[k].roll);
     if (s->has_failure)
         p += sprintf(p, "failure %.17g,%.17g\n", s->s00, s->alpha);
     if (s->has_contact)
@@ -1009,6 +1032,10 @@ int main(int argc, char **argv)
                 PROG ": model lps (seed 000 eqs. 3-4, Algorithms 2-4): K %g Pa, G %g Pa, "
                      "influence %s; contact stiffness from c = 18K/(pi delta^4)\n",
                 sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence));
+    if (!o.quiet && sc->nellipsoids > 0)
+        fprintf(stderr, PROG ": anisotropic influence (seed 002 eq. 13): omega times the largest "
+                             "distance to %d ellipsoid%s\n",
+                sc->nellipsoids, sc->nellipsoids > 1 ? "s" : "");
     if (!o.quiet && sc->has_projectile && !restart)
         fprintf(stderr,
                 PROG ": projectile: mass %g kg, radius %g m, stiffness K %.6g N/m^5%s\n",

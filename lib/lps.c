@@ -35,6 +35,10 @@
  * When bonds break, the energy released is the drop of W* of both ends at
  * the step's positions as the bonds go.
  *
+ * The influence omega may also depend on the bond's direction (the
+ * ellipsoids of lib/influence.c, seed 002): omega[k] is then the bond's
+ * own weight, the same in m and in every sum below.
+ *
  * Each particle walks its own (directed) family and writes only its own
  * force, theta and s0: no scatter, so the sums are in a fixed order and
  * the result does not depend on the thread count.  The bond states stay
@@ -51,7 +55,7 @@
 typedef struct {
     double *m;         /* n: weighted volume m_i, m^5 times omega's unit */
     double *theta;     /* n: dilatation of this step                     */
-    double *omega;     /* directed bonds: omega(|xi|)                    */
+    double *omega;     /* directed bonds: omega(|xi|) d(xi/|xi|)         */
     int64_t *half;     /* directed bond -> its half bond in sim->half    */
     uint8_t *kill;     /* directed bonds: breaks in this step            */
     uint8_t *touched;  /* n: particle with a bond breaking in this step  */
@@ -103,6 +107,27 @@ void pd_lps_weighted_volume(const pd_particles *p, const pd_bonds *b, pd_influen
     }
 }
 
+/* The weight of every directed bond, omega[k] = omega(|xi|) d(xi/|xi|)
+ * (lib/influence.c: d = 1 without ellipsoids), and m_i from it (Algorithm
+ * 3, in pd_lps_weighted_volume's order of products). */
+static void bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
+                         double *omega, double *m)
+{
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < b->n; i++) {
+        double sum = 0;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            const int32_t j = b->neighbor[k];
+            const double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
+                         dz = p->x[2][i] - p->x[2][j];
+            const double rsq = dx * dx + dy * dy + dz * dz, xi[3] = {-dx, -dy, -dz};
+            omega[k] = pd_bond_influence(s, b->length[k], b->horizon, xi);
+            sum += omega[k] * rsq * p->volume[j] * b->vfactor[k];
+        }
+        m[i] = sum;
+    }
+}
+
 static void lps_free(void *state)
 {
     lps_state *st = state;
@@ -138,9 +163,7 @@ static pd_status lps_init(pd_sim *sim, void **state)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS state of %lld bonds",
                        (long long)b->count);
     }
-    pd_lps_weighted_volume(sim->p, b, sim->sc.influence, st->m);
-    for (int64_t k = 0; k < b->count; k++)
-        st->omega[k] = pd_lps_influence(sim->sc.influence, b->length[k], b->horizon);
+    bond_weights(sim->p, b, &sim->sc, st->omega, st->m);
     /* the half bond of each directed bond: row i meets its bonds to j < i
      * in ascending i for each j, so a cursor per row finds them */
     const pd_half_bonds *h = &sim->half;
@@ -406,17 +429,18 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
     const int64_t n = b->n;
     double *m = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
     double *S = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
-    if (m == NULL || S == NULL) {
+    double *omega = malloc((size_t)(b->count > 0 ? b->count : 1) * sizeof(double));
+    if (m == NULL || S == NULL || omega == NULL) {
         free(m);
         free(S);
+        free(omega);
         return NAN;
     }
-    pd_lps_weighted_volume(p, b, s->influence, m);
+    bond_weights(p, b, s, omega, m);
     for (int64_t i = 0; i < n; i++) {
         S[i] = 0;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-            S[i] += pd_lps_influence(s->influence, b->length[k], b->horizon) * b->length[k] *
-                    b->vfactor[k] * p->volume[b->neighbor[k]];
+            S[i] += omega[k] * b->length[k] * b->vfactor[k] * p->volume[b->neighbor[k]];
     }
     const double G = s->shear_modulus, dil = fabs(3.0 * s->bulk_modulus - 5.0 * G);
     double best = INFINITY;
@@ -424,7 +448,7 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
         double sum = 0;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
             const int32_t j = b->neighbor[k];
-            const double om = pd_lps_influence(s->influence, b->length[k], b->horizon);
+            const double om = omega[k];
             const double C = om * b->vfactor[k] *
                              (PD_LPS_SHEAR_FACTOR * G * (1.0 / m[i] + 1.0 / m[j]) +
                               3.0 * dil * b->length[k] * (S[i] / (m[i] * m[i]) + S[j] / (m[j] * m[j])));
@@ -435,5 +459,6 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
     }
     free(m);
     free(S);
+    free(omega);
     return best;
 }

@@ -261,6 +261,17 @@ typedef enum {
     PD_INFLUENCE_GAUSSIAN   /* exp(-|xi|^2/delta^2)                        */
 } pd_influence;
 
+/* An ellipsoid of the anisotropic influence function (seed 002, lib/
+ * influence.c): major semi-axis 1 along the preferred direction u, the
+ * others a and b along v and w, rolled about u by `roll`. */
+#define PD_ELLIPSOID_MAX 8 /* --ellipsoid at most this many times         */
+typedef struct {
+    double u[3];    /* preferred direction as given (nonzero, any length) */
+    double a, b;    /* semi-axis ratios along v and w, in (0, 1]          */
+    double roll;    /* rotation of v, w about u, rad                      */
+    double rinv[9]; /* M^-1, row-major, M = M_Y M_P M_R (pd_ellipsoid_init) */
+} pd_ellipsoid;
+
 typedef struct {
     pd_model_kind model;
     double c;              /* PMB micromodulus, N/m^6                       */
@@ -299,6 +310,9 @@ typedef struct {
     double proj_velocity[3];/* at t = 0, m/s                                */
     double proj_k;         /* K of the force density K (R - r)^2, N/m^5 (0:
                               pd_projectile_default_k)                   */
+    int nellipsoids;       /* anisotropic influence (state-based models);
+                              0: isotropic                               */
+    pd_ellipsoid ellipsoid[PD_ELLIPSOID_MAX];
 } pd_scene;
 
 /* ---------------------------------------------------------------- run */
@@ -362,6 +376,19 @@ int pd_influence_parse(const char *name);
  * and bond states (seed 000 Algorithm 4), into theta (n); LPS runs only
  * (PD_ERR_INVALID otherwise). */
 pd_status pd_sim_dilatation(const pd_sim *sim, double *theta);
+
+/* The ellipsoidal influence function (lib/influence.c, seed 002 eqs. 6-13).
+ * pd_ellipsoid_parse reads "UX,UY,UZ,A,B,ROLL" and calls pd_ellipsoid_init,
+ * which checks u != 0, a, b in (0, 1] and builds M^-1 (PD_ERR_INVALID).
+ * pd_ellipsoid_distance is eq. 13 for a direction of any nonzero length:
+ * d = 1/sqrt(w_x^2 + w_y^2/a^2 + w_z^2/b^2), w = M^-1 e, e = dir/|dir|.
+ * pd_ellipsoids_factor is the largest d over n ellipsoids (1 for n = 0),
+ * pd_bond_influence the bond's weight omega(|xi|) d(xi/|xi|) in the scene. */
+pd_status pd_ellipsoid_parse(const char *text, pd_ellipsoid *e);
+pd_status pd_ellipsoid_init(pd_ellipsoid *e);
+double pd_ellipsoid_distance(const pd_ellipsoid *e, const double dir[3]);
+double pd_ellipsoids_factor(const pd_ellipsoid *e, int n, const double dir[3]);
+double pd_bond_influence(const pd_scene *s, double length, double horizon, const double xi[3]);
 
 /* Compute the forces of the initial state (step 0). */
 pd_status pd_sim_setup(pd_sim *sim);

@@ -595,6 +595,16 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
         TRY(pd_h5_write_attr_doubles(g, "shear_modulus", &sc->shear_modulus, 1));
         TRY(pd_h5_write_attr_string(g, "influence", pd_influence_name(sc->influence)));
     }
+    if (sc->nellipsoids > 0) { /* UX,UY,UZ,A,B,ROLL per ellipsoid */
+        double el[6 * PD_ELLIPSOID_MAX];
+        for (int k = 0; k < sc->nellipsoids; k++) {
+            const pd_ellipsoid *e = &sc->ellipsoid[k];
+            const double row[6] = {e->u[0], e->u[1], e->u[2], e->a, e->b, e->roll};
+            for (int q = 0; q < 6; q++)
+                el[6 * k + q] = row[q];
+        }
+        TRY(pd_h5_write_attr_doubles(g, "ellipsoids", el, 6 * sc->nellipsoids));
+    }
 #undef TRY
     H5Gclose(g);
     return s;
