@@ -115,8 +115,8 @@ pd_status pd_bond_laws_check(const pd_particles *p, const pd_scene *s)
             while (i < p->n && p->material[i] != m)
                 i++;
             if (i == p->n)
-                return pd_fail(PD_ERR_INVALID, "%s %d: the body has no particle of material %d",
-                               law->a == law->b ? "--material" : "--interface", (int)m, (int)m);
+                return pd_fail(PD_ERR_INVALID, "the body has no particle of material %d (%s)",
+                               (int)m, law->a == law->b ? "--material" : "--interface");
         }
     }
     if (s->has_fibre && (!(s->fibre_c[0] > 0) || !(s->fibre_c[1] > 0)))
