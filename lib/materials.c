@@ -57,8 +57,10 @@ static void end_law(const pd_scene *s, int32_t m, double beta2, double *c, doubl
     } else if (s->has_fibre) {
         double sf = s->fibre_s00[0] > 0 ? s->fibre_s00[0] : s->s00;
         double sm = s->fibre_s00[1] > 0 ? s->fibre_s00[1] : s->s00;
-        *c = beta2 * s->fibre_c[0] + (1.0 - beta2) * s->fibre_c[1];
-        *s00 = beta2 * sf + (1.0 - beta2) * sm;
+        /* beta^2 x_f + (1 - beta^2) x_m, as x_m + beta^2 (x_f - x_m):
+         * exactly x_m when the two are equal */
+        *c = s->fibre_c[1] + beta2 * (s->fibre_c[0] - s->fibre_c[1]);
+        *s00 = sm + beta2 * (sf - sm);
     } else {
         *c = s->c;
         *s00 = s->s00;
@@ -140,41 +142,32 @@ int64_t pd_material_paint(pd_particles *p, const pd_region *r, int32_t id)
 pd_status pd_half_laws(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
                        pd_half_bonds *h)
 {
+    (void)b; /* the weights of pd_half_build hold V nu already */
+    if (!(s->c > 0))
+        return pd_fail(PD_ERR_INVALID, "the scene's micromodulus must be positive");
     size_t m = (size_t)(h->count > 0 ? h->count : 1);
     const int failure = s->has_failure && s->s00 > 0;
     if (failure && (h->kfail = malloc(m * sizeof(double))) == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the bond laws");
+    const int shared = h->w_ji == h->w_ij;
     int bad = 0;
-    /* the rows as pd_half_build walks them: c V_j nu_ij with the bond's c */
+    /* w = c V nu of pd_half_build times c_bond / c: a bond whose c is the
+     * scene's keeps its weight bit for bit */
 #pragma omp parallel for schedule(static) reduction(| : bad)
-    for (int64_t i = 0; i < h->n; i++) {
-        int64_t k = b->offset[i + 1] - (h->offset[i + 1] - h->offset[i]);
-        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++, k++) {
-            const int32_t j = h->neighbor[q];
+    for (int64_t i = 0; i < h->n; i++)
+        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
             double c, s00;
-            pd_bond_law_of(p, s, i, j, &c, &s00);
+            pd_bond_law_of(p, s, i, h->neighbor[q], &c, &s00);
             bad |= !(c > 0) || !isfinite(c);
-            h->w_ij[q] = c * p->volume[j] * b->vfactor[k];
+            const double scale = c / s->c;
+            h->w_ij[q] *= scale;
+            if (!shared)
+                h->w_ji[q] *= scale;
             if (failure)
                 h->kfail[q] = s00 / s->s00;
         }
-    }
     if (bad)
         return pd_fail(PD_ERR_INVALID, "a bond's micromodulus is not positive");
-    if (h->w_ji == h->w_ij) /* equal volumes and factors: one weight */
-        return PD_OK;
-    /* c V_i nu_ji: the mirror j-i of each bond by a cursor per row, as in
-     * pd_half_build */
-    for (int64_t j = 0; j < h->n; j++)
-        h->cursor[j] = b->offset[j];
-    for (int64_t i = 0; i < h->n; i++)
-        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
-            const int32_t j = h->neighbor[q];
-            int64_t back = h->cursor[j]++;
-            double c, s00;
-            pd_bond_law_of(p, s, i, j, &c, &s00);
-            h->w_ji[q] = c * p->volume[i] * b->vfactor[back];
-        }
     return PD_OK;
 }
 
