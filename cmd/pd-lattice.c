@@ -10,6 +10,9 @@
  * With --dimension 2 it makes a plate: the square lattice of sites
  * (i spacing, j spacing, 0) where the regions, cut at z = 0, hold the point;
  * volume spacing^2 H for the thickness H of --thickness.
+ * --material-region ID=REGION paints the particles inside a region with a
+ * material id (the last such region wins), for pd-run --material and
+ * --interface.
  */
 #include <getopt.h>
 #include <stdio.h>

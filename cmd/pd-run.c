@@ -13,6 +13,8 @@
  * Writes the model, the resolved scene (/scene) and frames (/frames).
  * A 2-D plate (/particles dimension 2) takes the plane-stress constants of
  * lib/plate.c: its --bulk-modulus is the 2-D bulk modulus.
+ * --material, --interface and --fibre give bonds their own PMB constants
+ * (lib/materials.c, seed 004 eq. 10).
  */
 #include <getopt.h>
 #include <math.h>

@@ -19,8 +19,13 @@
  *       s00 = min(s00_i, s00_j)         (it breaks no later than its weaker
  *             half would).
  *
+ * (The mix is computed as x_m + beta^2 (x_f - x_m): exactly x_m when the two
+ * are equal.)
+ *
  * The run keeps c in the half bonds' weights w = c V nu (lib/pmb.c), so a
- * bond's own c costs the force kernel nothing.  Its own s00 enters the
+ * bond's own c costs the force kernel nothing: pd_half_laws scales the
+ * weights of pd_half_build by c_bond / c, so that a bond whose c is the
+ * scene's keeps its weight bit for bit.  Its own s00 enters the
  * failure test of seed 000 eqs. 8-9 as a factor k = s00_bond / s00 (s00 the
  * scene's): the bond breaks when
  *   s > k min(s0_i, s0_j),   s0 = s00 - alpha s_min  (per particle, eq. 9)

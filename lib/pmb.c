@@ -342,13 +342,12 @@ static pd_status pmb_failure_force(pd_sim *sim, void *state)
 
 /* The bonds' energy, half of each bond to each end (directed bonds, each
  * row its own sum): e_i += sum_j 1/4 c s^2 |xi| nu_ij V_i V_j. */
-static void pmb_energy(const pd_sim *sim, void *state, double *e)
+static void pmb_energy_uniform(const pd_sim *sim, void *state, double *e)
 {
     (void)state;
     const pd_bonds *b = sim->b;
     const uint64_t *intact = pd_sim_intact(sim);
     const double *V = sim->p->volume, c = sim->sc.c;
-    const int laws = pd_scene_has_laws(&sim->sc); /* each bond's c (lib/materials.c) */
     double *const *y = sim->y;
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++) {
@@ -361,10 +360,7 @@ static void pmb_energy(const pd_sim *sim, void *state, double *e)
             double dr = sqrt(dx * dx + dy * dy + dz * dz) - b->length[k];
             dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
             const double s = dr / b->length[k];
-            double cb = c, s00;
-            if (laws)
-                pd_bond_law_of(sim->p, &sim->sc, i, j, &cb, &s00);
-            sum += 0.25 * cb * s * s * b->length[k] * b->vfactor[k] * V[j];
+            sum += 0.25 * c * s * s * b->length[k] * b->vfactor[k] * V[j];
         }
         e[i] += sum * V[i];
     }
@@ -374,13 +370,12 @@ static void pmb_energy(const pd_sim *sim, void *state, double *e)
  * s_i += 1/2 sum_j V_j f_ij (x) xi_ij with f_ij = c s nu_ij (y_j - y_i)/r,
  * the force density bond j puts on i per unit volume of j.  Directed
  * bonds, each row its own sum: the same at any thread count. */
-static void pmb_stress(const pd_sim *sim, void *state, double *out)
+static void pmb_stress_uniform(const pd_sim *sim, void *state, double *out)
 {
     (void)state;
     const pd_bonds *b = sim->b;
     const uint64_t *intact = pd_sim_intact(sim);
     const double *V = sim->p->volume, c = sim->sc.c;
-    const int laws = pd_scene_has_laws(&sim->sc); /* each bond's c (lib/materials.c) */
     double *const *y = sim->y;
     double *const *x = sim->p->x;
 #pragma omp parallel for schedule(static)
@@ -396,10 +391,7 @@ static void pmb_stress(const pd_sim *sim, void *state, double *out)
             dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
             if (r <= 0.0)
                 continue;
-            double cb = c, s00;
-            if (laws)
-                pd_bond_law_of(sim->p, &sim->sc, i, j, &cb, &s00);
-            const double f = 0.5 * cb * (dr / b->length[k]) * b->vfactor[k] * V[j] / r;
+            const double f = 0.5 * c * (dr / b->length[k]) * b->vfactor[k] * V[j] / r;
             const double xi[3] = {x[0][j] - x[0][i], x[1][j] - x[1][i], x[2][j] - x[2][i]};
             for (int a = 0; a < 3; a++)
                 for (int d = 0; d < 3; d++)
@@ -408,6 +400,82 @@ static void pmb_stress(const pd_sim *sim, void *state, double *out)
         for (int m = 0; m < 9; m++)
             out[9 * i + m] += sum[m];
     }
+}
+
+/* The same two with each bond's own c (lib/materials.c), apart so that a
+ * scene without laws keeps the loops above bit for bit. */
+static void pmb_energy_laws(const pd_sim *sim, double *e)
+{
+    const pd_bonds *b = sim->b;
+    const uint64_t *intact = pd_sim_intact(sim);
+    const double *V = sim->p->volume;
+    double *const *y = sim->y;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        double sum = 0;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            if (!pd_bond_intact(intact, k))
+                continue;
+            const int32_t j = b->neighbor[k];
+            const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i], dz = y[2][j] - y[2][i];
+            double dr = sqrt(dx * dx + dy * dy + dz * dz) - b->length[k];
+            dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+            const double s = dr / b->length[k];
+            double c, s00;
+            pd_bond_law_of(sim->p, &sim->sc, i, j, &c, &s00);
+            sum += 0.25 * c * s * s * b->length[k] * b->vfactor[k] * V[j];
+        }
+        e[i] += sum * V[i];
+    }
+}
+
+static void pmb_stress_laws(const pd_sim *sim, double *out)
+{
+    const pd_bonds *b = sim->b;
+    const uint64_t *intact = pd_sim_intact(sim);
+    const double *V = sim->p->volume;
+    double *const *y = sim->y;
+    double *const *x = sim->p->x;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        double sum[9] = {0};
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            if (!pd_bond_intact(intact, k))
+                continue;
+            const int32_t j = b->neighbor[k];
+            const double e[3] = {y[0][j] - y[0][i], y[1][j] - y[1][i], y[2][j] - y[2][i]};
+            const double r = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+            double dr = r - b->length[k];
+            dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+            if (r <= 0.0)
+                continue;
+            double c, s00;
+            pd_bond_law_of(sim->p, &sim->sc, i, j, &c, &s00);
+            const double f = 0.5 * c * (dr / b->length[k]) * b->vfactor[k] * V[j] / r;
+            const double xi[3] = {x[0][j] - x[0][i], x[1][j] - x[1][i], x[2][j] - x[2][i]};
+            for (int a = 0; a < 3; a++)
+                for (int d = 0; d < 3; d++)
+                    sum[3 * a + d] += f * e[a] * xi[d];
+        }
+        for (int m = 0; m < 9; m++)
+            out[9 * i + m] += sum[m];
+    }
+}
+
+static void pmb_energy(const pd_sim *sim, void *state, double *e)
+{
+    if (pd_scene_has_laws(&sim->sc))
+        pmb_energy_laws(sim, e);
+    else
+        pmb_energy_uniform(sim, state, e);
+}
+
+static void pmb_stress(const pd_sim *sim, void *state, double *out)
+{
+    if (pd_scene_has_laws(&sim->sc))
+        pmb_stress_laws(sim, out);
+    else
+        pmb_stress_uniform(sim, state, out);
 }
 
 const pd_effect pd_effect_pmb = {
