@@ -10,6 +10,9 @@
  * With --dimension 2 it makes a plate: the square lattice of sites
  * (i spacing, j spacing, 0) where the regions, cut at z = 0, hold the point;
  * volume spacing^2 H for the thickness H of --thickness.
+ * --material-region ID=REGION paints the particles inside a region with a
+ * material id (the last such region wins), for pd-run --material and
+ * --interface.
  */
 #include <getopt.h>
 #include <stdio.h>
@@ -22,6 +25,7 @@
 #include "cli.h"
 #define MAX_REGIONS 64
 #define MAX_SETS 64
+#define MAX_PAINTS 64
 
 struct options {
     pd_region regions[MAX_REGIONS];
@@ -29,6 +33,9 @@ struct options {
     char *set_names[MAX_SETS]; /* --set NAME=REGION, in order */
     pd_region set_regions[MAX_SETS];
     int nsets;
+    int32_t paint_ids[MAX_PAINTS]; /* --material-region ID=REGION, in order */
+    pd_region paint_regions[MAX_PAINTS];
+    int npaints;
     pd_lattice_params lp;
     int has_spacing, has_density;
     int dimension;    /* 3, or 2 for a plate                          */
@@ -57,6 +64,11 @@ static void usage(FILE *out)
             "  --spacing DX      lattice spacing, m (> 0)\n"
             "  --density RHO     mass density, kg/m^3 (> 0)\n"
             "  --material ID     material id (default 1)\n"
+            "  --material-region ID=KIND,...\n"
+            "                    the particles inside a region (KIND box, cylinder or\n"
+            "                    sphere, as --subtract) get material ID; repeatable,\n"
+            "                    the last region holding a particle wins:\n"
+            "                    --material-region 2=box,0,1,0.5,1,0,1\n"
             "  --perturb A       move each site by uniform noise in [-A,A] per axis, m\n"
             "  --seed N          seed of the perturbation (default 1)\n"
             "  --dimension D     3 (default) or 2: a plate, the square lattice of sites\n"
@@ -114,10 +126,31 @@ static int add_set(struct options *o, const char *arg)
     return 0;
 }
 
+/* --material-region ID=KIND,...: a material id and a region. */
+static int add_paint(struct options *o, const char *arg)
+{
+    if (o->npaints == MAX_PAINTS)
+        return usage_error("too many --material-region", NULL);
+    const char *eq = strchr(arg, '=');
+    char id[32];
+    int64_t iv;
+    if (eq == NULL || (size_t)(eq - arg) >= sizeof id)
+        return usage_error("--material-region needs ID=KIND,... (KIND box, cylinder or "
+                           "sphere), not",
+                           arg);
+    snprintf(id, sizeof id, "%.*s", (int)(eq - arg), arg);
+    if (!pd_parse_int64(id, &iv) || iv < 0 || iv > INT32_MAX)
+        return usage_error("--material-region ID must be a non-negative integer, not", arg);
+    if (pd_region_parse_tagged(eq + 1, &o->paint_regions[o->npaints]) != PD_OK)
+        return usage_error(pd_errmsg(), NULL);
+    o->paint_ids[o->npaints++] = (int32_t)iv;
+    return 0;
+}
+
 static int parse_options(int argc, char **argv, struct options *o)
 {
     enum { OPT_BOX = 256, OPT_CYL, OPT_SPHERE, OPT_SUB, OPT_SPACING, OPT_DENSITY, OPT_MATERIAL,
-           OPT_PERTURB, OPT_SEED, OPT_DIMENSION, OPT_THICKNESS, OPT_SET };
+           OPT_PERTURB, OPT_SEED, OPT_DIMENSION, OPT_THICKNESS, OPT_SET, OPT_PAINT };
     static const struct option longopts[] = {
         {"box", required_argument, 0, OPT_BOX},
         {"cylinder", required_argument, 0, OPT_CYL},
@@ -131,6 +164,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"dimension", required_argument, 0, OPT_DIMENSION},
         {"thickness", required_argument, 0, OPT_THICKNESS},
         {"set", required_argument, 0, OPT_SET},
+        {"material-region", required_argument, 0, OPT_PAINT},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -198,6 +232,10 @@ static int parse_options(int argc, char **argv, struct options *o)
             if ((rc = add_set(o, optarg)))
                 return rc;
             break;
+        case OPT_PAINT:
+            if ((rc = add_paint(o, optarg)))
+                return rc;
+            break;
         case 'o':
             o->output = optarg;
             break;
@@ -253,6 +291,8 @@ int main(int argc, char **argv)
     pd_status s = o.dimension == 2
                       ? pd_plate_make(o.regions, o.nregions, &o.lp, o.thickness, &p)
                       : pd_lattice_make(o.regions, o.nregions, &o.lp, &p);
+    for (int k = 0; k < o.npaints && s == PD_OK; k++)
+        pd_material_paint(p, &o.paint_regions[k], o.paint_ids[k]);
     if (s == PD_OK && (sets = pd_sets_new()) == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory");
     for (int k = 0; k < o.nsets && s == PD_OK; k++)

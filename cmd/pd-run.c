@@ -13,6 +13,8 @@
  * Writes the model, the resolved scene (/scene) and frames (/frames).
  * A 2-D plate (/particles dimension 2) takes the plane-stress constants of
  * lib/plate.c: its --bulk-modulus is the 2-D bulk modulus.
+ * --material, --interface and --fibre give bonds their own PMB constants
+ * (lib/materials.c, seed 004 eq. 10).
  */
 #include <getopt.h>
 #include <math.h>
@@ -27,6 +29,7 @@
 #define PROG "pd-run"
 #include "cli.h"
 #define MAX_BC 64
+#define MAX_LAWS 64
 
 struct options {
     pd_scene sc;
@@ -43,6 +46,11 @@ struct options {
     int quiet, timing, debug;
     pd_bc bc[MAX_BC]; /* --velocity-bc, --displacement-bc, --body-force */
     int nbc;
+    pd_bond_law laws[MAX_LAWS]; /* --material, --interface (a pair once:
+                                   the last spec of it wins)           */
+    double law_k[MAX_LAWS];     /* its K= (Pa), c resolved once the body
+                                   is read; 0: c= was given            */
+    int nlaws;
 };
 
 static void usage(FILE *out)
@@ -102,6 +110,20 @@ static void usage(FILE *out)
             "                        at t = 0, radius R (m), mass MASS (kg), velocity\n"
             "                        VX,VY,VZ (m/s); the indenter's force law, K in N/m^5\n"
             "                        (default: from the bond stiffness, see pd-run(1))\n"
+            "Materials and fibres (pmb; see pd-run(1)):\n"
+            "  --material ID,c=C|K=K[,s00=S]\n"
+            "                        the bonds inside material ID (pd-lattice --material)\n"
+            "                        take micromodulus C (N/m^6) or bulk modulus K (Pa)\n"
+            "                        and critical stretch S00 (needs --failure)\n"
+            "  --interface A,B,c=C|K=K[,s00=S]\n"
+            "                        the same for the bonds between materials A and B;\n"
+            "                        without it: the harmonic mean of the two c, the\n"
+            "                        smaller s00\n"
+            "  --fibre GX,GY,GZ,C_FIBRE,C_MATRIX[,S_FIBRE,S_MATRIX]\n"
+            "                        fibres along g (seed 004 eq. 10): a bond at angle\n"
+            "                        beta = g.xi/|g||xi| takes c = beta^2 C_FIBRE +\n"
+            "                        (1 - beta^2) C_MATRIX and s00 likewise; for the\n"
+            "                        materials without --material\n"
             "Time:\n"
             "  --steps N             number of steps\n"
             "  --dt DT               time step, s (default: stable step x safety)\n"
@@ -162,6 +184,79 @@ static void free_bc(struct options *o)
     for (int k = 0; k < o->nbc; k++)
         pd_profile_free(&o->bc[k].profile);
     o->nbc = 0;
+}
+
+/* --material ID,c=C|K=K[,s00=S] and --interface A,B,...: a bond law.  A pair
+ * given again replaces the earlier law (the command line overrides the
+ * scene file). */
+static int parse_law(struct options *o, int interface, const char *arg)
+{
+    const char *what = interface ? "--interface needs A,B,c=C|K=K[,s00=S] (A != B), not"
+                                 : "--material needs ID,c=C|K=K[,s00=S], not";
+    pd_bond_law law = {0};
+    double k = 0;
+    int have_c = 0, nid = 0;
+    char buf[512];
+    if (strlen(arg) >= sizeof buf)
+        return usage_error(what, arg);
+    strcpy(buf, arg);
+    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
+         tok = strtok_r(NULL, ",", &save)) {
+        int64_t id;
+        double v;
+        if (nid < 1 + interface) {
+            if (!pd_parse_int64(tok, &id) || id < 0 || id > INT32_MAX)
+                return usage_error(what, arg);
+            if (nid++ == 0)
+                law.a = law.b = (int32_t)id;
+            else
+                law.b = (int32_t)id;
+        } else if (strncmp(tok, "c=", 2) == 0 && pd_parse_double(tok + 2, &v) && v > 0 &&
+                   isfinite(v))
+            law.c = v, k = 0, have_c = 1;
+        else if (strncmp(tok, "K=", 2) == 0 && pd_parse_double(tok + 2, &v) && v > 0 &&
+                 isfinite(v))
+            k = v, law.c = 0, have_c = 1;
+        else if (strncmp(tok, "s00=", 4) == 0 && pd_parse_double(tok + 4, &v) && v > 0 &&
+                 isfinite(v))
+            law.s00 = v;
+        else
+            return usage_error(what, arg);
+    }
+    if (nid < 1 + interface || !have_c || (interface && law.a == law.b))
+        return usage_error(what, arg);
+    int slot = 0;
+    while (slot < o->nlaws && !((o->laws[slot].a == law.a && o->laws[slot].b == law.b) ||
+                                (o->laws[slot].a == law.b && o->laws[slot].b == law.a)))
+        slot++;
+    if (slot == MAX_LAWS)
+        return usage_error("too many --material and --interface laws", NULL);
+    o->laws[slot] = law;
+    o->law_k[slot] = k;
+    o->nlaws += slot == o->nlaws;
+    return 0;
+}
+
+/* --fibre GX,GY,GZ,C_FIBRE,C_MATRIX[,S_FIBRE,S_MATRIX]. */
+static int parse_fibre(pd_scene *sc, const char *arg)
+{
+    double v[7] = {0};
+    int seven = pd_parse_doubles(arg, v, 7);
+    if ((!seven && !pd_parse_doubles(arg, v, 5)) || !(v[3] > 0) || !(v[4] > 0) ||
+        (seven && (!(v[5] > 0) || !(v[6] > 0))) || !isfinite(v[3]) || !isfinite(v[4]) ||
+        !(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] > 0) ||
+        !isfinite(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))
+        return usage_error("--fibre needs GX,GY,GZ,C_FIBRE,C_MATRIX[,S_FIBRE,S_MATRIX] with g "
+                           "not zero and positive C and S, not",
+                           arg);
+    sc->has_fibre = 1;
+    for (int d = 0; d < 3; d++)
+        sc->fibre_g[d] = v[d];
+    for (int e = 0; e < 2; e++) {
+        sc->fibre_c[e] = v[3 + e];
+        sc->fibre_s00[e] = v[5 + e];
+    }
+    return 0;
 }
 
 /* --fields LIST: the optional per-particle fields of the frames. */
@@ -295,7 +390,8 @@ static int parse_options(int argc, char **argv, struct options *o)
     enum { OPT_MODEL = 256, OPT_C, OPT_K, OPT_FAILURE, OPT_CONTACT, OPT_SKIN, OPT_INDENTER,
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
-           OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID };
+           OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID, OPT_MATERIAL,
+           OPT_INTERFACE, OPT_FIBRE };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -324,6 +420,9 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"body-force", required_argument, 0, OPT_BODY},
         {"projectile", required_argument, 0, OPT_PROJECTILE},
         {"ellipsoid", required_argument, 0, OPT_ELLIPSOID},
+        {"material", required_argument, 0, OPT_MATERIAL},
+        {"interface", required_argument, 0, OPT_INTERFACE},
+        {"fibre", required_argument, 0, OPT_FIBRE},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -518,6 +617,15 @@ static int parse_options(int argc, char **argv, struct options *o)
                                    optarg);
             o->sc.nellipsoids++;
             break;
+        case OPT_MATERIAL:
+        case OPT_INTERFACE:
+            if ((rc = parse_law(o, c == OPT_INTERFACE, optarg)))
+                return rc;
+            break;
+        case OPT_FIBRE:
+            if ((rc = parse_fibre(&o->sc, optarg)))
+                return rc;
+            break;
         case 'q':
             o->quiet = 1;
             break;
@@ -553,6 +661,31 @@ static int parse_options(int argc, char **argv, struct options *o)
         return usage_error("--ellipsoid is an influence function of the state-based models "
                            "(--model lps)",
                            NULL);
+    if (o->nlaws > 0 || o->sc.has_fibre) {
+        if (o->sc.model == PD_MODEL_LPS)
+            return usage_error("--material, --interface and --fibre are for --model pmb", NULL);
+        int s00 = o->sc.fibre_s00[0] > 0;
+        for (int k = 0; k < o->nlaws; k++)
+            s00 |= o->laws[k].s00 > 0;
+        if (s00 && !o->sc.has_failure)
+            return usage_error("a critical stretch of --material, --interface or --fibre needs "
+                               "--failure or --failure-energy (the scene's s00 and alpha)",
+                               NULL);
+        /* the scene's c: the fibres' matrix, else the stiffest material
+         * (contact, and the materials without a law) */
+        if (!o->has_c && !o->has_k && !o->has_e && o->sc.has_fibre)
+            o->sc.c = o->sc.fibre_c[1], o->has_c = 1;
+        for (int k = 0; k < o->nlaws && !o->has_c && !o->has_k && !o->has_e; k++)
+            if (o->laws[k].a == o->laws[k].b && o->law_k[k] == 0)
+                o->sc.c = fmax(o->sc.c, o->laws[k].c);
+        if (o->sc.c > 0)
+            o->has_c = 1;
+        for (int k = 0; k < o->nlaws && !o->has_c && !o->has_k && !o->has_e; k++)
+            if (o->laws[k].a == o->laws[k].b)
+                o->sc.bulk_modulus = fmax(o->sc.bulk_modulus, o->law_k[k]);
+        if (!o->has_c && o->sc.bulk_modulus > 0)
+            o->has_k = 1;
+    }
     if (!o->has_c && !o->has_k && !o->has_e)
         return usage_error("give the stiffness: --c or --bulk-modulus (or --youngs-modulus)", NULL);
     if (o->restart) { /* the run file is the input and, without -o, the output */
@@ -583,6 +716,7 @@ static char *scene_text(const pd_scene *s)
         }
         cap += strlen(prof[k]) + 2 * PD_SET_NAME_MAX;
     }
+    cap += (size_t)s->nlaws * 160 + 256;
     char *t = malloc(cap), *p = t;
     if (t == NULL) {
         for (int k = 0; k < s->nbc; k++)
@@ -612,6 +746,21 @@ static char *scene_text(const pd_scene *s)
                      s->proj_center[0], s->proj_center[1], s->proj_center[2], s->proj_radius,
                      s->proj_mass, s->proj_velocity[0], s->proj_velocity[1], s->proj_velocity[2],
                      s->proj_k);
+    for (int k = 0; k < s->nlaws; k++) { /* K= resolved to c */
+        const pd_bond_law *l = &s->laws[k];
+        if (l->a == l->b)
+            p += sprintf(p, "material %d,c=%.17g", (int)l->a, l->c);
+        else
+            p += sprintf(p, "interface %d,%d,c=%.17g", (int)l->a, (int)l->b, l->c);
+        p += l->s00 > 0 ? sprintf(p, ",s00=%.17g\n", l->s00) : sprintf(p, "\n");
+    }
+    if (s->has_fibre) {
+        p += sprintf(p, "fibre %.17g,%.17g,%.17g,%.17g,%.17g", s->fibre_g[0], s->fibre_g[1],
+                     s->fibre_g[2], s->fibre_c[0], s->fibre_c[1]);
+        p += s->fibre_s00[0] > 0
+                 ? sprintf(p, ",%.17g,%.17g\n", s->fibre_s00[0], s->fibre_s00[1])
+                 : sprintf(p, "\n");
+    }
     p += sprintf(p, "dt %.17g\nsteps %lld\nevery %lld\n", s->dt, (long long)s->steps,
                  (long long)s->every);
     if (s->fields)
@@ -908,6 +1057,17 @@ int main(int argc, char **argv)
     sc->nbc = o.nbc;
     sc->bc = o.bc;
     sc->sets = h.sets;
+    for (int k = 0; k < o.nlaws; k++) /* --material/--interface K=: c for the dimension */
+        if (o.law_k[k] > 0)
+            o.laws[k].c = pd_pmb_c_for(p, o.law_k[k], b->horizon);
+    sc->nlaws = o.nlaws;
+    sc->laws = o.laws;
+    if (pd_scene_has_laws(sc) && pd_bond_laws_check(p, sc) != PD_OK) {
+        if (restart)
+            pd_file_abort(h.in), h.in = NULL;
+        release(&h);
+        return fail();
+    }
     if (o.has_e) /* PMB's fixed Poisson ratio: K from E by dimension */
         sc->bulk_modulus = pd_pmb_bulk_from_youngs(sc->youngs_modulus, p->dimension);
     if (o.has_k || o.has_e)

@@ -313,6 +313,12 @@ typedef struct {
     int nellipsoids;       /* anisotropic influence (state-based models);
                               0: isotropic                               */
     pd_ellipsoid ellipsoid[PD_ELLIPSOID_MAX];
+    int nlaws;             /* PMB bond laws of materials and interfaces    */
+    const struct pd_bond_law *laws; /* (lib/materials.c; may be NULL)     */
+    int has_fibre;         /* seed 004 eq. 10 for the scene's own bonds    */
+    double fibre_g[3];     /* fibre direction g (any length)               */
+    double fibre_c[2];     /* c of the fibre and of the matrix, N/m^6      */
+    double fibre_s00[2];   /* their s00 (0: the scene's s00)               */
 } pd_scene;
 
 /* ---------------------------------------------------------------- run */
@@ -355,6 +361,36 @@ double pd_pmb_bulk_from_youngs(double youngs_modulus, int dimension);
  * 2-D ones with p->thickness. */
 double pd_pmb_c_for(const pd_particles *p, double bulk_modulus, double horizon);
 double pd_pmb_s0_for(const pd_particles *p, double g0, double c, double horizon);
+
+/* ---------------------------------------------------------------- materials */
+
+/* A PMB bond law (lib/materials.c, pd-run --material and --interface): the
+ * micromodulus and critical stretch parameter of the bonds between
+ * particles of materials a and b (a == b: the bonds inside material a). */
+typedef struct pd_bond_law {
+    int32_t a, b;   /* material ids                                     */
+    double c;       /* micromodulus, N/m^6 (> 0)                        */
+    double s00;     /* s00 of the bonds (0: the scene's s00)            */
+} pd_bond_law;
+
+/* Whether a scene gives its bonds their own c or s00 (laws or a fibre). */
+int pd_scene_has_laws(const pd_scene *s);
+/* The c (N/m^6) and s00 of the bond from i to j (symmetric in i, j):
+ *  - material m_i == m_j with a law (m, m): that law's;
+ *  - else with a fibre (seed 004 eq. 10), beta = g.xi/(|g||xi|):
+ *    c = beta^2 c_fibre + (1 - beta^2) c_matrix, s00 likewise;
+ *  - else the scene's c and s00;
+ * and between two materials, the law (m_i, m_j) when given, else each end
+ * as above and c the harmonic mean 2 c_i c_j/(c_i + c_j) (the two half
+ * bonds in series), s00 the smaller of the two. */
+void pd_bond_law_of(const pd_particles *p, const pd_scene *s, int64_t i, int64_t j, double *c,
+                    double *s00);
+/* PD_ERR_INVALID naming the first law whose material is not in the body,
+ * or whose c or s00 is out of its domain. */
+pd_status pd_bond_laws_check(const pd_particles *p, const pd_scene *s);
+/* Give the particles inside region r the material id (pd-lattice
+ * --material-region); returns how many. */
+int64_t pd_material_paint(pd_particles *p, const pd_region *r, int32_t id);
 
 /* Stable step of seed 004 eq. 46 for the bonds of the scene's model. */
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s);

@@ -58,6 +58,7 @@ void pd_half_free(pd_half_bonds *h)
     free(h->intact);
     free(h->released);
     free(h->cursor);
+    free(h->kfail);
 }
 
 pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h)
@@ -188,7 +189,8 @@ static double bond_energy(const pd_sim *sim, int64_t i, int64_t k)
 }
 
 /* The forces of the half bonds of row i (and with `failure` their breaking
- * test and the new s0 of both ends), branch-free so that the arithmetic
+ * test and the new s0 of both ends; failure 2: each bond's threshold times
+ * its kfail, lib/materials.c), branch-free so that the arithmetic
  * vectorizes; the scatter to the partners j is a plain loop. */
 static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i,
                                                           const int failure, double *released)
@@ -199,6 +201,7 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
     const double *restrict len = h->length, *restrict wij = h->w_ij, *restrict wji = h->w_ji;
     const int32_t *restrict nb = h->neighbor;
     const double *restrict s0 = sim->s0;
+    const double *restrict kf = h->kfail;
     double *restrict fx = sim->f[0], *restrict fy = sim->f[1], *restrict fz = sim->f[2];
     double *restrict s0_new = sim->s0_new;
     const double yi0 = y0[i], yi1 = y1[i], yi2 = y2[i];
@@ -227,7 +230,8 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
             gy[q] = fj * dy;
             gz[q] = fj * dz;
             if (failure) { /* ternaries, not fmin/fmax: they vectorize */
-                const double thr = s0i_old < s0[j] ? s0i_old : s0[j];
+                const double thr = failure == 2 ? kf[k] * (s0i_old < s0[j] ? s0i_old : s0[j])
+                                                : s0i_old < s0[j] ? s0i_old : s0[j];
                 brk[q] = s > thr ? mu[q] : 0.0;
                 t[q] = mu[q] > 0 ? s00 - alpha * s : -INFINITY;
             }
@@ -273,6 +277,14 @@ PD_VECTOR_CLONES static void pmb_block_failure(pd_sim *sim, int64_t lo, int64_t 
         pmb_row(sim, i, 1, released);
 }
 
+/* The same with each bond's own critical stretch (h->kfail). */
+PD_VECTOR_CLONES static void pmb_block_failure_laws(pd_sim *sim, int64_t lo, int64_t hi,
+                                                    double *released)
+{
+    for (int64_t i = lo; i < hi; i++)
+        pmb_row(sim, i, 2, released);
+}
+
 static void pmb_kernel(pd_sim *sim, int failure)
 {
     const pd_half_bonds *h = &sim->half;
@@ -286,7 +298,10 @@ static void pmb_kernel(pd_sim *sim, int failure)
             int64_t lo = blk * h->block, hi = lo + h->block < sim->n ? lo + h->block : sim->n;
             if (failure) {
                 h->released[blk] = 0;
-                pmb_block_failure(sim, lo, hi, &h->released[blk]);
+                if (h->kfail)
+                    pmb_block_failure_laws(sim, lo, hi, &h->released[blk]);
+                else
+                    pmb_block_failure(sim, lo, hi, &h->released[blk]);
             } else
                 pmb_block_elastic(sim, lo, hi);
         }
@@ -327,7 +342,7 @@ static pd_status pmb_failure_force(pd_sim *sim, void *state)
 
 /* The bonds' energy, half of each bond to each end (directed bonds, each
  * row its own sum): e_i += sum_j 1/4 c s^2 |xi| nu_ij V_i V_j. */
-static void pmb_energy(const pd_sim *sim, void *state, double *e)
+static void pmb_energy_uniform(const pd_sim *sim, void *state, double *e)
 {
     (void)state;
     const pd_bonds *b = sim->b;
@@ -355,7 +370,7 @@ static void pmb_energy(const pd_sim *sim, void *state, double *e)
  * s_i += 1/2 sum_j V_j f_ij (x) xi_ij with f_ij = c s nu_ij (y_j - y_i)/r,
  * the force density bond j puts on i per unit volume of j.  Directed
  * bonds, each row its own sum: the same at any thread count. */
-static void pmb_stress(const pd_sim *sim, void *state, double *out)
+static void pmb_stress_uniform(const pd_sim *sim, void *state, double *out)
 {
     (void)state;
     const pd_bonds *b = sim->b;
@@ -387,6 +402,82 @@ static void pmb_stress(const pd_sim *sim, void *state, double *out)
     }
 }
 
+/* The same two with each bond's own c (lib/materials.c), apart so that a
+ * scene without laws keeps the loops above bit for bit. */
+static void pmb_energy_laws(const pd_sim *sim, double *e)
+{
+    const pd_bonds *b = sim->b;
+    const uint64_t *intact = pd_sim_intact(sim);
+    const double *V = sim->p->volume;
+    double *const *y = sim->y;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        double sum = 0;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            if (!pd_bond_intact(intact, k))
+                continue;
+            const int32_t j = b->neighbor[k];
+            const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i], dz = y[2][j] - y[2][i];
+            double dr = sqrt(dx * dx + dy * dy + dz * dz) - b->length[k];
+            dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+            const double s = dr / b->length[k];
+            double c, s00;
+            pd_bond_law_of(sim->p, &sim->sc, i, j, &c, &s00);
+            sum += 0.25 * c * s * s * b->length[k] * b->vfactor[k] * V[j];
+        }
+        e[i] += sum * V[i];
+    }
+}
+
+static void pmb_stress_laws(const pd_sim *sim, double *out)
+{
+    const pd_bonds *b = sim->b;
+    const uint64_t *intact = pd_sim_intact(sim);
+    const double *V = sim->p->volume;
+    double *const *y = sim->y;
+    double *const *x = sim->p->x;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        double sum[9] = {0};
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            if (!pd_bond_intact(intact, k))
+                continue;
+            const int32_t j = b->neighbor[k];
+            const double e[3] = {y[0][j] - y[0][i], y[1][j] - y[1][i], y[2][j] - y[2][i]};
+            const double r = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+            double dr = r - b->length[k];
+            dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+            if (r <= 0.0)
+                continue;
+            double c, s00;
+            pd_bond_law_of(sim->p, &sim->sc, i, j, &c, &s00);
+            const double f = 0.5 * c * (dr / b->length[k]) * b->vfactor[k] * V[j] / r;
+            const double xi[3] = {x[0][j] - x[0][i], x[1][j] - x[1][i], x[2][j] - x[2][i]};
+            for (int a = 0; a < 3; a++)
+                for (int d = 0; d < 3; d++)
+                    sum[3 * a + d] += f * e[a] * xi[d];
+        }
+        for (int m = 0; m < 9; m++)
+            out[9 * i + m] += sum[m];
+    }
+}
+
+static void pmb_energy(const pd_sim *sim, void *state, double *e)
+{
+    if (pd_scene_has_laws(&sim->sc))
+        pmb_energy_laws(sim, e);
+    else
+        pmb_energy_uniform(sim, state, e);
+}
+
+static void pmb_stress(const pd_sim *sim, void *state, double *out)
+{
+    if (pd_scene_has_laws(&sim->sc))
+        pmb_stress_laws(sim, out);
+    else
+        pmb_stress_uniform(sim, state, out);
+}
+
 const pd_effect pd_effect_pmb = {
     .name = "pmb", .timer = PD_T_BONDS, .force = pmb_force,
     .energy = pmb_energy, .kind = PD_ENERGY_ELASTIC, .stress = pmb_stress};
@@ -411,7 +502,8 @@ double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
      * that the discrete force uses; the smallest over all particles. */
     double best = INFINITY;
     for (int64_t i = 0; i < b->n; i++) {
-        double sum = pd_bond_stiffness(p, b, s->c, i);
+        double sum = pd_scene_has_laws(s) ? pd_bond_stiffness_laws(p, b, s, i)
+                                          : pd_bond_stiffness(p, b, s->c, i);
         if (sum > 0)
             best = fmin(best, sqrt(2.0 * p->density[i] / sum));
     }

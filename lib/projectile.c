@@ -35,7 +35,8 @@ double pd_projectile_default_k(const pd_particles *p, const pd_bonds *b, const p
 {
     double smax = 0;
     for (int64_t i = 0; i < b->n; i++)
-        smax = fmax(smax, pd_bond_stiffness(p, b, s->c, i));
+        smax = fmax(smax, pd_scene_has_laws(s) ? pd_bond_stiffness_laws(p, b, s, i)
+                                               : pd_bond_stiffness(p, b, s->c, i));
     return smax / (2.0 * PD_PROJECTILE_DEPTH * p->spacing);
 }
 

@@ -605,6 +605,26 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
         }
         TRY(pd_h5_write_attr_doubles(g, "ellipsoids", el, 6 * sc->nellipsoids));
     }
+    if (sc->model == PD_MODEL_PMB && sc->has_fibre) {
+        double fb[7] = {sc->fibre_g[0], sc->fibre_g[1], sc->fibre_g[2],  sc->fibre_c[0],
+                        sc->fibre_c[1], sc->fibre_s00[0], sc->fibre_s00[1]};
+        TRY(pd_h5_write_attr_doubles(g, "fibre", fb, 7));
+    }
+    if (sc->model == PD_MODEL_PMB && sc->nlaws > 0) {
+        /* rows (a, b, c, s00) of the bond laws, a == b for a material */
+        double *rows = malloc((size_t)sc->nlaws * 4 * sizeof(double));
+        if (rows == NULL && s == PD_OK)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory");
+        for (int k = 0; rows && k < sc->nlaws; k++) {
+            rows[4 * k] = sc->laws[k].a;
+            rows[4 * k + 1] = sc->laws[k].b;
+            rows[4 * k + 2] = sc->laws[k].c;
+            rows[4 * k + 3] = sc->laws[k].s00 > 0 ? sc->laws[k].s00 : sc->s00;
+        }
+        if (rows)
+            TRY(pd_h5_write_attr_doubles(g, "bond_laws", rows, 4 * sc->nlaws));
+        free(rows);
+    }
 #undef TRY
     H5Gclose(g);
     return s;

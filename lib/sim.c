@@ -103,6 +103,10 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
         memcpy(sim->y[d], p->x[d], n * sizeof(double));
     memcpy(sim->intact, b->intact, (size_t)words * sizeof(uint64_t));
     pd_status hs = pd_half_build(p, b, s->c, &sim->half);
+    if (hs == PD_OK && pd_scene_has_laws(s))
+        hs = pd_bond_laws_check(p, s);
+    if (hs == PD_OK && pd_scene_has_laws(s))
+        hs = pd_half_laws(p, b, s, &sim->half);
     if (hs != PD_OK) {
         pd_sim_free(sim);
         return hs;

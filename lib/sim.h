@@ -58,6 +58,9 @@ typedef struct {
     double *released;  /* nblocks: energy of the bonds broken in a block
                           in this step, J (summed in block order)        */
     int64_t *cursor;   /* scratch of pd_half_expand                      */
+    double *kfail;     /* per bond s00_bond / s00: the bond breaks at
+                          kfail min(s0_i, s0_j) (lib/materials.c); NULL:
+                          all 1, the kernel of old                       */
 } pd_half_bonds;
 
 pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h);
@@ -128,6 +131,14 @@ void pd_sphere_energy(const pd_sim *sim, const double c[3], double R, double K, 
 /* The PMB bond stiffness sum of seed 004 eq. 46 of particle i,
  * sum_p V_p nu c / |xi| over its family, N/m^4 per unit volume (lib/pmb.c). */
 double pd_bond_stiffness(const pd_particles *p, const pd_bonds *b, double c, int64_t i);
+
+/* Per-bond laws (lib/materials.c): w_ij and w_ji with each bond's own c,
+ * and kfail when the scene has failure; for pd_scene_has_laws only. */
+pd_status pd_half_laws(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
+                       pd_half_bonds *h);
+/* pd_bond_stiffness with each bond's own c. */
+double pd_bond_stiffness_laws(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
+                              int64_t i);
 
 /* Break every bond of particle i (both halves). */
 void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i);
