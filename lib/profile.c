@@ -294,15 +294,18 @@ double pd_profile_rate(const pd_profile *g, double t)
 }
 
 /* The shortest %g form of x that reads back to x exactly (at most 17
- * digits), so that a log shows 5e-06 and not 5.0000000000000004e-06. */
+ * digits), so that a log shows 5e-06 and 20, not 5.0000000000000004e-06
+ * or 2e+01. */
 static int shortest(char *buf, size_t len, double x)
 {
-    for (int prec = 1; prec < 17; prec++) {
-        int n = snprintf(buf, len, "%.*g", prec, x);
-        if (strtod(buf, NULL) == x)
-            return n;
+    char best[32] = "";
+    for (int prec = 17; prec >= 1; prec--) {
+        char try[32];
+        snprintf(try, sizeof try, "%.*g", prec, x);
+        if (strtod(try, NULL) == x && (best[0] == '\0' || strlen(try) <= strlen(best)))
+            memcpy(best, try, sizeof best);
     }
-    return snprintf(buf, len, "%.17g", x);
+    return snprintf(buf, len, "%s", best);
 }
 
 char *pd_profile_text(const pd_profile *g)
