@@ -36,6 +36,7 @@ struct options {
     int has_proj_k;  /* --projectile with its K                     */
     int has_c, has_k, has_dt, has_steps, force_dt, has_status, has_output;
     int has_g, has_influence; /* --shear-modulus, --influence (LPS) */
+    int has_lambda, has_tau;  /* --ves-lambda, --ves-tau (VES)      */
     int64_t status_every;
     const char *input;
     const char *output;
@@ -53,8 +54,8 @@ static void usage(FILE *out)
             "Integrate a peridynamic model (pd-h5 with /bonds); INPUT '-' is stdin.\n"
             "\n"
             "Model:\n"
-            "  --model pmb|lps       prototype microelastic brittle (default) or linear\n"
-            "                        peridynamic solid\n"
+            "  --model pmb|lps|ves   prototype microelastic brittle (default), linear\n"
+            "                        peridynamic solid, or its viscoelastic variant\n"
             "  --c C                 micromodulus, N/m^6 (pmb)\n"
             "  --bulk-modulus K      bulk modulus, Pa (c = 18K/(pi delta^4));\n"
             "                        the last of --c, --bulk-modulus and\n"
@@ -66,6 +67,11 @@ static void usage(FILE *out)
             "  --shear-modulus G     shear modulus, Pa (lps, required there)\n"
             "  --influence W         influence function of lps: 1/r (default), 1 or\n"
             "                        gaussian (exp(-|xi|^2/delta^2)); lps is 3-D only\n"
+            "  --ves-lambda L        ves: the viscous fraction lambda of the deviatoric\n"
+            "                        part, 0 <= L <= 1 (LAMMPS peri/ves m_lambdai)\n"
+            "  --ves-tau T           ves: the relaxation time tau, s (m_taubi)\n"
+            "                        (ves takes --bulk-modulus, --shear-modulus and\n"
+            "                        --influence as lps, and both of these)\n"
             "Effects (each only when given):\n"
             "  --failure S00,ALPHA   critical stretch s0 = S00 - ALPHA s_min (both\n"
             "                        dimensionless)\n"
@@ -290,7 +296,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     enum { OPT_MODEL = 256, OPT_C, OPT_K, OPT_FAILURE, OPT_CONTACT, OPT_SKIN, OPT_INDENTER,
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
-           OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE };
+           OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_LAMBDA, OPT_TAU };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -318,6 +324,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"displacement-bc", required_argument, 0, OPT_DBC},
         {"body-force", required_argument, 0, OPT_BODY},
         {"projectile", required_argument, 0, OPT_PROJECTILE},
+        {"ves-lambda", required_argument, 0, OPT_LAMBDA},
+        {"ves-tau", required_argument, 0, OPT_TAU},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -336,8 +344,21 @@ static int parse_options(int argc, char **argv, struct options *o)
                 o->sc.model = PD_MODEL_PMB;
             else if (strcmp(optarg, "lps") == 0)
                 o->sc.model = PD_MODEL_LPS;
+            else if (strcmp(optarg, "ves") == 0)
+                o->sc.model = PD_MODEL_VES;
             else
-                return usage_error("unknown --model (this pd knows: pmb, lps)", optarg);
+                return usage_error("unknown --model (this pd knows: pmb, lps, ves)", optarg);
+            break;
+        case OPT_LAMBDA:
+            if (!pd_parse_double(optarg, &o->sc.ves_lambda) || !(o->sc.ves_lambda >= 0) ||
+                !(o->sc.ves_lambda <= 1))
+                return usage_error("--ves-lambda must be a number in [0, 1], not", optarg);
+            o->has_lambda = 1;
+            break;
+        case OPT_TAU:
+            if ((rc = positive("--ves-tau", optarg, &o->sc.ves_tau)))
+                return rc;
+            o->has_tau = 1;
             break;
         case OPT_G:
             if ((rc = positive("--shear-modulus", optarg, &o->sc.shear_modulus)))
@@ -514,7 +535,14 @@ static int parse_options(int argc, char **argv, struct options *o)
         return status;
     if (!o->has_steps)
         return usage_error("--steps is required", NULL);
-    if (o->sc.model == PD_MODEL_LPS) {
+    if (o->sc.model == PD_MODEL_VES) {
+        if (!o->has_lambda || !o->has_tau)
+            return usage_error("--model ves needs --ves-lambda and --ves-tau", NULL);
+    } else if (o->has_lambda || o->has_tau)
+        return usage_error(o->has_lambda ? "--ves-lambda is for --model ves"
+                                         : "--ves-tau is for --model ves",
+                           NULL);
+    if (PD_MODEL_STATE_BASED(o->sc.model)) {
         if (o->has_e)
             return usage_error("--youngs-modulus is for pmb (Poisson ratio 1/4); --model lps "
                                "takes --bulk-modulus and --shear-modulus",
@@ -570,11 +598,14 @@ static char *scene_text(const pd_scene *s)
             free(prof[k]);
         return NULL;
     }
-    if (s->model == PD_MODEL_LPS)
-        p += sprintf(p, "model lps\nbulk-modulus %.17g\nshear-modulus %.17g\ninfluence %s\n",
-                     s->bulk_modulus, s->shear_modulus, pd_influence_name(s->influence));
+    if (PD_MODEL_STATE_BASED(s->model))
+        p += sprintf(p, "model %s\nbulk-modulus %.17g\nshear-modulus %.17g\ninfluence %s\n",
+                     s->model == PD_MODEL_VES ? "ves" : "lps", s->bulk_modulus,
+                     s->shear_modulus, pd_influence_name(s->influence));
     else
         p += sprintf(p, "model pmb\nc %.17g\n", s->c);
+    if (s->model == PD_MODEL_VES)
+        p += sprintf(p, "ves-lambda %.17g\nves-tau %.17g\n", s->ves_lambda, s->ves_tau);
     if (s->has_failure)
         p += sprintf(p, "failure %.17g,%.17g\n", s->s00, s->alpha);
     if (s->has_contact)
@@ -891,9 +922,9 @@ int main(int argc, char **argv)
         sc->c = pd_pmb_c_for(p, sc->bulk_modulus, b->horizon);
     if (!o.has_k && !o.has_e)
         sc->bulk_modulus = sc->youngs_modulus = 0; /* a scene's K or E that --c overrode */
-    if (sc->model == PD_MODEL_LPS && p->dimension == 2) {
-        fprintf(stderr, PROG ": error: --model lps is for 3-D bodies; '%s' is a 2-D plate (run "
-                             "it with pmb)\n", o.input);
+    if (PD_MODEL_STATE_BASED(sc->model) && p->dimension == 2) {
+        fprintf(stderr, PROG ": error: --model %s is for 3-D bodies; '%s' is a 2-D plate (run "
+                             "it with pmb)\n", sc->model == PD_MODEL_VES ? "ves" : "lps", o.input);
         if (restart)
             pd_file_abort(h.in), h.in = NULL;
         release(&h);
@@ -970,6 +1001,8 @@ int main(int argc, char **argv)
         s = pd_plan_restart(h.out, p->n, sc->has_failure, sc->has_contact);
     if (s == PD_OK && sc->has_projectile)
         s = pd_plan_restart_projectile(h.out);
+    if (s == PD_OK && sc->model == PD_MODEL_VES && b->count > 0)
+        s = pd_plan_restart_history(h.out, b->count, 2);
     if (s == PD_OK)
         s = pd_file_publish(h.out);
     if (!restart) {
@@ -1009,6 +1042,13 @@ int main(int argc, char **argv)
                 PROG ": model lps (seed 000 eqs. 3-4, Algorithms 2-4): K %g Pa, G %g Pa, "
                      "influence %s; contact stiffness from c = 18K/(pi delta^4)\n",
                 sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence));
+    if (!o.quiet && sc->model == PD_MODEL_VES)
+        fprintf(stderr,
+                PROG ": model ves (Mitchell SAND2011-8064, as LAMMPS peri/ves): K %g Pa, G %g "
+                     "Pa, influence %s, lambda %g, tau %g s; contact stiffness from c = "
+                     "18K/(pi delta^4)\n",
+                sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence),
+                sc->ves_lambda, sc->ves_tau);
     if (!o.quiet && sc->has_projectile && !restart)
         fprintf(stderr,
                 PROG ": projectile: mass %g kg, radius %g m, stiffness K %.6g N/m^5%s\n",

@@ -35,8 +35,34 @@
  * When bonds break, the energy released is the drop of W* of both ends at
  * the step's positions as the bonds go.
  *
+ * VES, the viscoelastic solid (--model ves; Mitchell, SAND2011-8064, as
+ * LAMMPS peri/ves).  The deviatoric extension of directed bond i-j,
+ *   e^d = e - theta_i |xi| / 3      (theta of i only, as LAMMPS),
+ * splits into an elastic spring and a Maxwell branch of weight lambda with
+ * the back extension e^b (the dashpot's share).  With the relaxation time
+ * tau and c = tau/dt, d = exp(-1/c), beta = 1 - c (1 - d), the exact
+ * integral of de^b/dt = (e^d - e^b)/tau over a step with e^d linear in time
+ * gives
+ *   e^b_{n+1} = e^d_n (1 - d) + e^b_n d + beta (e^d_{n+1} - e^d_n)
+ * and the pair force
+ *   t_ij = 3K (omega theta_i/m_i + omega theta_j/m_j) |xi| nu V_j
+ *        + 15G (omega/m_i + omega/m_j) [(1 - lambda) e^d + lambda (e^d -
+ *          e^b_{n+1})] nu V_j.
+ * e^d_n and e^b_n are kept per directed bond (the bond history, in the
+ * restart slots) and advance at every force evaluation but step 0's.  With
+ * lambda = 0 this is LPS but for one thing LAMMPS does: the deviatoric
+ * part of t_ij uses theta_i for both ends, where Algorithm 2 has theta_i/m_i
+ * + theta_j/m_j; so t_ij != t_ji where theta_i != theta_j and m_i != m_j
+ * (near a surface or a crack), and momentum is not conserved to rounding
+ * there.  pd follows LAMMPS (to agree with peri/ves to 1e-9).  The elastic
+ * energy booked is LAMMPS's
+ *   W_i = K/2 theta_i^2 + 15G/(2 m_i) sum_{j intact} omega [(1 - lambda)
+ *         (e^d)^2 + lambda (e^d - e^b)^2] nu V_j,
+ * the energy of the springs; the dashpot dissipates, which the status
+ * line's balance does not book (it drifts by what the dashpot took).
+ *
  * Each particle walks its own (directed) family and writes only its own
- * force, theta and s0: no scatter, so the sums are in a fixed order and
+ * force, theta, s0 and bond history: no scatter, so the sums are in a fixed order and
  * the result does not depend on the thread count.  The bond states stay
  * in the run's half bonds (sim->half), reached through a map from the
  * directed bonds.
@@ -56,6 +82,9 @@ typedef struct {
     uint8_t *kill;     /* directed bonds: breaks in this step            */
     uint8_t *touched;  /* n: particle with a bond breaking in this step  */
     double *released;  /* n: energy released at each particle, J         */
+    pd_model_kind model; /* PD_MODEL_LPS or PD_MODEL_VES                 */
+    double *hist;      /* VES: 2 per directed bond, e^d_n and e^b_n      */
+    double decay, beta;/* VES: d = exp(-dt/tau), beta = 1 - tau/dt (1 - d) */
 } lps_state;
 
 const char *pd_influence_name(pd_influence w)
@@ -115,6 +144,7 @@ static void lps_free(void *state)
     free(st->kill);
     free(st->touched);
     free(st->released);
+    free(st->hist);
     free(st);
 }
 
@@ -137,6 +167,17 @@ static pd_status lps_init(pd_sim *sim, void **state)
         lps_free(st);
         return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS state of %lld bonds",
                        (long long)b->count);
+    }
+    st->model = sim->sc.model == PD_MODEL_VES ? PD_MODEL_VES : PD_MODEL_LPS;
+    if (st->model == PD_MODEL_VES) {
+        const double c1 = sim->sc.ves_tau / sim->sc.dt;
+        st->decay = exp(-1.0 / c1);
+        st->beta = 1.0 - c1 * (1.0 - st->decay);
+        if ((st->hist = calloc(2 * nb, sizeof(double))) == NULL) {
+            lps_free(st);
+            return pd_fail(PD_ERR_NOMEM, "out of memory for the VES history of %lld bonds",
+                           (long long)b->count);
+        }
     }
     pd_lps_weighted_volume(sim->p, b, sim->sc.influence, st->m);
     for (int64_t k = 0; k < b->count; k++)
@@ -185,6 +226,26 @@ static double theta_row(const pd_sim *sim, const lps_state *st, const uint64_t *
     return st->m[i] != 0.0 ? (3.0 / st->m[i]) * sum : 0.0;
 }
 
+/* W_i of VES over the bonds intact in `bits`, theta_i = th, J/m^3, with
+ * the stored back extensions (see the top). */
+static double ves_energy(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i,
+                         double th)
+{
+    const pd_bonds *b = sim->b;
+    const double *V = sim->p->volume, lam = sim->sc.ves_lambda;
+    double sum = 0, d[3], r;
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        if (!pd_bond_intact(bits, st->half[k]))
+            continue;
+        const double ed = extension(sim, i, k, d, &r) - th * b->length[k] / 3.0;
+        const double ev = ed - st->hist[2 * k + 1];
+        sum += st->omega[k] * ((1.0 - lam) * ed * ed + lam * ev * ev) * V[b->neighbor[k]] *
+               b->vfactor[k];
+    }
+    return 0.5 * sim->sc.bulk_modulus * th * th +
+           0.5 * PD_LPS_SHEAR_FACTOR * sim->sc.shear_modulus / st->m[i] * sum;
+}
+
 /* V_i W*_i over the bonds intact in `bits`, J (see the top). */
 static double energy_row(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i)
 {
@@ -200,8 +261,36 @@ static double energy_row(const pd_sim *sim, const lps_state *st, const uint64_t 
         sum += st->omega[k] * e * e * V[b->neighbor[k]] * b->vfactor[k];
     }
     const double th = theta_row(sim, st, bits, i);
+    if (st->model == PD_MODEL_VES)
+        return V[i] * ves_energy(sim, st, bits, i, th);
     return V[i] * ((0.5 * K - 5.0 * G / 6.0) * th * th +
                    0.5 * PD_LPS_SHEAR_FACTOR * G / st->m[i] * sum);
+}
+
+/* The VES pair force t_ij of directed bond k of row i (nu V_j included)
+ * with extension e and the dilatations theta; with `advance` the bond
+ * history steps to e^d_{n+1}, e^b_{n+1}, else the force uses e^b_{n+1}
+ * from the stored e^d_n, e^b_n (step 0) -- see the top. */
+static inline double ves_pair(const pd_sim *sim, lps_state *st, int64_t i, int64_t k, double e,
+                              const double *theta, int advance)
+{
+    const pd_bonds *b = sim->b;
+    const int32_t j = b->neighbor[k];
+    const double *m = st->m, om = st->omega[k], len = b->length[k];
+    const double w = sim->p->volume[j] * b->vfactor[k], lam = sim->sc.ves_lambda;
+    const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
+    const double td = ((3.0 * K) * w * ((om * theta[i] / m[i]) + (om * theta[j] / m[j]))) * len;
+    const double ed = e - (theta[i] * len / 3.0);
+    double *h = st->hist + 2 * k;
+    const double eb = h[0] * (1.0 - st->decay) + h[1] * st->decay + st->beta * (ed - h[0]);
+    const double g = (G * w) * ((om / m[i]) + (om / m[j]));
+    const double tv = ((1.0 - lam) * PD_LPS_SHEAR_FACTOR) * g * ed +
+                      (lam * PD_LPS_SHEAR_FACTOR) * g * (ed - eb);
+    if (advance) {
+        h[0] = ed;
+        h[1] = eb;
+    }
+    return td + tv;
 }
 
 /* The force density on i (Algorithm 2) from theta of this step, and with
@@ -222,10 +311,16 @@ static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
         const int32_t j = b->neighbor[k];
         const double e = extension(sim, i, k, d, &r);
         const double om = st->omega[k], len = b->length[k];
-        double t = dil * V[j] * b->vfactor[k] * ((om * theta[i] / m[i]) + (om * theta[j] / m[j])) *
-                   len;
-        t += PD_LPS_SHEAR_FACTOR * (G * V[j] * b->vfactor[k]) * ((om / m[i]) + (om / m[j])) * e;
-        const double fb = r > 0.0 ? t / r : 0.0;
+        double fb;
+        if (st->model == PD_MODEL_VES) {
+            fb = ves_pair(sim, st, i, k, e, theta, !sim->setup);
+            fb = r > 0.0 ? fb / r : 0.0;
+        } else {
+            double t = dil * V[j] * b->vfactor[k] *
+                       ((om * theta[i] / m[i]) + (om * theta[j] / m[j])) * len;
+            t += PD_LPS_SHEAR_FACTOR * (G * V[j] * b->vfactor[k]) * ((om / m[i]) + (om / m[j])) * e;
+            fb = r > 0.0 ? t / r : 0.0;
+        }
         fx += d[0] * fb;
         fy += d[1] * fb;
         fz += d[2] * fb;
@@ -355,8 +450,15 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
             if (!(r > 0.0))
                 continue;
             const double om = st->omega[k], w = V[j] * b->vfactor[k];
-            const double t = dil * w * (om * theta[i] / m[i] + om * theta[j] / m[j]) * b->length[k] +
-                             PD_LPS_SHEAR_FACTOR * G * w * (om / m[i] + om / m[j]) * e;
+            double t = dil * w * (om * theta[i] / m[i] + om * theta[j] / m[j]) * b->length[k] +
+                       PD_LPS_SHEAR_FACTOR * G * w * (om / m[i] + om / m[j]) * e;
+            if (st->model == PD_MODEL_VES) { /* with the stored back extension */
+                const double ed = e - theta[i] * b->length[k] / 3.0, lam = sim->sc.ves_lambda;
+                t = 3.0 * sim->sc.bulk_modulus * w * (om * theta[i] / m[i] + om * theta[j] / m[j]) *
+                        b->length[k] +
+                    PD_LPS_SHEAR_FACTOR * G * w * (om / m[i] + om / m[j]) *
+                        (ed - lam * st->hist[2 * k + 1]);
+            }
             const double xi[3] = {x[0][j] - x[0][i], x[1][j] - x[1][i], x[2][j] - x[2][i]};
             for (int a = 0; a < 3; a++)
                 for (int c = 0; c < 3; c++)
@@ -374,17 +476,39 @@ const pd_effect pd_effect_lps = {
 const pd_effect pd_effect_lps_failure = {
     .name = "lps+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
     .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+const pd_effect pd_effect_ves = {
+    .name = "ves", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+const pd_effect pd_effect_ves_failure = {
+    .name = "ves+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+
+/* The state of the run's LPS-family effect, or NULL. */
+static lps_state *lps_of(const pd_sim *sim)
+{
+    for (int k = 0; k < sim->neffects; k++)
+        if (sim->effects[k] == &pd_effect_lps || sim->effects[k] == &pd_effect_lps_failure ||
+            sim->effects[k] == &pd_effect_ves || sim->effects[k] == &pd_effect_ves_failure)
+            return sim->state[k];
+    return NULL;
+}
+
+double *pd_sim_bond_history(const pd_sim *sim, int *width)
+{
+    const lps_state *st = lps_of(sim);
+    *width = st && st->hist && sim->b->count > 0 ? 2 : 0; /* none without bonds */
+    return *width ? st->hist : NULL;
+}
 
 pd_status pd_sim_dilatation(const pd_sim *sim, double *theta)
 {
-    for (int k = 0; k < sim->neffects; k++)
-        if (sim->effects[k] == &pd_effect_lps || sim->effects[k] == &pd_effect_lps_failure) {
-            const lps_state *st = sim->state[k];
+    const lps_state *st = lps_of(sim);
+    if (st != NULL) {
 #pragma omp parallel for schedule(static)
-            for (int64_t i = 0; i < sim->n; i++)
-                theta[i] = theta_row(sim, st, sim->half.intact, i);
-            return PD_OK;
-        }
+        for (int64_t i = 0; i < sim->n; i++)
+            theta[i] = theta_row(sim, st, sim->half.intact, i);
+        return PD_OK;
+    }
     return pd_fail(PD_ERR_INVALID, "the run has no LPS model, so no dilatation");
 }
 
@@ -418,7 +542,11 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
             S[i] += pd_lps_influence(s->influence, b->length[k], b->horizon) * b->length[k] *
                     b->vfactor[k] * p->volume[b->neighbor[k]];
     }
-    const double G = s->shear_modulus, dil = fabs(3.0 * s->bulk_modulus - 5.0 * G);
+    /* VES: its dilatation term has 3K and its deviatoric part -5G theta_i
+     * (see the top), so |3K| + |5G| bounds their coupling */
+    const double G = s->shear_modulus,
+                 dil = s->model == PD_MODEL_VES ? 3.0 * s->bulk_modulus + 5.0 * G
+                                                : fabs(3.0 * s->bulk_modulus - 5.0 * G);
     double best = INFINITY;
     for (int64_t i = 0; i < n; i++) {
         double sum = 0;
