@@ -542,11 +542,14 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
             S[i] += pd_lps_influence(s->influence, b->length[k], b->horizon) * b->length[k] *
                     b->vfactor[k] * p->volume[b->neighbor[k]];
     }
-    /* VES: its dilatation term has 3K and its deviatoric part -5G theta_i
-     * (see the top), so |3K| + |5G| bounds their coupling */
+    /* VES (see the top): theta_i enters t_ij with 3K omega/m_i - 5G omega
+     * (1/m_i + 1/m_j), theta_j with 3K omega/m_j; with m_i ~ m_j both are
+     * bounded by max(3K, 10G - 3K) omega/m, which takes the place of
+     * |3K - 5G| */
     const double G = s->shear_modulus,
-                 dil = s->model == PD_MODEL_VES ? 3.0 * s->bulk_modulus + 5.0 * G
-                                                : fabs(3.0 * s->bulk_modulus - 5.0 * G);
+                 dil = s->model == PD_MODEL_VES
+                           ? fmax(3.0 * s->bulk_modulus, 10.0 * G - 3.0 * s->bulk_modulus)
+                           : fabs(3.0 * s->bulk_modulus - 5.0 * G);
     double best = INFINITY;
     for (int64_t i = 0; i < n; i++) {
         double sum = 0;

@@ -256,3 +256,66 @@ run_lps() {
     assert_success
     assert_damage_in_both
 }
+
+# ---------------------------------------------------------------- VES
+# pair_style peri/ves (Mitchell SAND2011-8064): K, G as LPS plus the
+# viscous fraction lambda and the relaxation time tau.  tau = 40 steps, so
+# the back extension moves a lot within the run (decay exp(-1/40) per
+# step), and lambda = 0.5 weighs both branches alike.  VES's stable step
+# is smaller than LPS's (see lib/lps.c), hence dt = 5e-8 s; the sphere
+# goes twice as fast to reach the same depth as the LPS scenes.
+VES_DT=5e-8
+VES=(--ves-lambda 0.5 --ves-tau 2e-6)
+
+# run_ves DIR STEPS EVERY IND [pd-run option]...: pd and LAMMPS on
+# DIR/model.h5, failure, contact and the indenter.
+run_ves() {
+    local dir=$1 steps=$2 every=$3 ind=$4
+    shift 4
+    pd-run "$dir/model.h5" --model ves --bulk-modulus "$K" --shear-modulus 8e9 "${VES[@]}" \
+        --failure "$FAILURE" --contact --dt "$VES_DT" --threads 1 --indenter "$ind" \
+        --steps "$steps" --every "$every" -q -o "$dir/run.h5" "$@" &&
+        pd-damage "$dir/run.h5" >/dev/null || return 1
+    "$PY" "$LMPTOOLS/pd2lmp.py" "$dir/model.h5" -d "$dir/data.lmp" -i "$dir/in.lmp" \
+        --dump dump.lmp --model ves --bulk-modulus "$K" --shear-modulus 8e9 "${VES[@]}" \
+        --horizon "$DISK_HORIZON" --failure "$FAILURE" --dt "$VES_DT" --steps "$steps" \
+        --every "$every" --indenter "$ind" || return 1
+    grep -q "^pair_style *peri/ves" "$dir/in.lmp" || return 1
+    (cd "$dir" && lmp -in in.lmp -log none >lmp.out 2>&1) || {
+        cat "$dir/lmp.out"
+        return 1
+    }
+}
+
+@test "pd-run --model ves agrees with LAMMPS peri/ves: failure, contact and the indenter" {
+    local d=$BATS_TEST_TMPDIR/ves ind=sphere,0,0.0050,0,0.005,1e17,0,-200,0
+    make_disk "$d"
+    run_ves "$d" 100 50 "$ind"
+    compare "$d/run.h5" "$d/dump.lmp" --step 50
+    assert_success
+    compare "$d/run.h5" "$d/dump.lmp" --step 100 --min-damaged 100
+    assert_success
+    assert_damage_in_both
+    # negative controls: lambda 2e-4 or tau 1e-4 off is seen, so both
+    # parameters are in play
+    for off in "--ves-lambda 0.5001" "--ves-tau 2.0002e-6"; do
+        # shellcheck disable=SC2086 # two words
+        pd-run "$d/model.h5" --model ves --bulk-modulus "$K" --shear-modulus 8e9 "${VES[@]}" \
+            $off --failure "$FAILURE" --contact --dt "$VES_DT" --threads 1 --indenter "$ind" \
+            --steps 100 -q -o "$d/off.h5"
+        compare "$d/off.h5" "$d/dump.lmp" --step 100
+        assert_failure 1
+        assert_line --regexp "^FAIL:.*displacements"
+    done
+}
+
+@test "pd-run --model ves agrees with LAMMPS peri/ves on a perturbed lattice, crushed" {
+    # as the LPS scene: unequal bonds, a stiff fast sphere (contact forces
+    # act) that starts above the top face
+    local d=$BATS_TEST_TMPDIR/ves-perturbed
+    make_disk "$d" --perturb 1e-5 --seed 3
+    run_ves "$d" 100 100 sphere,0,0.00503,0,0.005,1e18,0,-400,0
+    compare "$d/run.h5" "$d/dump.lmp" --step 100 --min-damaged 100
+    assert_success
+    assert_damage_in_both
+}

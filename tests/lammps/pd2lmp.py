@@ -70,8 +70,11 @@ def main(argv):
     ap.add_argument("--dump", default="dump.lmp", help="dump file named in the script (default dump.lmp)")
     ap.add_argument("--c", type=float, help="micromodulus c, N/m^6")
     ap.add_argument("--bulk-modulus", type=float, help="bulk modulus K, Pa (c = 18K/(pi delta^4))")
-    ap.add_argument("--model", choices=("pmb", "lps"), help="material model (default: /scene's, or pmb)")
-    ap.add_argument("--shear-modulus", type=float, help="shear modulus G, Pa (lps)")
+    ap.add_argument("--model", choices=("pmb", "lps", "ves"),
+                    help="material model (default: /scene's, or pmb)")
+    ap.add_argument("--shear-modulus", type=float, help="shear modulus G, Pa (lps, ves)")
+    ap.add_argument("--ves-lambda", type=float, help="viscous fraction lambda (ves: m_lambdai)")
+    ap.add_argument("--ves-tau", type=float, help="relaxation time tau, s (ves: m_taubi)")
     ap.add_argument("--horizon", type=float, help="horizon delta, m (default /bonds horizon)")
     ap.add_argument("--spacing", type=float, help="lattice constant, m (default /particles spacing)")
     ap.add_argument("--failure", metavar="S00,ALPHA", help="critical stretch parameters")
@@ -112,9 +115,13 @@ def main(argv):
     model = a.model or str(scene("model") or "pmb")
     K = a.bulk_modulus if a.bulk_modulus is not None else scene("bulk_modulus")
     G = a.shear_modulus if a.shear_modulus is not None else scene("shear_modulus")
-    if model == "lps":
+    lam = a.ves_lambda if a.ves_lambda is not None else scene("ves_lambda")
+    tau = a.ves_tau if a.ves_tau is not None else scene("ves_tau")
+    if model == "ves" and (lam is None or tau is None):
+        raise SystemExit("pd2lmp.py: error: ves needs --ves-lambda and --ves-tau")
+    if model in ("lps", "ves"):
         if K is None or G is None:
-            raise SystemExit("pd2lmp.py: error: lps needs --bulk-modulus and --shear-modulus")
+            raise SystemExit("pd2lmp.py: error: %s needs --bulk-modulus and --shear-modulus" % model)
         if str(scene("influence") or "1/r") != "1/r":
             raise SystemExit("pd2lmp.py: error: LAMMPS peri/lps has the influence function 1/r only")
     # micromodulus
@@ -149,8 +156,8 @@ def main(argv):
     if not every:
         every = steps
 
-    if model == "lps":
-        c = 0.0  # not used by peri/lps
+    if model in ("lps", "ves"):
+        c = 0.0  # not used by peri/lps or peri/ves
     missing = [n for n, v in (("--c", c), ("--horizon", horizon), ("--spacing", spacing),
                               ("--failure", s00), ("--dt", dt), ("--steps", steps))
                if v is None]
@@ -194,6 +201,11 @@ def main(argv):
         L.append("#               <type1> <type2> <K> <G> <horizon> <s00> <alpha>")
         L.append("pair_coeff      * * %s %s %s %s %s"
                  % (fmt(K), fmt(G), fmt(horizon), fmt(s00), fmt(alpha)))
+    elif model == "ves":
+        L.append("pair_style      peri/ves")
+        L.append("#               <type1> <type2> <K> <G> <horizon> <s00> <alpha> <lambda> <tau>")
+        L.append("pair_coeff      * * %s %s %s %s %s %s %s"
+                 % (fmt(K), fmt(G), fmt(horizon), fmt(s00), fmt(alpha), fmt(lam), fmt(tau)))
     else:
         L.append("pair_style      peri/pmb")
         L.append("#               <type1> <type2> <c> <horizon> <s00> <alpha>")
