@@ -82,8 +82,12 @@ typedef struct {
     uint8_t *kill;     /* directed bonds: breaks in this step            */
     uint8_t *touched;  /* n: particle with a bond breaking in this step  */
     double *released;  /* n: energy released at each particle, J         */
-    pd_model_kind model; /* PD_MODEL_LPS or PD_MODEL_VES                 */
-    double *hist;      /* VES: 2 per directed bond, e^d_n and e^b_n      */
+    pd_model_kind model; /* PD_MODEL_LPS, PD_MODEL_VES or PD_MODEL_EPS   */
+    double *hist;      /* VES: 2 per directed bond, e^d_n and e^b_n;
+                          EPS: 1, the plastic extension e^p              */
+    int64_t *rev;      /* EPS: directed bond i-j -> j-i                  */
+    double *psi0;      /* EPS: n, the yield value psi_0 of each particle */
+    double *ratio;     /* EPS: n, sqrt(2 psi_0)/|t^d_trial| (1: elastic) */
     double decay, beta;/* VES: d = exp(-dt/tau), beta = 1 - tau/dt (1 - d) */
 } lps_state;
 
@@ -145,7 +149,50 @@ static void lps_free(void *state)
     free(st->touched);
     free(st->released);
     free(st->hist);
+    free(st->rev);
+    free(st->psi0);
+    free(st->ratio);
     free(st);
+}
+
+/* EPS: the reverse of each directed bond, and psi_0 = 5/2 Y^2 I_i / m_i^2
+ * with I_i = sum_j omega^2 |xi|^2 nu V_j (see the top). */
+static void eps_init(const pd_sim *sim, lps_state *st)
+{
+    const pd_bonds *b = sim->b;
+    const double Y = sim->sc.yield_stress;
+    int64_t *seen = st->rev; /* first: the first directed bond of each half bond */
+    int64_t nh = sim->half.count;
+    int64_t *first = malloc((size_t)(nh > 0 ? nh : 1) * sizeof(int64_t));
+    if (first == NULL) { /* (small: falls back to a search) */
+        for (int64_t i = 0; i < b->n; i++)
+            for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+                const int32_t j = b->neighbor[k];
+                for (int64_t q = b->offset[j]; q < b->offset[j + 1]; q++)
+                    if (b->neighbor[q] == i)
+                        seen[k] = q;
+            }
+    } else {
+        for (int64_t q = 0; q < nh; q++)
+            first[q] = -1;
+        for (int64_t k = 0; k < b->count; k++) {
+            const int64_t q = st->half[k];
+            if (first[q] < 0)
+                first[q] = k;
+            else {
+                seen[k] = first[q];
+                seen[first[q]] = k;
+            }
+        }
+        free(first);
+    }
+    for (int64_t i = 0; i < b->n; i++) {
+        double I = 0;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
+            I += st->omega[k] * st->omega[k] * b->length[k] * b->length[k] *
+                 sim->p->volume[b->neighbor[k]] * b->vfactor[k];
+        st->psi0[i] = st->m[i] > 0 ? 2.5 * Y * Y * I / (st->m[i] * st->m[i]) : INFINITY;
+    }
 }
 
 static pd_status lps_init(pd_sim *sim, void **state)
@@ -168,7 +215,21 @@ static pd_status lps_init(pd_sim *sim, void **state)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS state of %lld bonds",
                        (long long)b->count);
     }
-    st->model = sim->sc.model == PD_MODEL_VES ? PD_MODEL_VES : PD_MODEL_LPS;
+    st->model = sim->sc.model == PD_MODEL_VES || sim->sc.model == PD_MODEL_EPS ? sim->sc.model
+                                                                                : PD_MODEL_LPS;
+    if (st->model == PD_MODEL_EPS) {
+        st->hist = calloc(nb, sizeof(double));
+        st->rev = malloc(nb * sizeof(int64_t));
+        st->psi0 = malloc(n * sizeof(double));
+        st->ratio = malloc(n * sizeof(double));
+        if (!st->hist || !st->rev || !st->psi0 || !st->ratio) {
+            lps_free(st);
+            return pd_fail(PD_ERR_NOMEM, "out of memory for the EPS state of %lld bonds",
+                           (long long)b->count);
+        }
+        for (int64_t i = 0; i < sim->n; i++)
+            st->ratio[i] = 1.0;
+    }
     if (st->model == PD_MODEL_VES) {
         const double c1 = sim->sc.ves_tau / sim->sc.dt;
         st->decay = exp(-1.0 / c1);
@@ -194,6 +255,8 @@ static pd_status lps_init(pd_sim *sim, void **state)
             st->half[k] = j < i ? h->cursor[j]++ : own++;
         }
     }
+    if (st->model == PD_MODEL_EPS)
+        eps_init(sim, st);
     *state = st;
     return PD_OK;
 }
@@ -232,13 +295,15 @@ static double ves_energy(const pd_sim *sim, const lps_state *st, const uint64_t 
                          double th)
 {
     const pd_bonds *b = sim->b;
-    const double *V = sim->p->volume, lam = sim->sc.ves_lambda;
+    const double *V = sim->p->volume,
+                 lam = st->model == PD_MODEL_EPS ? 1.0 : sim->sc.ves_lambda;
     double sum = 0, d[3], r;
+    const int eps = st->model == PD_MODEL_EPS; /* W of EPS: lambda = 1, e^b = e^p */
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
         if (!pd_bond_intact(bits, st->half[k]))
             continue;
         const double ed = extension(sim, i, k, d, &r) - th * b->length[k] / 3.0;
-        const double ev = ed - st->hist[2 * k + 1];
+        const double ev = ed - (eps ? st->hist[k] : st->hist[2 * k + 1]);
         sum += st->omega[k] * ((1.0 - lam) * ed * ed + lam * ev * ev) * V[b->neighbor[k]] *
                b->vfactor[k];
     }
@@ -261,7 +326,7 @@ static double energy_row(const pd_sim *sim, const lps_state *st, const uint64_t 
         sum += st->omega[k] * e * e * V[b->neighbor[k]] * b->vfactor[k];
     }
     const double th = theta_row(sim, st, bits, i);
-    if (st->model == PD_MODEL_VES)
+    if (st->model != PD_MODEL_LPS)
         return V[i] * ves_energy(sim, st, bits, i, th);
     return V[i] * ((0.5 * K - 5.0 * G / 6.0) * th * th +
                    0.5 * PD_LPS_SHEAR_FACTOR * G / st->m[i] * sum);
@@ -293,6 +358,63 @@ static inline double ves_pair(const pd_sim *sim, lps_state *st, int64_t i, int64
     return td + tv;
 }
 
+/* The EPS pair force t_ij of directed bond k of row i (nu V_j included)
+ * with extension e, the dilatations theta and the plastic extensions of
+ * both directions, each deviatoric half scaled by its particle's ratio
+ * (NULL: 1, the stored state) -- see the top. */
+static inline double eps_pair(const pd_sim *sim, const lps_state *st, int64_t i, int64_t k,
+                              double e, const double *theta, const double *ratio)
+{
+    const pd_bonds *b = sim->b;
+    const int32_t j = b->neighbor[k];
+    const double *m = st->m, om = st->omega[k], len = b->length[k];
+    const double w = sim->p->volume[j] * b->vfactor[k];
+    const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
+    const double td = ((3.0 * K) * w * ((om * theta[i] / m[i]) + (om * theta[j] / m[j]))) * len;
+    const double di = e - (theta[i] * len / 3.0) - st->hist[k];
+    const double dj = e - (theta[j] * len / 3.0) - st->hist[st->rev[k]];
+    const double ri = ratio ? ratio[i] : 1.0, rj = ratio ? ratio[j] : 1.0;
+    return td + (PD_LPS_SHEAR_FACTOR * G * w * om) * (ri * di / m[i] + rj * dj / m[j]);
+}
+
+/* EPS: the trial deviatoric force state of particle i, t^d = 15G/m_i omega
+ * (e^d - e^p) with the stored e^p, against the yield value: ratio[i] =
+ * sqrt(2 psi_0)/|t^d| where |t^d|^2/2 > psi_0, else 1. */
+static void eps_yield_row(const pd_sim *sim, lps_state *st, int64_t i)
+{
+    const pd_bonds *b = sim->b;
+    const uint64_t *bits = sim->half.intact;
+    const double alpha = PD_LPS_SHEAR_FACTOR * sim->sc.shear_modulus / st->m[i];
+    double norm = 0, d[3], r;
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        if (!pd_bond_intact(bits, st->half[k]))
+            continue;
+        const double ed = extension(sim, i, k, d, &r) - st->theta[i] * b->length[k] / 3.0;
+        const double t = alpha * st->omega[k] * (ed - st->hist[k]);
+        norm += t * t * sim->p->volume[b->neighbor[k]] * b->vfactor[k];
+    }
+    st->ratio[i] = st->m[i] > 0 && 0.5 * norm > st->psi0[i] ? sqrt(2.0 * st->psi0[i] / norm) : 1.0;
+}
+
+/* EPS: the return to the yield surface, e^p <- e^d - ratio_i (e^d - e^p)
+ * on every intact bond of a yielding particle (after all rows read the
+ * old e^p). */
+static void eps_flow_row(const pd_sim *sim, lps_state *st, int64_t i)
+{
+    const pd_bonds *b = sim->b;
+    const uint64_t *bits = sim->half.intact;
+    const double ri = st->ratio[i];
+    if (ri == 1.0)
+        return;
+    double d[3], r;
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        if (!pd_bond_intact(bits, st->half[k]))
+            continue;
+        const double ed = extension(sim, i, k, d, &r) - st->theta[i] * b->length[k] / 3.0;
+        st->hist[k] = ed - ri * (ed - st->hist[k]);
+    }
+}
+
 /* The force density on i (Algorithm 2) from theta of this step, and with
  * `failure` the breaking test (into st->kill) and s0_new[i]. */
 static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
@@ -314,6 +436,9 @@ static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
         double fb;
         if (st->model == PD_MODEL_VES) {
             fb = ves_pair(sim, st, i, k, e, theta, !sim->setup);
+            fb = r > 0.0 ? fb / r : 0.0;
+        } else if (st->model == PD_MODEL_EPS) {
+            fb = eps_pair(sim, st, i, k, e, theta, st->ratio);
             fb = r > 0.0 ? fb / r : 0.0;
         } else {
             double t = dil * V[j] * b->vfactor[k] *
@@ -382,11 +507,21 @@ static void lps_kernel(pd_sim *sim, lps_state *st, int failure)
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++)
         st->theta[i] = theta_row(sim, st, bits, i);
+    if (st->model == PD_MODEL_EPS) {
+#pragma omp parallel for schedule(dynamic, 256)
+        for (int64_t i = 0; i < sim->n; i++)
+            eps_yield_row(sim, st, i);
+    }
     int broke = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(| : broke)
     for (int64_t i = 0; i < sim->n; i++) {
         force_row(sim, st, i, failure);
         broke |= failure && st->touched[i];
+    }
+    if (st->model == PD_MODEL_EPS && !sim->setup) {
+#pragma omp parallel for schedule(dynamic, 256)
+        for (int64_t i = 0; i < sim->n; i++)
+            eps_flow_row(sim, st, i);
     }
     if (broke)
         sim->released += break_marked(sim, st);
@@ -452,6 +587,8 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
             const double om = st->omega[k], w = V[j] * b->vfactor[k];
             double t = dil * w * (om * theta[i] / m[i] + om * theta[j] / m[j]) * b->length[k] +
                        PD_LPS_SHEAR_FACTOR * G * w * (om / m[i] + om / m[j]) * e;
+            if (st->model == PD_MODEL_EPS) /* with the stored plastic extensions */
+                t = eps_pair(sim, st, i, k, e, theta, NULL);
             if (st->model == PD_MODEL_VES) { /* with the stored back extension */
                 const double ed = e - theta[i] * b->length[k] / 3.0, lam = sim->sc.ves_lambda;
                 t = 3.0 * sim->sc.bulk_modulus * w * (om * theta[i] / m[i] + om * theta[j] / m[j]) *
@@ -479,6 +616,12 @@ const pd_effect pd_effect_lps_failure = {
 const pd_effect pd_effect_ves = {
     .name = "ves", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
     .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+const pd_effect pd_effect_eps = {
+    .name = "eps", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+const pd_effect pd_effect_eps_failure = {
+    .name = "eps+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
 const pd_effect pd_effect_ves_failure = {
     .name = "ves+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
     .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
@@ -488,7 +631,8 @@ static lps_state *lps_of(const pd_sim *sim)
 {
     for (int k = 0; k < sim->neffects; k++)
         if (sim->effects[k] == &pd_effect_lps || sim->effects[k] == &pd_effect_lps_failure ||
-            sim->effects[k] == &pd_effect_ves || sim->effects[k] == &pd_effect_ves_failure)
+            sim->effects[k] == &pd_effect_ves || sim->effects[k] == &pd_effect_ves_failure ||
+            sim->effects[k] == &pd_effect_eps || sim->effects[k] == &pd_effect_eps_failure)
             return sim->state[k];
     return NULL;
 }
@@ -496,7 +640,9 @@ static lps_state *lps_of(const pd_sim *sim)
 double *pd_sim_bond_history(const pd_sim *sim, int *width)
 {
     const lps_state *st = lps_of(sim);
-    *width = st && st->hist && sim->b->count > 0 ? 2 : 0; /* none without bonds */
+    *width = !st || !st->hist || sim->b->count == 0 ? 0 /* none without bonds */
+             : st->model == PD_MODEL_EPS            ? 1
+                                                    : 2;
     return *width ? st->hist : NULL;
 }
 

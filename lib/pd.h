@@ -252,10 +252,12 @@ pd_status pd_particles_sort_spatial(pd_particles *p, double cell);
 
 /* ---------------------------------------------------------------- scene */
 
-typedef enum { PD_MODEL_PMB = 0, PD_MODEL_LPS, PD_MODEL_VES } pd_model_kind;
-/* The state-based models (LPS and its viscoelastic variant VES, lib/lps.c):
- * K, G and an influence function, 3-D only. */
-#define PD_MODEL_STATE_BASED(m) ((m) == PD_MODEL_LPS || (m) == PD_MODEL_VES)
+typedef enum { PD_MODEL_PMB = 0, PD_MODEL_LPS, PD_MODEL_VES, PD_MODEL_EPS } pd_model_kind;
+/* The state-based models (LPS and its viscoelastic and elastic-plastic
+ * variants VES and EPS, lib/lps.c): K, G and an influence function, 3-D
+ * only. */
+#define PD_MODEL_STATE_BASED(m)                                                                    \
+    ((m) == PD_MODEL_LPS || (m) == PD_MODEL_VES || (m) == PD_MODEL_EPS)
 
 /* Influence functions omega(|xi|) of the LPS model (seed 000 eq. 4). */
 typedef enum {
@@ -304,6 +306,7 @@ typedef struct {
                               pd_projectile_default_k)                   */
     double ves_lambda;     /* VES: the viscous fraction lambda_i, 0..1     */
     double ves_tau;        /* VES: the relaxation time tau_i, s            */
+    double yield_stress;   /* EPS: the yield stress Y, Pa                  */
 } pd_scene;
 
 /* ---------------------------------------------------------------- run */
@@ -367,7 +370,8 @@ int pd_influence_parse(const char *name);
  * and bond states (seed 000 Algorithm 4), into theta (n); LPS runs only
  * (PD_ERR_INVALID otherwise). */
 pd_status pd_sim_dilatation(const pd_sim *sim, double *theta);
-/* The run's bond history (VES: 2 values per directed bond, see lib/lps.c),
+/* The run's bond history (VES: 2 values per directed bond, EPS: 1; see
+ * lib/lps.c),
  * NULL and *width 0 when its model keeps none. */
 double *pd_sim_bond_history(const pd_sim *sim, int *width);
 

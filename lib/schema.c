@@ -561,6 +561,7 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
     } while (0)
     TRY(pd_h5_write_attr_string(g, "model", sc->model == PD_MODEL_LPS   ? "lps"
                                             : sc->model == PD_MODEL_VES ? "ves"
+                                            : sc->model == PD_MODEL_EPS ? "eps"
                                                                         : "pmb"));
     TRY(pd_h5_write_attr_string(g, "effects", effects));
     TRY(pd_h5_write_attr_string(g, "options", options_text));
@@ -601,6 +602,8 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
         TRY(pd_h5_write_attr_doubles(g, "ves_lambda", &sc->ves_lambda, 1));
         TRY(pd_h5_write_attr_doubles(g, "ves_tau", &sc->ves_tau, 1));
     }
+    if (sc->model == PD_MODEL_EPS)
+        TRY(pd_h5_write_attr_doubles(g, "yield_stress", &sc->yield_stress, 1));
 #undef TRY
     H5Gclose(g);
     return s;

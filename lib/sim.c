@@ -118,6 +118,8 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
         model = s->has_failure ? &pd_effect_lps_failure : &pd_effect_lps;
     if (s->model == PD_MODEL_VES)
         model = s->has_failure ? &pd_effect_ves_failure : &pd_effect_ves;
+    if (s->model == PD_MODEL_EPS)
+        model = s->has_failure ? &pd_effect_eps_failure : &pd_effect_eps;
     pd_status st = add_effect(sim, model);
     if (st == PD_OK && s->has_contact)
         st = add_effect(sim, &pd_effect_contact);
