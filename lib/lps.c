@@ -61,9 +61,30 @@
  * the energy of the springs; the dashpot dissipates, which the status
  * line's balance does not book (it drifts by what the dashpot took).
  *
+ * EPS, the elastic-plastic solid (--model eps; Mitchell, SAND2011-3166,
+ * with the plastic update corrected; pd-run(1) MODELS derives it and says
+ * what LAMMPS peri/eps differs in).  Each directed bond keeps a plastic
+ * extension e^p.  Particle i's trial deviatoric force state is
+ *   t^d = alpha_i omega (e^d - e^p_n),  alpha_i = 15G/m_i,
+ * |t^d|^2 = sum_j (t^d)^2 nu V_j; with the yield value psi_0 = 5/2 Y^2
+ * I_i/m_i^2, I_i = sum_j omega^2 |xi|^2 nu V_j (von Mises in the continuum:
+ * Mitchell's 25 Y^2/(8 pi delta^5) for omega = 1), a particle with
+ * |t^d|^2/2 > psi_0 scales its state back by r_i = sqrt(2 psi_0)/|t^d| and
+ *   e^p_{n+1} = e^d - r_i (e^d - e^p_n)
+ * (Mitchell's e^p += Delta-lambda t^d with omega divided out).  The pair
+ * force is the state form T_i<xi> - T_j<-xi>,
+ *   t_ij = 3K (omega theta_i/m_i + omega theta_j/m_j) |xi| nu V_j
+ *        + 15G omega [r_i (e^d_ij - e^p_ij)/m_i + r_j (e^d_ji - e^p_ji)/m_j] nu V_j
+ * with e^d_ji = e - theta_j |xi|/3: t_ij = t_ji, and below yield it is
+ * Algorithm 2 rearranged (LPS to rounding).  The trial norms are taken
+ * over the bonds intact at the start of the step, the forces use the old
+ * e^p and r, and e^p advances after every row has read it (not at step 0).
+ * The elastic energy booked is W_i = K/2 theta_i^2 + 15G/(2 m_i) sum
+ * omega (e^d - e^p)^2 nu V_j; the plastic dissipation is not booked.
+ *
  * Each particle walks its own (directed) family and writes only its own
- * force, theta, s0 and bond history: no scatter, so the sums are in a fixed order and
- * the result does not depend on the thread count.  The bond states stay
+ * force, theta, s0 and bond history: no scatter, so the sums are in a
+ * fixed order and the result does not depend on the thread count.  The bond states stay
  * in the run's half bonds (sim->half), reached through a map from the
  * directed bonds.
  */
@@ -155,37 +176,30 @@ static void lps_free(void *state)
     free(st);
 }
 
-/* EPS: the reverse of each directed bond, and psi_0 = 5/2 Y^2 I_i / m_i^2
- * with I_i = sum_j omega^2 |xi|^2 nu V_j (see the top). */
-static void eps_init(const pd_sim *sim, lps_state *st)
+/* EPS: the reverse of each directed bond (the two directed bonds of a
+ * half bond point at each other), and psi_0 = 5/2 Y^2 I_i / m_i^2 with
+ * I_i = sum_j omega^2 |xi|^2 nu V_j (see the top). */
+static pd_status eps_init(const pd_sim *sim, lps_state *st)
 {
     const pd_bonds *b = sim->b;
     const double Y = sim->sc.yield_stress;
-    int64_t *seen = st->rev; /* first: the first directed bond of each half bond */
-    int64_t nh = sim->half.count;
+    const int64_t nh = sim->half.count;
     int64_t *first = malloc((size_t)(nh > 0 ? nh : 1) * sizeof(int64_t));
-    if (first == NULL) { /* (small: falls back to a search) */
-        for (int64_t i = 0; i < b->n; i++)
-            for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-                const int32_t j = b->neighbor[k];
-                for (int64_t q = b->offset[j]; q < b->offset[j + 1]; q++)
-                    if (b->neighbor[q] == i)
-                        seen[k] = q;
-            }
-    } else {
-        for (int64_t q = 0; q < nh; q++)
-            first[q] = -1;
-        for (int64_t k = 0; k < b->count; k++) {
-            const int64_t q = st->half[k];
-            if (first[q] < 0)
-                first[q] = k;
-            else {
-                seen[k] = first[q];
-                seen[first[q]] = k;
-            }
+    if (first == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the EPS state of %lld bonds",
+                       (long long)b->count);
+    for (int64_t q = 0; q < nh; q++)
+        first[q] = -1;
+    for (int64_t k = 0; k < b->count; k++) {
+        const int64_t q = st->half[k];
+        if (first[q] < 0)
+            first[q] = k;
+        else {
+            st->rev[k] = first[q];
+            st->rev[first[q]] = k;
         }
-        free(first);
     }
+    free(first);
     for (int64_t i = 0; i < b->n; i++) {
         double I = 0;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
@@ -193,6 +207,7 @@ static void eps_init(const pd_sim *sim, lps_state *st)
                  sim->p->volume[b->neighbor[k]] * b->vfactor[k];
         st->psi0[i] = st->m[i] > 0 ? 2.5 * Y * Y * I / (st->m[i] * st->m[i]) : INFINITY;
     }
+    return PD_OK;
 }
 
 static pd_status lps_init(pd_sim *sim, void **state)
@@ -255,8 +270,11 @@ static pd_status lps_init(pd_sim *sim, void **state)
             st->half[k] = j < i ? h->cursor[j]++ : own++;
         }
     }
-    if (st->model == PD_MODEL_EPS)
-        eps_init(sim, st);
+    pd_status es = st->model == PD_MODEL_EPS ? eps_init(sim, st) : PD_OK;
+    if (es != PD_OK) {
+        lps_free(st);
+        return es;
+    }
     *state = st;
     return PD_OK;
 }
