@@ -39,6 +39,8 @@ struct options {
     int has_proj_k;  /* --projectile with its K                     */
     int has_c, has_k, has_dt, has_steps, force_dt, has_status, has_output;
     int has_g, has_influence; /* --shear-modulus, --influence (LPS) */
+    int has_lambda, has_tau;  /* --ves-lambda, --ves-tau (VES)      */
+    int has_yield;            /* --yield-stress (EPS)               */
     int64_t status_every;
     const char *input;
     const char *output;
@@ -61,8 +63,10 @@ static void usage(FILE *out)
             "Integrate a peridynamic model (pd-h5 with /bonds); INPUT '-' is stdin.\n"
             "\n"
             "Model:\n"
-            "  --model pmb|lps       prototype microelastic brittle (default) or linear\n"
-            "                        peridynamic solid\n"
+            "  --model pmb|lps|ves|eps\n"
+            "                        prototype microelastic brittle (default), linear\n"
+            "                        peridynamic solid, or its viscoelastic or\n"
+            "                        elastic-plastic variant\n"
             "  --c C                 micromodulus, N/m^6 (pmb)\n"
             "  --bulk-modulus K      bulk modulus, Pa (c = 18K/(pi delta^4));\n"
             "                        the last of --c, --bulk-modulus and\n"
@@ -79,6 +83,13 @@ static void usage(FILE *out)
             "                        wins): omega times the distance to an ellipsoid\n"
             "                        with semi-axes 1, A, B (A, B in (0,1]) along U and\n"
             "                        two normals rolled ROLL radians about U (seed 002)\n"
+            "  --ves-lambda L        ves: the viscous fraction lambda of the deviatoric\n"
+            "                        part, 0 <= L <= 1 (LAMMPS peri/ves m_lambdai)\n"
+            "  --ves-tau T           ves: the relaxation time tau, s (m_taubi)\n"
+            "                        (ves takes --bulk-modulus, --shear-modulus and\n"
+            "                        --influence as lps, and both of these)\n"
+            "  --yield-stress Y      eps: the yield stress, Pa (and K, G, --influence as\n"
+            "                        lps)\n"
             "Effects (each only when given):\n"
             "  --failure S00,ALPHA   critical stretch s0 = S00 - ALPHA s_min (both\n"
             "                        dimensionless)\n"
@@ -391,7 +402,7 @@ static int parse_options(int argc, char **argv, struct options *o)
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
            OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID, OPT_MATERIAL,
-           OPT_INTERFACE, OPT_FIBRE };
+           OPT_INTERFACE, OPT_FIBRE, OPT_LAMBDA, OPT_TAU, OPT_YIELD };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -423,6 +434,9 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"material", required_argument, 0, OPT_MATERIAL},
         {"interface", required_argument, 0, OPT_INTERFACE},
         {"fibre", required_argument, 0, OPT_FIBRE},
+        {"ves-lambda", required_argument, 0, OPT_LAMBDA},
+        {"ves-tau", required_argument, 0, OPT_TAU},
+        {"yield-stress", required_argument, 0, OPT_YIELD},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
@@ -441,8 +455,28 @@ static int parse_options(int argc, char **argv, struct options *o)
                 o->sc.model = PD_MODEL_PMB;
             else if (strcmp(optarg, "lps") == 0)
                 o->sc.model = PD_MODEL_LPS;
+            else if (strcmp(optarg, "ves") == 0)
+                o->sc.model = PD_MODEL_VES;
+            else if (strcmp(optarg, "eps") == 0)
+                o->sc.model = PD_MODEL_EPS;
             else
-                return usage_error("unknown --model (this pd knows: pmb, lps)", optarg);
+                return usage_error("unknown --model (this pd knows: pmb, lps, ves, eps)", optarg);
+            break;
+        case OPT_LAMBDA:
+            if (!pd_parse_double(optarg, &o->sc.ves_lambda) || !(o->sc.ves_lambda >= 0) ||
+                !(o->sc.ves_lambda <= 1))
+                return usage_error("--ves-lambda must be a number in [0, 1], not", optarg);
+            o->has_lambda = 1;
+            break;
+        case OPT_TAU:
+            if ((rc = positive("--ves-tau", optarg, &o->sc.ves_tau)))
+                return rc;
+            o->has_tau = 1;
+            break;
+        case OPT_YIELD:
+            if ((rc = positive("--yield-stress", optarg, &o->sc.yield_stress)))
+                return rc;
+            o->has_yield = 1;
             break;
         case OPT_G:
             if ((rc = positive("--shear-modulus", optarg, &o->sc.shear_modulus)))
@@ -637,7 +671,18 @@ static int parse_options(int argc, char **argv, struct options *o)
         return status;
     if (!o->has_steps)
         return usage_error("--steps is required", NULL);
-    if (o->sc.model == PD_MODEL_LPS) {
+    if (o->sc.model == PD_MODEL_VES) {
+        if (!o->has_lambda || !o->has_tau)
+            return usage_error("--model ves needs --ves-lambda and --ves-tau", NULL);
+    } else if (o->has_lambda || o->has_tau)
+        return usage_error(o->has_lambda ? "--ves-lambda is for --model ves"
+                                         : "--ves-tau is for --model ves",
+                           NULL);
+    if (o->sc.model == PD_MODEL_EPS && !o->has_yield)
+        return usage_error("--model eps needs --yield-stress", NULL);
+    if (o->sc.model != PD_MODEL_EPS && o->has_yield)
+        return usage_error("--yield-stress is for --model eps", NULL);
+    if (PD_MODEL_STATE_BASED(o->sc.model)) {
         if (o->has_e)
             return usage_error("--youngs-modulus is for pmb (Poisson ratio 1/4); --model lps "
                                "takes --bulk-modulus and --shear-modulus",
@@ -662,7 +707,7 @@ static int parse_options(int argc, char **argv, struct options *o)
                            "(--model lps)",
                            NULL);
     if (o->nlaws > 0 || o->sc.has_fibre) {
-        if (o->sc.model == PD_MODEL_LPS)
+        if (o->sc.model != PD_MODEL_PMB)
             return usage_error("--material, --interface and --fibre are for --model pmb", NULL);
         int s00 = o->sc.fibre_s00[0] > 0;
         for (int k = 0; k < o->nlaws; k++)
@@ -723,15 +768,23 @@ static char *scene_text(const pd_scene *s)
             free(prof[k]);
         return NULL;
     }
-    if (s->model == PD_MODEL_LPS)
-        p += sprintf(p, "model lps\nbulk-modulus %.17g\nshear-modulus %.17g\ninfluence %s\n",
-                     s->bulk_modulus, s->shear_modulus, pd_influence_name(s->influence));
+    if (PD_MODEL_STATE_BASED(s->model))
+        p += sprintf(p, "model %s\nbulk-modulus %.17g\nshear-modulus %.17g\ninfluence %s\n",
+                     s->model == PD_MODEL_VES   ? "ves"
+                     : s->model == PD_MODEL_EPS ? "eps"
+                                                : "lps",
+                     s->bulk_modulus,
+                     s->shear_modulus, pd_influence_name(s->influence));
     else
         p += sprintf(p, "model pmb\nc %.17g\n", s->c);
     for (int k = 0; k < s->nellipsoids; k++)
         p += sprintf(p, "ellipsoid %.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", s->ellipsoid[k].u[0],
                      s->ellipsoid[k].u[1], s->ellipsoid[k].u[2], s->ellipsoid[k].a,
                      s->ellipsoid[k].b, s->ellipsoid[k].roll);
+    if (s->model == PD_MODEL_VES)
+        p += sprintf(p, "ves-lambda %.17g\nves-tau %.17g\n", s->ves_lambda, s->ves_tau);
+    if (s->model == PD_MODEL_EPS)
+        p += sprintf(p, "yield-stress %.17g\n", s->yield_stress);
     if (s->has_failure)
         p += sprintf(p, "failure %.17g,%.17g\n", s->s00, s->alpha);
     if (s->has_contact)
@@ -1074,9 +1127,13 @@ int main(int argc, char **argv)
         sc->c = pd_pmb_c_for(p, sc->bulk_modulus, b->horizon);
     if (!o.has_k && !o.has_e)
         sc->bulk_modulus = sc->youngs_modulus = 0; /* a scene's K or E that --c overrode */
-    if (sc->model == PD_MODEL_LPS && p->dimension == 2) {
-        fprintf(stderr, PROG ": error: --model lps is for 3-D bodies; '%s' is a 2-D plate (run "
-                             "it with pmb)\n", o.input);
+    if (PD_MODEL_STATE_BASED(sc->model) && p->dimension == 2) {
+        fprintf(stderr, PROG ": error: --model %s is for 3-D bodies; '%s' is a 2-D plate (run "
+                             "it with pmb)\n",
+                sc->model == PD_MODEL_VES   ? "ves"
+                : sc->model == PD_MODEL_EPS ? "eps"
+                                            : "lps",
+                o.input);
         if (restart)
             pd_file_abort(h.in), h.in = NULL;
         release(&h);
@@ -1153,6 +1210,10 @@ int main(int argc, char **argv)
         s = pd_plan_restart(h.out, p->n, sc->has_failure, sc->has_contact);
     if (s == PD_OK && sc->has_projectile)
         s = pd_plan_restart_projectile(h.out);
+    if (s == PD_OK && sc->model == PD_MODEL_VES && b->count > 0)
+        s = pd_plan_restart_history(h.out, b->count, 2);
+    if (s == PD_OK && sc->model == PD_MODEL_EPS && b->count > 0)
+        s = pd_plan_restart_history(h.out, b->count, 1);
     if (s == PD_OK)
         s = pd_file_publish(h.out);
     if (!restart) {
@@ -1196,6 +1257,20 @@ int main(int argc, char **argv)
         fprintf(stderr, PROG ": anisotropic influence (seed 002 eq. 13): omega times the largest "
                              "distance to %d ellipsoid%s\n",
                 sc->nellipsoids, sc->nellipsoids > 1 ? "s" : "");
+    if (!o.quiet && sc->model == PD_MODEL_VES)
+        fprintf(stderr,
+                PROG ": model ves (Mitchell SAND2011-8064, as LAMMPS peri/ves): K %g Pa, G %g "
+                     "Pa, influence %s, lambda %g, tau %g s; contact stiffness from c = "
+                     "18K/(pi delta^4)\n",
+                sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence),
+                sc->ves_lambda, sc->ves_tau);
+    if (!o.quiet && sc->model == PD_MODEL_EPS)
+        fprintf(stderr,
+                PROG ": model eps (Mitchell SAND2011-3166, a corrected plastic update; see "
+                     "pd-run(1)): K %g Pa, G %g Pa, influence %s, yield stress %g Pa; contact "
+                     "stiffness from c = 18K/(pi delta^4)\n",
+                sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence),
+                sc->yield_stress);
     if (!o.quiet && sc->has_projectile && !restart)
         fprintf(stderr,
                 PROG ": projectile: mass %g kg, radius %g m, stiffness K %.6g N/m^5%s\n",

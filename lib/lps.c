@@ -38,10 +38,56 @@
  * The influence omega may also depend on the bond's direction (the
  * ellipsoids of lib/influence.c, seed 002): omega[k] is then the bond's
  * own weight, the same in m and in every sum below.
+ * VES, the viscoelastic solid (--model ves; Mitchell, SAND2011-8064, as
+ * LAMMPS peri/ves).  The deviatoric extension of directed bond i-j,
+ *   e^d = e - theta_i |xi| / 3      (theta of i only, as LAMMPS),
+ * splits into an elastic spring and a Maxwell branch of weight lambda with
+ * the back extension e^b (the dashpot's share).  With the relaxation time
+ * tau and c = tau/dt, d = exp(-1/c), beta = 1 - c (1 - d), the exact
+ * integral of de^b/dt = (e^d - e^b)/tau over a step with e^d linear in time
+ * gives
+ *   e^b_{n+1} = e^d_n (1 - d) + e^b_n d + beta (e^d_{n+1} - e^d_n)
+ * and the pair force
+ *   t_ij = 3K (omega theta_i/m_i + omega theta_j/m_j) |xi| nu V_j
+ *        + 15G (omega/m_i + omega/m_j) [(1 - lambda) e^d + lambda (e^d -
+ *          e^b_{n+1})] nu V_j.
+ * e^d_n and e^b_n are kept per directed bond (the bond history, in the
+ * restart slots) and advance at every force evaluation but step 0's.  With
+ * lambda = 0 this is LPS but for one thing LAMMPS does: the deviatoric
+ * part of t_ij uses theta_i for both ends, where Algorithm 2 has theta_i/m_i
+ * + theta_j/m_j; so t_ij != t_ji where theta_i != theta_j and m_i != m_j
+ * (near a surface or a crack), and momentum is not conserved to rounding
+ * there.  pd follows LAMMPS (to agree with peri/ves to 1e-9).  The elastic
+ * energy booked is LAMMPS's
+ *   W_i = K/2 theta_i^2 + 15G/(2 m_i) sum_{j intact} omega [(1 - lambda)
+ *         (e^d)^2 + lambda (e^d - e^b)^2] nu V_j,
+ * the energy of the springs; the dashpot dissipates, which the status
+ * line's balance does not book (it drifts by what the dashpot took).
+ *
+ * EPS, the elastic-plastic solid (--model eps; Mitchell, SAND2011-3166,
+ * with the plastic update corrected; pd-run(1) MODELS derives it and says
+ * what LAMMPS peri/eps differs in).  Each directed bond keeps a plastic
+ * extension e^p.  Particle i's trial deviatoric force state is
+ *   t^d = alpha_i omega (e^d - e^p_n),  alpha_i = 15G/m_i,
+ * |t^d|^2 = sum_j (t^d)^2 nu V_j; with the yield value psi_0 = 5/2 Y^2
+ * I_i/m_i^2, I_i = sum_j omega^2 |xi|^2 nu V_j (von Mises in the continuum:
+ * Mitchell's 25 Y^2/(8 pi delta^5) for omega = 1), a particle with
+ * |t^d|^2/2 > psi_0 scales its state back by r_i = sqrt(2 psi_0)/|t^d| and
+ *   e^p_{n+1} = e^d - r_i (e^d - e^p_n)
+ * (Mitchell's e^p += Delta-lambda t^d with omega divided out).  The pair
+ * force is the state form T_i<xi> - T_j<-xi>,
+ *   t_ij = 3K (omega theta_i/m_i + omega theta_j/m_j) |xi| nu V_j
+ *        + 15G omega [r_i (e^d_ij - e^p_ij)/m_i + r_j (e^d_ji - e^p_ji)/m_j] nu V_j
+ * with e^d_ji = e - theta_j |xi|/3: t_ij = t_ji, and below yield it is
+ * Algorithm 2 rearranged (LPS to rounding).  The trial norms are taken
+ * over the bonds intact at the start of the step, the forces use the old
+ * e^p and r, and e^p advances after every row has read it (not at step 0).
+ * The elastic energy booked is W_i = K/2 theta_i^2 + 15G/(2 m_i) sum
+ * omega (e^d - e^p)^2 nu V_j; the plastic dissipation is not booked.
  *
  * Each particle walks its own (directed) family and writes only its own
- * force, theta and s0: no scatter, so the sums are in a fixed order and
- * the result does not depend on the thread count.  The bond states stay
+ * force, theta, s0 and bond history: no scatter, so the sums are in a
+ * fixed order and the result does not depend on the thread count.  The bond states stay
  * in the run's half bonds (sim->half), reached through a map from the
  * directed bonds.
  */
@@ -60,6 +106,13 @@ typedef struct {
     uint8_t *kill;     /* directed bonds: breaks in this step            */
     uint8_t *touched;  /* n: particle with a bond breaking in this step  */
     double *released;  /* n: energy released at each particle, J         */
+    pd_model_kind model; /* PD_MODEL_LPS, PD_MODEL_VES or PD_MODEL_EPS   */
+    double *hist;      /* VES: 2 per directed bond, e^d_n and e^b_n;
+                          EPS: 1, the plastic extension e^p              */
+    int64_t *rev;      /* EPS: directed bond i-j -> j-i                  */
+    double *psi0;      /* EPS: n, the yield value psi_0 of each particle */
+    double *ratio;     /* EPS: n, sqrt(2 psi_0)/|t^d_trial| (1: elastic) */
+    double decay, beta;/* VES: d = exp(-dt/tau), beta = 1 - tau/dt (1 - d) */
 } lps_state;
 
 const char *pd_influence_name(pd_influence w)
@@ -140,7 +193,45 @@ static void lps_free(void *state)
     free(st->kill);
     free(st->touched);
     free(st->released);
+    free(st->hist);
+    free(st->rev);
+    free(st->psi0);
+    free(st->ratio);
     free(st);
+}
+
+/* EPS: the reverse of each directed bond (the two directed bonds of a
+ * half bond point at each other), and psi_0 = 5/2 Y^2 I_i / m_i^2 with
+ * I_i = sum_j omega^2 |xi|^2 nu V_j (see the top). */
+static pd_status eps_init(const pd_sim *sim, lps_state *st)
+{
+    const pd_bonds *b = sim->b;
+    const double Y = sim->sc.yield_stress;
+    const int64_t nh = sim->half.count;
+    int64_t *first = malloc((size_t)(nh > 0 ? nh : 1) * sizeof(int64_t));
+    if (first == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the EPS state of %lld bonds",
+                       (long long)b->count);
+    for (int64_t q = 0; q < nh; q++)
+        first[q] = -1;
+    for (int64_t k = 0; k < b->count; k++) {
+        const int64_t q = st->half[k];
+        if (first[q] < 0)
+            first[q] = k;
+        else {
+            st->rev[k] = first[q];
+            st->rev[first[q]] = k;
+        }
+    }
+    free(first);
+    for (int64_t i = 0; i < b->n; i++) {
+        double I = 0;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
+            I += st->omega[k] * st->omega[k] * b->length[k] * b->length[k] *
+                 sim->p->volume[b->neighbor[k]] * b->vfactor[k];
+        st->psi0[i] = st->m[i] > 0 ? 2.5 * Y * Y * I / (st->m[i] * st->m[i]) : INFINITY;
+    }
+    return PD_OK;
 }
 
 static pd_status lps_init(pd_sim *sim, void **state)
@@ -163,6 +254,32 @@ static pd_status lps_init(pd_sim *sim, void **state)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS state of %lld bonds",
                        (long long)b->count);
     }
+
+    st->model = sim->sc.model == PD_MODEL_VES || sim->sc.model == PD_MODEL_EPS ? sim->sc.model
+                                                                                : PD_MODEL_LPS;
+    if (st->model == PD_MODEL_EPS) {
+        st->hist = calloc(nb, sizeof(double));
+        st->rev = malloc(nb * sizeof(int64_t));
+        st->psi0 = malloc(n * sizeof(double));
+        st->ratio = malloc(n * sizeof(double));
+        if (!st->hist || !st->rev || !st->psi0 || !st->ratio) {
+            lps_free(st);
+            return pd_fail(PD_ERR_NOMEM, "out of memory for the EPS state of %lld bonds",
+                           (long long)b->count);
+        }
+        for (int64_t i = 0; i < sim->n; i++)
+            st->ratio[i] = 1.0;
+    }
+    if (st->model == PD_MODEL_VES) {
+        const double c1 = sim->sc.ves_tau / sim->sc.dt;
+        st->decay = exp(-1.0 / c1);
+        st->beta = 1.0 - c1 * (1.0 - st->decay);
+        if ((st->hist = calloc(2 * nb, sizeof(double))) == NULL) {
+            lps_free(st);
+            return pd_fail(PD_ERR_NOMEM, "out of memory for the VES history of %lld bonds",
+                           (long long)b->count);
+        }
+    }
     bond_weights(sim->p, b, &sim->sc, st->omega, st->m);
     /* the half bond of each directed bond: row i meets its bonds to j < i
      * in ascending i for each j, so a cursor per row finds them */
@@ -175,6 +292,11 @@ static pd_status lps_init(pd_sim *sim, void **state)
             const int32_t j = b->neighbor[k];
             st->half[k] = j < i ? h->cursor[j]++ : own++;
         }
+    }
+    pd_status es = st->model == PD_MODEL_EPS ? eps_init(sim, st) : PD_OK;
+    if (es != PD_OK) {
+        lps_free(st);
+        return es;
     }
     *state = st;
     return PD_OK;
@@ -208,6 +330,28 @@ static double theta_row(const pd_sim *sim, const lps_state *st, const uint64_t *
     return st->m[i] != 0.0 ? (3.0 / st->m[i]) * sum : 0.0;
 }
 
+/* W_i of VES over the bonds intact in `bits`, theta_i = th, J/m^3, with
+ * the stored back extensions (see the top). */
+static double ves_energy(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i,
+                         double th)
+{
+    const pd_bonds *b = sim->b;
+    const double *V = sim->p->volume,
+                 lam = st->model == PD_MODEL_EPS ? 1.0 : sim->sc.ves_lambda;
+    double sum = 0, d[3], r;
+    const int eps = st->model == PD_MODEL_EPS; /* W of EPS: lambda = 1, e^b = e^p */
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        if (!pd_bond_intact(bits, st->half[k]))
+            continue;
+        const double ed = extension(sim, i, k, d, &r) - th * b->length[k] / 3.0;
+        const double ev = ed - (eps ? st->hist[k] : st->hist[2 * k + 1]);
+        sum += st->omega[k] * ((1.0 - lam) * ed * ed + lam * ev * ev) * V[b->neighbor[k]] *
+               b->vfactor[k];
+    }
+    return 0.5 * sim->sc.bulk_modulus * th * th +
+           0.5 * PD_LPS_SHEAR_FACTOR * sim->sc.shear_modulus / st->m[i] * sum;
+}
+
 /* V_i W*_i over the bonds intact in `bits`, J (see the top). */
 static double energy_row(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i)
 {
@@ -223,8 +367,93 @@ static double energy_row(const pd_sim *sim, const lps_state *st, const uint64_t 
         sum += st->omega[k] * e * e * V[b->neighbor[k]] * b->vfactor[k];
     }
     const double th = theta_row(sim, st, bits, i);
+    if (st->model != PD_MODEL_LPS)
+        return V[i] * ves_energy(sim, st, bits, i, th);
     return V[i] * ((0.5 * K - 5.0 * G / 6.0) * th * th +
                    0.5 * PD_LPS_SHEAR_FACTOR * G / st->m[i] * sum);
+}
+
+/* The VES pair force t_ij of directed bond k of row i (nu V_j included)
+ * with extension e and the dilatations theta; with `advance` the bond
+ * history steps to e^d_{n+1}, e^b_{n+1}, else the force uses e^b_{n+1}
+ * from the stored e^d_n, e^b_n (step 0) -- see the top. */
+static inline double ves_pair(const pd_sim *sim, lps_state *st, int64_t i, int64_t k, double e,
+                              const double *theta, int advance)
+{
+    const pd_bonds *b = sim->b;
+    const int32_t j = b->neighbor[k];
+    const double *m = st->m, om = st->omega[k], len = b->length[k];
+    const double w = sim->p->volume[j] * b->vfactor[k], lam = sim->sc.ves_lambda;
+    const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
+    const double td = ((3.0 * K) * w * ((om * theta[i] / m[i]) + (om * theta[j] / m[j]))) * len;
+    const double ed = e - (theta[i] * len / 3.0);
+    double *h = st->hist + 2 * k;
+    const double eb = h[0] * (1.0 - st->decay) + h[1] * st->decay + st->beta * (ed - h[0]);
+    const double g = (G * w) * ((om / m[i]) + (om / m[j]));
+    const double tv = ((1.0 - lam) * PD_LPS_SHEAR_FACTOR) * g * ed +
+                      (lam * PD_LPS_SHEAR_FACTOR) * g * (ed - eb);
+    if (advance) {
+        h[0] = ed;
+        h[1] = eb;
+    }
+    return td + tv;
+}
+
+/* The EPS pair force t_ij of directed bond k of row i (nu V_j included)
+ * with extension e, the dilatations theta and the plastic extensions of
+ * both directions, each deviatoric half scaled by its particle's ratio
+ * (NULL: 1, the stored state) -- see the top. */
+static inline double eps_pair(const pd_sim *sim, const lps_state *st, int64_t i, int64_t k,
+                              double e, const double *theta, const double *ratio)
+{
+    const pd_bonds *b = sim->b;
+    const int32_t j = b->neighbor[k];
+    const double *m = st->m, om = st->omega[k], len = b->length[k];
+    const double w = sim->p->volume[j] * b->vfactor[k];
+    const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
+    const double td = ((3.0 * K) * w * ((om * theta[i] / m[i]) + (om * theta[j] / m[j]))) * len;
+    const double di = e - (theta[i] * len / 3.0) - st->hist[k];
+    const double dj = e - (theta[j] * len / 3.0) - st->hist[st->rev[k]];
+    const double ri = ratio ? ratio[i] : 1.0, rj = ratio ? ratio[j] : 1.0;
+    return td + (PD_LPS_SHEAR_FACTOR * G * w * om) * (ri * di / m[i] + rj * dj / m[j]);
+}
+
+/* EPS: the trial deviatoric force state of particle i, t^d = 15G/m_i omega
+ * (e^d - e^p) with the stored e^p, against the yield value: ratio[i] =
+ * sqrt(2 psi_0)/|t^d| where |t^d|^2/2 > psi_0, else 1. */
+static void eps_yield_row(const pd_sim *sim, lps_state *st, int64_t i)
+{
+    const pd_bonds *b = sim->b;
+    const uint64_t *bits = sim->half.intact;
+    const double alpha = PD_LPS_SHEAR_FACTOR * sim->sc.shear_modulus / st->m[i];
+    double norm = 0, d[3], r;
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        if (!pd_bond_intact(bits, st->half[k]))
+            continue;
+        const double ed = extension(sim, i, k, d, &r) - st->theta[i] * b->length[k] / 3.0;
+        const double t = alpha * st->omega[k] * (ed - st->hist[k]);
+        norm += t * t * sim->p->volume[b->neighbor[k]] * b->vfactor[k];
+    }
+    st->ratio[i] = st->m[i] > 0 && 0.5 * norm > st->psi0[i] ? sqrt(2.0 * st->psi0[i] / norm) : 1.0;
+}
+
+/* EPS: the return to the yield surface, e^p <- e^d - ratio_i (e^d - e^p)
+ * on every intact bond of a yielding particle (after all rows read the
+ * old e^p). */
+static void eps_flow_row(const pd_sim *sim, lps_state *st, int64_t i)
+{
+    const pd_bonds *b = sim->b;
+    const uint64_t *bits = sim->half.intact;
+    const double ri = st->ratio[i];
+    if (ri == 1.0)
+        return;
+    double d[3], r;
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        if (!pd_bond_intact(bits, st->half[k]))
+            continue;
+        const double ed = extension(sim, i, k, d, &r) - st->theta[i] * b->length[k] / 3.0;
+        st->hist[k] = ed - ri * (ed - st->hist[k]);
+    }
 }
 
 /* The force density on i (Algorithm 2) from theta of this step, and with
@@ -245,10 +474,19 @@ static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
         const int32_t j = b->neighbor[k];
         const double e = extension(sim, i, k, d, &r);
         const double om = st->omega[k], len = b->length[k];
-        double t = dil * V[j] * b->vfactor[k] * ((om * theta[i] / m[i]) + (om * theta[j] / m[j])) *
-                   len;
-        t += PD_LPS_SHEAR_FACTOR * (G * V[j] * b->vfactor[k]) * ((om / m[i]) + (om / m[j])) * e;
-        const double fb = r > 0.0 ? t / r : 0.0;
+        double fb;
+        if (st->model == PD_MODEL_VES) {
+            fb = ves_pair(sim, st, i, k, e, theta, !sim->setup);
+            fb = r > 0.0 ? fb / r : 0.0;
+        } else if (st->model == PD_MODEL_EPS) {
+            fb = eps_pair(sim, st, i, k, e, theta, st->ratio);
+            fb = r > 0.0 ? fb / r : 0.0;
+        } else {
+            double t = dil * V[j] * b->vfactor[k] *
+                       ((om * theta[i] / m[i]) + (om * theta[j] / m[j])) * len;
+            t += PD_LPS_SHEAR_FACTOR * (G * V[j] * b->vfactor[k]) * ((om / m[i]) + (om / m[j])) * e;
+            fb = r > 0.0 ? t / r : 0.0;
+        }
         fx += d[0] * fb;
         fy += d[1] * fb;
         fz += d[2] * fb;
@@ -310,11 +548,21 @@ static void lps_kernel(pd_sim *sim, lps_state *st, int failure)
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++)
         st->theta[i] = theta_row(sim, st, bits, i);
+    if (st->model == PD_MODEL_EPS) {
+#pragma omp parallel for schedule(dynamic, 256)
+        for (int64_t i = 0; i < sim->n; i++)
+            eps_yield_row(sim, st, i);
+    }
     int broke = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(| : broke)
     for (int64_t i = 0; i < sim->n; i++) {
         force_row(sim, st, i, failure);
         broke |= failure && st->touched[i];
+    }
+    if (st->model == PD_MODEL_EPS && !sim->setup) {
+#pragma omp parallel for schedule(dynamic, 256)
+        for (int64_t i = 0; i < sim->n; i++)
+            eps_flow_row(sim, st, i);
     }
     if (broke)
         sim->released += break_marked(sim, st);
@@ -378,8 +626,17 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
             if (!(r > 0.0))
                 continue;
             const double om = st->omega[k], w = V[j] * b->vfactor[k];
-            const double t = dil * w * (om * theta[i] / m[i] + om * theta[j] / m[j]) * b->length[k] +
-                             PD_LPS_SHEAR_FACTOR * G * w * (om / m[i] + om / m[j]) * e;
+            double t = dil * w * (om * theta[i] / m[i] + om * theta[j] / m[j]) * b->length[k] +
+                       PD_LPS_SHEAR_FACTOR * G * w * (om / m[i] + om / m[j]) * e;
+            if (st->model == PD_MODEL_EPS) /* with the stored plastic extensions */
+                t = eps_pair(sim, st, i, k, e, theta, NULL);
+            if (st->model == PD_MODEL_VES) { /* with the stored back extension */
+                const double ed = e - theta[i] * b->length[k] / 3.0, lam = sim->sc.ves_lambda;
+                t = 3.0 * sim->sc.bulk_modulus * w * (om * theta[i] / m[i] + om * theta[j] / m[j]) *
+                        b->length[k] +
+                    PD_LPS_SHEAR_FACTOR * G * w * (om / m[i] + om / m[j]) *
+                        (ed - lam * st->hist[2 * k + 1]);
+            }
             const double xi[3] = {x[0][j] - x[0][i], x[1][j] - x[1][i], x[2][j] - x[2][i]};
             for (int a = 0; a < 3; a++)
                 for (int c = 0; c < 3; c++)
@@ -397,17 +654,48 @@ const pd_effect pd_effect_lps = {
 const pd_effect pd_effect_lps_failure = {
     .name = "lps+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
     .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+const pd_effect pd_effect_ves = {
+    .name = "ves", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+const pd_effect pd_effect_eps = {
+    .name = "eps", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+const pd_effect pd_effect_eps_failure = {
+    .name = "eps+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+const pd_effect pd_effect_ves_failure = {
+    .name = "ves+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+
+/* The state of the run's LPS-family effect, or NULL. */
+static lps_state *lps_of(const pd_sim *sim)
+{
+    for (int k = 0; k < sim->neffects; k++)
+        if (sim->effects[k] == &pd_effect_lps || sim->effects[k] == &pd_effect_lps_failure ||
+            sim->effects[k] == &pd_effect_ves || sim->effects[k] == &pd_effect_ves_failure ||
+            sim->effects[k] == &pd_effect_eps || sim->effects[k] == &pd_effect_eps_failure)
+            return sim->state[k];
+    return NULL;
+}
+
+double *pd_sim_bond_history(const pd_sim *sim, int *width)
+{
+    const lps_state *st = lps_of(sim);
+    *width = !st || !st->hist || sim->b->count == 0 ? 0 /* none without bonds */
+             : st->model == PD_MODEL_EPS            ? 1
+                                                    : 2;
+    return *width ? st->hist : NULL;
+}
 
 pd_status pd_sim_dilatation(const pd_sim *sim, double *theta)
 {
-    for (int k = 0; k < sim->neffects; k++)
-        if (sim->effects[k] == &pd_effect_lps || sim->effects[k] == &pd_effect_lps_failure) {
-            const lps_state *st = sim->state[k];
+    const lps_state *st = lps_of(sim);
+    if (st != NULL) {
 #pragma omp parallel for schedule(static)
-            for (int64_t i = 0; i < sim->n; i++)
-                theta[i] = theta_row(sim, st, sim->half.intact, i);
-            return PD_OK;
-        }
+        for (int64_t i = 0; i < sim->n; i++)
+            theta[i] = theta_row(sim, st, sim->half.intact, i);
+        return PD_OK;
+    }
     return pd_fail(PD_ERR_INVALID, "the run has no LPS model, so no dilatation");
 }
 
@@ -442,7 +730,14 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
             S[i] += omega[k] * b->length[k] * b->vfactor[k] * p->volume[b->neighbor[k]];
     }
-    const double G = s->shear_modulus, dil = fabs(3.0 * s->bulk_modulus - 5.0 * G);
+    /* VES (see the top): theta_i enters t_ij with 3K omega/m_i - 5G omega
+     * (1/m_i + 1/m_j), theta_j with 3K omega/m_j; with m_i ~ m_j both are
+     * bounded by max(3K, 10G - 3K) omega/m, which takes the place of
+     * |3K - 5G| */
+    const double G = s->shear_modulus,
+                 dil = s->model == PD_MODEL_VES
+                           ? fmax(3.0 * s->bulk_modulus, 10.0 * G - 3.0 * s->bulk_modulus)
+                           : fabs(3.0 * s->bulk_modulus - 5.0 * G);
     double best = INFINITY;
     for (int64_t i = 0; i < n; i++) {
         double sum = 0;

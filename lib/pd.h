@@ -252,7 +252,12 @@ pd_status pd_particles_sort_spatial(pd_particles *p, double cell);
 
 /* ---------------------------------------------------------------- scene */
 
-typedef enum { PD_MODEL_PMB = 0, PD_MODEL_LPS } pd_model_kind;
+typedef enum { PD_MODEL_PMB = 0, PD_MODEL_LPS, PD_MODEL_VES, PD_MODEL_EPS } pd_model_kind;
+/* The state-based models (LPS and its viscoelastic and elastic-plastic
+ * variants VES and EPS, lib/lps.c): K, G and an influence function, 3-D
+ * only. */
+#define PD_MODEL_STATE_BASED(m)                                                                    \
+    ((m) == PD_MODEL_LPS || (m) == PD_MODEL_VES || (m) == PD_MODEL_EPS)
 
 /* Influence functions omega(|xi|) of the LPS model (seed 000 eq. 4). */
 typedef enum {
@@ -319,6 +324,9 @@ typedef struct {
     double fibre_g[3];     /* fibre direction g (any length)               */
     double fibre_c[2];     /* c of the fibre and of the matrix, N/m^6      */
     double fibre_s00[2];   /* their s00 (0: the scene's s00)               */
+    double ves_lambda;     /* VES: the viscous fraction lambda_i, 0..1     */
+    double ves_tau;        /* VES: the relaxation time tau_i, s            */
+    double yield_stress;   /* EPS: the yield stress Y, Pa                  */
 } pd_scene;
 
 /* ---------------------------------------------------------------- run */
@@ -412,6 +420,10 @@ int pd_influence_parse(const char *name);
  * and bond states (seed 000 Algorithm 4), into theta (n); LPS runs only
  * (PD_ERR_INVALID otherwise). */
 pd_status pd_sim_dilatation(const pd_sim *sim, double *theta);
+/* The run's bond history (VES: 2 values per directed bond, EPS: 1; see
+ * lib/lps.c),
+ * NULL and *width 0 when its model keeps none. */
+double *pd_sim_bond_history(const pd_sim *sim, int *width);
 
 /* The ellipsoidal influence function (lib/influence.c, seed 002 eqs. 6-13).
  * pd_ellipsoid_parse reads "UX,UY,UZ,A,B,ROLL" and calls pd_ellipsoid_init,
@@ -494,6 +506,12 @@ typedef struct {
     int has_projectile;
     double projectile[9];        /* the projectile's centre (m), velocity
                                     (m/s) and the force on it (N)     */
+    int64_t history_bonds;       /* directed bonds of bond_history    */
+    int history_width;           /* values per directed bond          */
+    double *bond_history;        /* the model's state per directed bond
+                                    (VES: the deviatoric extension of
+                                    the last step and the back
+                                    extension), row-major; NULL: none */
 } pd_restart;
 /* The run's accumulated energies, power and lost particles, for its
  * restart data (r->lost points into the run). */
@@ -726,6 +744,9 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
 /* Lay out the projectile's state in both restart slots (after
  * pd_plan_restart; nothing when it is there already). */
 pd_status pd_plan_restart_projectile(pd_file *f);
+/* Lay out the model's bond history, `width` doubles for each of `nbonds`
+ * directed bonds, in both restart slots (nothing when it is there). */
+pd_status pd_plan_restart_history(pd_file *f, int64_t nbonds, int width);
 void pd_restart_free(pd_restart *r);
 /* Remove frames laid out but never completed. */
 pd_status pd_drop_incomplete_frames(pd_file *f);

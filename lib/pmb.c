@@ -495,7 +495,7 @@ double pd_bond_stiffness(const pd_particles *p, const pd_bonds *b, double c, int
 
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
 {
-    if (s->model == PD_MODEL_LPS)
+    if (PD_MODEL_STATE_BASED(s->model))
         return pd_lps_stable_dt(p, b, s);
     /* seed 004 eq. 46: dt < sqrt(2 rho_i / sum_p V_p C_ip), C_ip = c/|xi|
      * for PMB (|df/deta| of f = c s), here with the partial volume nu V_p

@@ -559,7 +559,10 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
         if (s == PD_OK)                                                                            \
             s = (call);                                                                            \
     } while (0)
-    TRY(pd_h5_write_attr_string(g, "model", sc->model == PD_MODEL_LPS ? "lps" : "pmb"));
+    TRY(pd_h5_write_attr_string(g, "model", sc->model == PD_MODEL_LPS   ? "lps"
+                                            : sc->model == PD_MODEL_VES ? "ves"
+                                            : sc->model == PD_MODEL_EPS ? "eps"
+                                                                        : "pmb"));
     TRY(pd_h5_write_attr_string(g, "effects", effects));
     TRY(pd_h5_write_attr_string(g, "options", options_text));
     TRY(pd_h5_write_attr_doubles(g, "c", &sc->c, 1));
@@ -591,7 +594,7 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
     TRY(pd_h5_write_attr_int(g, "steps", sc->steps));
     TRY(pd_h5_write_attr_int(g, "every", sc->every));
     TRY(pd_h5_write_attr_int(g, "threads", sc->threads));
-    if (sc->model == PD_MODEL_LPS) {
+    if (PD_MODEL_STATE_BASED(sc->model)) {
         TRY(pd_h5_write_attr_doubles(g, "shear_modulus", &sc->shear_modulus, 1));
         TRY(pd_h5_write_attr_string(g, "influence", pd_influence_name(sc->influence)));
     }
@@ -625,6 +628,12 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
             TRY(pd_h5_write_attr_doubles(g, "bond_laws", rows, 4 * sc->nlaws));
         free(rows);
     }
+    if (sc->model == PD_MODEL_VES) {
+        TRY(pd_h5_write_attr_doubles(g, "ves_lambda", &sc->ves_lambda, 1));
+        TRY(pd_h5_write_attr_doubles(g, "ves_tau", &sc->ves_tau, 1));
+    }
+    if (sc->model == PD_MODEL_EPS)
+        TRY(pd_h5_write_attr_doubles(g, "yield_stress", &sc->yield_stress, 1));
 #undef TRY
     H5Gclose(g);
     return s;
@@ -1199,6 +1208,8 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
         s = pd_h5_update_attr(g, "lost_particles", H5T_NATIVE_INT64, &nlost);
     if (s == PD_OK && r->has_projectile)
         s = pd_h5_update_attr(g, "projectile", H5T_NATIVE_DOUBLE, sums.projectile);
+    if (s == PD_OK && r->bond_history)
+        s = pd_h5_write_into(g, "bond_history", H5T_NATIVE_DOUBLE, r->bond_history);
     if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
         s = pd_fail(PD_ERR_IO, "cannot write restart data (disk full?)");
     if (s == PD_OK)
@@ -1217,6 +1228,7 @@ void pd_restart_free(pd_restart *r)
     }
     free(r->s0);
     free(r->lost);
+    free(r->bond_history);
     memset(r, 0, sizeof *r);
 }
 
@@ -1284,6 +1296,16 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
             s = pd_h5_read_data(f->fid, f->name, path, &form, H5T_NATIVE_UINT8, 1,
                                 (void **)&r->lost, NULL);
         }
+        char hpath[64];
+        snprintf(hpath, sizeof hpath, "%s/bond_history", group);
+        if (s == PD_OK && pd_h5_has_link(f->fid, hpath)) {
+            pd_h5_form form = {H5T_FLOAT, 8, 2, {0, 0}};
+            hsize_t dims[8] = {0};
+            s = pd_h5_read_data(f->fid, f->name, hpath, &form, H5T_NATIVE_DOUBLE, sizeof(double),
+                                (void **)&r->bond_history, dims);
+            r->history_bonds = (int64_t)dims[0];
+            r->history_width = (int)dims[1];
+        }
     }
     if (s != PD_OK)
         pd_restart_free(r);
@@ -1302,6 +1324,23 @@ pd_status pd_plan_restart_projectile(pd_file *f)
             return pd_fail(PD_ERR_IO, "'%s' has no %s", f->name, path);
         if (!pd_h5_has_attr(g, "projectile"))
             s = pd_h5_write_attr_doubles(g, "projectile", zeros, 9);
+        H5Gclose(g);
+    }
+    return s;
+}
+
+pd_status pd_plan_restart_history(pd_file *f, int64_t nbonds, int width)
+{
+    hsize_t d2[2] = {(hsize_t)nbonds, (hsize_t)width};
+    pd_status s = PD_OK;
+    for (int k = 0; k < 2 && s == PD_OK; k++) {
+        char path[32];
+        snprintf(path, sizeof path, "/restart/%d", k);
+        hid_t g = pd_h5_has_link(f->fid, path) ? H5Gopen2(f->fid, path, H5P_DEFAULT) : -1;
+        if (g < 0)
+            return pd_fail(PD_ERR_IO, "'%s' has no %s", f->name, path);
+        if (!pd_h5_has_link(g, "bond_history"))
+            s = pd_h5_reserve_data(g, "bond_history", H5T_IEEE_F64LE, 2, d2);
         H5Gclose(g);
     }
     return s;

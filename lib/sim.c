@@ -120,6 +120,10 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
     const pd_effect *model = s->has_failure ? &pd_effect_pmb_failure : &pd_effect_pmb;
     if (s->model == PD_MODEL_LPS)
         model = s->has_failure ? &pd_effect_lps_failure : &pd_effect_lps;
+    if (s->model == PD_MODEL_VES)
+        model = s->has_failure ? &pd_effect_ves_failure : &pd_effect_ves;
+    if (s->model == PD_MODEL_EPS)
+        model = s->has_failure ? &pd_effect_eps_failure : &pd_effect_eps;
     pd_status st = add_effect(sim, model);
     if (st == PD_OK && s->has_contact)
         st = add_effect(sim, &pd_effect_contact);
@@ -487,6 +491,8 @@ void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
     r->energy0 = sim->energy0;
     r->lost = sim->lost;
     r->has_projectile = sim->has_projectile;
+    r->bond_history = pd_sim_bond_history(sim, &r->history_width);
+    r->history_bonds = r->bond_history ? sim->b->count : 0;
     for (int d = 0; d < 3 && sim->has_projectile; d++) {
         r->projectile[d] = sim->proj_x[d];
         r->projectile[3 + d] = sim->proj_v[d];
@@ -610,6 +616,16 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
             sim->proj_v[d] = r->projectile[3 + d];
             sim->proj_f[d] = r->projectile[6 + d];
         }
+    }
+    int width;
+    double *hist = pd_sim_bond_history(sim, &width);
+    if (hist) {
+        if (r->bond_history == NULL || r->history_width != width ||
+            r->history_bonds != sim->b->count)
+            return pd_fail(PD_ERR_FORMAT, "the restart data have no bond history of %d values "
+                           "for each of %lld directed bonds, the scene's model keeps one",
+                           width, (long long)sim->b->count);
+        memcpy(hist, r->bond_history, (size_t)sim->b->count * (size_t)width * sizeof(double));
     }
     void *cs = effect_state(sim, &pd_effect_contact);
     if (cs && r->contact_builds > 0) {

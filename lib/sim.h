@@ -155,6 +155,10 @@ extern const pd_effect pd_effect_prescribed;
 extern const pd_effect pd_effect_lps;
 extern const pd_effect pd_effect_lps_failure;
 extern const pd_effect pd_effect_projectile;
+extern const pd_effect pd_effect_ves;
+extern const pd_effect pd_effect_ves_failure;
+extern const pd_effect pd_effect_eps;
+extern const pd_effect pd_effect_eps_failure;
 
 /* The projectile's half kick V += dt/(2M) F (1 when V is not finite) and
  * its drift X += dt V, in step with the particles'. */

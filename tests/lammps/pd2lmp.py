@@ -31,7 +31,9 @@ add contact forces pd does not have) unless --allow-contact is given.
 With --model lps (or a run file whose /scene says model lps) the pair
 style is peri/lps with pair_coeff K G horizon s00 alpha (--bulk-modulus,
 --shear-modulus); LAMMPS's influence function is 1/r, so a pd run with
-another --influence cannot be written.
+another --influence cannot be written.  --model ves adds lambda and tau
+(--ves-lambda, --ves-tau: peri/ves), --model eps the yield stress
+(--yield-stress: peri/eps).
 
 Run the result with: lmp -in INPUT.lmp -log none -screen none
 (the dump goes to the file given by --dump, default dump.lmp, relative to
@@ -70,8 +72,12 @@ def main(argv):
     ap.add_argument("--dump", default="dump.lmp", help="dump file named in the script (default dump.lmp)")
     ap.add_argument("--c", type=float, help="micromodulus c, N/m^6")
     ap.add_argument("--bulk-modulus", type=float, help="bulk modulus K, Pa (c = 18K/(pi delta^4))")
-    ap.add_argument("--model", choices=("pmb", "lps"), help="material model (default: /scene's, or pmb)")
-    ap.add_argument("--shear-modulus", type=float, help="shear modulus G, Pa (lps)")
+    ap.add_argument("--model", choices=("pmb", "lps", "ves", "eps"),
+                    help="material model (default: /scene's, or pmb)")
+    ap.add_argument("--shear-modulus", type=float, help="shear modulus G, Pa (lps, ves)")
+    ap.add_argument("--ves-lambda", type=float, help="viscous fraction lambda (ves: m_lambdai)")
+    ap.add_argument("--ves-tau", type=float, help="relaxation time tau, s (ves: m_taubi)")
+    ap.add_argument("--yield-stress", type=float, help="yield stress, Pa (eps)")
     ap.add_argument("--horizon", type=float, help="horizon delta, m (default /bonds horizon)")
     ap.add_argument("--spacing", type=float, help="lattice constant, m (default /particles spacing)")
     ap.add_argument("--failure", metavar="S00,ALPHA", help="critical stretch parameters")
@@ -112,9 +118,16 @@ def main(argv):
     model = a.model or str(scene("model") or "pmb")
     K = a.bulk_modulus if a.bulk_modulus is not None else scene("bulk_modulus")
     G = a.shear_modulus if a.shear_modulus is not None else scene("shear_modulus")
-    if model == "lps":
+    lam = a.ves_lambda if a.ves_lambda is not None else scene("ves_lambda")
+    tau = a.ves_tau if a.ves_tau is not None else scene("ves_tau")
+    if model == "ves" and (lam is None or tau is None):
+        raise SystemExit("pd2lmp.py: error: ves needs --ves-lambda and --ves-tau")
+    ys = a.yield_stress if a.yield_stress is not None else scene("yield_stress")
+    if model == "eps" and ys is None:
+        raise SystemExit("pd2lmp.py: error: eps needs --yield-stress")
+    if model in ("lps", "ves", "eps"):
         if K is None or G is None:
-            raise SystemExit("pd2lmp.py: error: lps needs --bulk-modulus and --shear-modulus")
+            raise SystemExit("pd2lmp.py: error: %s needs --bulk-modulus and --shear-modulus" % model)
         if str(scene("influence") or "1/r") != "1/r":
             raise SystemExit("pd2lmp.py: error: LAMMPS peri/lps has the influence function 1/r only")
     # micromodulus
@@ -149,8 +162,8 @@ def main(argv):
     if not every:
         every = steps
 
-    if model == "lps":
-        c = 0.0  # not used by peri/lps
+    if model in ("lps", "ves", "eps"):
+        c = 0.0  # not used by peri/lps, peri/ves or peri/eps
     missing = [n for n, v in (("--c", c), ("--horizon", horizon), ("--spacing", spacing),
                               ("--failure", s00), ("--dt", dt), ("--steps", steps))
                if v is None]
@@ -194,6 +207,16 @@ def main(argv):
         L.append("#               <type1> <type2> <K> <G> <horizon> <s00> <alpha>")
         L.append("pair_coeff      * * %s %s %s %s %s"
                  % (fmt(K), fmt(G), fmt(horizon), fmt(s00), fmt(alpha)))
+    elif model == "ves":
+        L.append("pair_style      peri/ves")
+        L.append("#               <type1> <type2> <K> <G> <horizon> <s00> <alpha> <lambda> <tau>")
+        L.append("pair_coeff      * * %s %s %s %s %s %s %s"
+                 % (fmt(K), fmt(G), fmt(horizon), fmt(s00), fmt(alpha), fmt(lam), fmt(tau)))
+    elif model == "eps":
+        L.append("pair_style      peri/eps")
+        L.append("#               <type1> <type2> <K> <G> <horizon> <s00> <alpha> <yield stress>")
+        L.append("pair_coeff      * * %s %s %s %s %s %s"
+                 % (fmt(K), fmt(G), fmt(horizon), fmt(s00), fmt(alpha), fmt(ys)))
     else:
         L.append("pair_style      peri/pmb")
         L.append("#               <type1> <type2> <c> <horizon> <s00> <alpha>")
