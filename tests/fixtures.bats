@@ -187,6 +187,16 @@ refused_by_model_readers() {
     assert_no_temp .
 }
 
+@test "a restart slot whose projectile velocity is NaN (pd-run --restart)" {
+    cp restart-projectile-nan.h5 "$BATS_TEST_TMPDIR/"
+    cd "$BATS_TEST_TMPDIR"
+    run --separate-stderr pd-run --restart restart-projectile-nan.h5 --steps 1 -q -o r.h5
+    [ "$status" -eq 1 ]
+    [ "$stderr" = "pd-run: error: 'restart-projectile-nan.h5': /restart/1: the projectile state holds nan" ]
+    [ ! -e r.h5 ]
+    cmp restart-projectile-nan.h5 "$FIXTURES/restart-projectile-nan.h5"
+}
+
 @test "hostile but valid /sets go through pd-bonds and pd-run unchanged; an unknown one is refused" {
     cd "$BATS_TEST_TMPDIR"
     pd-lattice -q --spacing 1 --density 1000 --box 0,3,0,3,0,3 --set left=box,0,0,0,3,0,3 -o l.h5
