@@ -362,13 +362,16 @@ static void *image_of(const field *w, int nw, size_t *len)
     return img;
 }
 
-/* A refusal is one printable line; a format error names the file. */
+/* A refusal is one printable line; a format error names the file, once (a
+ * message wrapped in another must not have been overwritten by it). */
 static pd_status checked(pd_status st)
 {
     if (st == PD_OK)
         return st;
     const char *m = pd_errmsg();
-    int bad = m[0] == '\0' || strlen(m) >= 511 || (st == PD_ERR_FORMAT && !strstr(m, "fuzz.h5"));
+    const char *name = strstr(m, "fuzz.h5");
+    int bad = m[0] == '\0' || strlen(m) >= 511 || (st == PD_ERR_FORMAT && !name) ||
+              (name && strstr(name + 1, "fuzz.h5"));
     for (const char *c = m; *c && !bad; c++)
         bad = (unsigned char)*c < 0x20 || *c == 0x7f;
     if (bad) {
