@@ -98,7 +98,8 @@ fuzz:
 	    -fsanitize=fuzzer,address,undefined -fno-math-errno -Ilib \
 	    $(shell pkg-config --cflags hdf5 gsl) -o bin/fuzz-readers tests/fuzz/fuzz_readers.c \
 	    $(LIB_SRC) $(shell pkg-config --libs hdf5 gsl) -lm
-	bin/fuzz-readers -max_total_time=$(FUZZ_SECONDS) -timeout=10 tests/fuzz/corpus
+	bin/fuzz-readers -max_total_time=$(FUZZ_SECONDS) -timeout=10 -len_control=0 -max_len=512 \
+	    tests/fuzz/corpus
 
 install: all
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR) $(DESTDIR)$(PCDIR) \

@@ -4,6 +4,7 @@
  */
 #include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
 
 #include <hdf5.h>
 
@@ -18,10 +19,14 @@ const char *pd_errmsg(void)
 
 pd_status pd_fail(pd_status st, const char *fmt, ...)
 {
+    /* through a copy: the arguments may hold pd_errmsg() itself (a message
+     * wrapped with the file's name), which vsnprintf must not overwrite */
+    char buf[sizeof message];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(message, sizeof message, fmt, ap);
+    vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
+    memcpy(message, buf, sizeof message);
     return st;
 }
 

@@ -1010,7 +1010,7 @@ pd_status pd_read_frame_stress(const pd_file *f, const char *name, int64_t n, do
     /* (N,3,3) read as (N,9): the form checks rank 2, so look at rank 3 here */
     hid_t ds = H5Dopen2(f->fid, path, H5P_DEFAULT);
     if (ds < 0)
-        return pd_fail(PD_ERR_FORMAT, "%s: cannot open %s", f->name, path);
+        return pd_fail(PD_ERR_FORMAT, "'%s': cannot open '%s'", f->name, path);
     hid_t sp = H5Dget_space(ds);
     hsize_t dims[3] = {0, 0, 0};
     int rank = sp < 0 ? -1 : H5Sget_simple_extent_ndims(sp);
@@ -1024,12 +1024,12 @@ pd_status pd_read_frame_stress(const pd_file *f, const char *name, int64_t n, do
         H5Sclose(sp);
     if (rank != 3 || dims[0] != (hsize_t)n || dims[1] != 3 || dims[2] != 3 || !isfloat) {
         H5Dclose(ds);
-        return pd_fail(PD_ERR_FORMAT, "%s: %s is not a (%lld,3,3) float dataset", f->name, path,
-                       (long long)n);
+        return pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' is not a (%lld,3,3) float dataset",
+                       f->name, path, (long long)n);
     }
     herr_t rc = H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out);
     H5Dclose(ds);
-    return rc < 0 ? pd_fail(PD_ERR_FORMAT, "%s: cannot read %s", f->name, path) : PD_OK;
+    return rc < 0 ? pd_fail(PD_ERR_FORMAT, "'%s': cannot read '%s'", f->name, path) : PD_OK;
 }
 
 pd_status pd_write_frame_scalar(pd_file *f, const char *name, const char *field, int64_t n,
@@ -1287,8 +1287,14 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
         if (s == PD_OK && pd_h5_has_attr(g, "projectile")) {
             r->has_projectile = 1;
             s = pd_h5_read_attr_doubles(g, "projectile", r->projectile, 9);
+            /* the projectile's x, v, f go on as the run's state */
+            for (int q = 0; q < 9 && s == PD_OK; q++)
+                if (!isfinite(r->projectile[q]))
+                    s = pd_fail(PD_ERR_FORMAT, "the projectile state holds %g", r->projectile[q]);
         }
         H5Gclose(g);
+        if (s != PD_OK)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': %s: %s", f->name, group, pd_errmsg());
         if (s == PD_OK && nlost > 0) {
             char path[64];
             snprintf(path, sizeof path, "%s/lost", group);

@@ -127,6 +127,105 @@ refused_by_run() {
     refused frame-state-short.h5 "'frame-state-short.h5': dataset '/frames/00000001/state' has 31 entries along axis 0, expected 32"
 }
 
+# ------------------------------------------------------------ newer parts:
+# /sets, frame stress, plates, the projectile's restart state
+
+# refused_by_model_readers FILE MESSAGE: the programs that read /sets
+# (pd-bonds, pd-run) exit 1 with exactly this line and write no output.
+refused_by_model_readers() {
+    local out=$BATS_TEST_TMPDIR/o.h5
+    run --separate-stderr pd-bonds --horizon 1.5 -q "$1" -o "$out"
+    [ "$status" -eq 1 ] && [ "$stderr" = "pd-bonds: error: $2" ] && [ ! -e "$out" ] ||
+        { echo "pd-bonds: $status: $stderr"; return 1; }
+    run --separate-stderr pd-run --c 1e3 --steps 1 -q "$1" -o "$out"
+    [ "$status" -eq 1 ] && [ "$stderr" = "pd-run: error: $2" ] && [ ! -e "$out" ] ||
+        { echo "pd-run: $status: $stderr"; return 1; }
+}
+
+@test "a /sets member with an id that is no particle's" {
+    refused_by_model_readers set-unknown-id.h5 "'set-unknown-id.h5': set 'right': id 1000 is no particle's"
+}
+
+@test "a /sets member stored as float64" {
+    refused_by_model_readers set-float.h5 "'set-float.h5': dataset '/sets/left' is float64, expected int64"
+}
+
+@test "a /sets member whose ids descend" {
+    refused_by_model_readers set-unsorted.h5 "'set-unsorted.h5': set 'left': ids are not strictly ascending"
+}
+
+@test "a frame stress of shape (N,3,2) (pd-dump2vtk reads it)" {
+    local out=$BATS_TEST_TMPDIR/out
+    run --separate-stderr pd-dump2vtk -q stress-shape.h5 -o "$out/vtk"
+    [ "$status" -eq 1 ]
+    [ "$stderr" = "pd-dump2vtk: error: 'stress-shape.h5': dataset '/frames/00000000/stress' is not a (27,3,3) float dataset" ]
+    ! compgen -G "$out/vtk/*.pvd" >/dev/null
+    # the readers that do not look at the stress read the file
+    run -0 pd-damage -n stress-shape.h5
+}
+
+@test "a plate (dimension 2) without its thickness" {
+    refused_by_run plate-no-thickness.h5 "'plate-no-thickness.h5': /particles of dimension 2 without a thickness"
+}
+
+@test "a plate (dimension 2) with a particle off the plane z = 0" {
+    refused_by_run plate-z.h5 "'plate-z.h5': particle 0 of a plate (dimension 2) has z = 0.5, not 0"
+}
+
+@test "a restart slot whose projectile state is one value short (pd-run --restart)" {
+    # on a copy: a restart updates its run in place unless -o is given
+    cp restart-projectile-short.h5 "$BATS_TEST_TMPDIR/"
+    cd "$BATS_TEST_TMPDIR"
+    run --separate-stderr pd-run --restart restart-projectile-short.h5 --steps 1 -q -o r.h5
+    [ "$status" -eq 1 ]
+    [ "$stderr" = "pd-run: error: 'restart-projectile-short.h5': /restart/1: attribute 'projectile' has the wrong type or shape" ]
+    [ ! -e r.h5 ]
+    cmp restart-projectile-short.h5 "$FIXTURES/restart-projectile-short.h5"
+    run --separate-stderr pd-run --restart restart-projectile-short.h5 --steps 1 -q
+    [ "$status" -eq 1 ]
+    cmp restart-projectile-short.h5 "$FIXTURES/restart-projectile-short.h5"
+    assert_no_temp .
+}
+
+@test "a restart slot whose projectile velocity is NaN (pd-run --restart)" {
+    cp restart-projectile-nan.h5 "$BATS_TEST_TMPDIR/"
+    cd "$BATS_TEST_TMPDIR"
+    run --separate-stderr pd-run --restart restart-projectile-nan.h5 --steps 1 -q -o r.h5
+    [ "$status" -eq 1 ]
+    [ "$stderr" = "pd-run: error: 'restart-projectile-nan.h5': /restart/1: the projectile state holds nan" ]
+    [ ! -e r.h5 ]
+    cmp restart-projectile-nan.h5 "$FIXTURES/restart-projectile-nan.h5"
+}
+
+@test "hostile but valid /sets go through pd-bonds and pd-run unchanged; an unknown one is refused" {
+    cd "$BATS_TEST_TMPDIR"
+    pd-lattice -q --spacing 1 --density 1000 --box 0,3,0,3,0,3 --set left=box,0,0,0,3,0,3 -o l.h5
+    # names at the edge of what is allowed, one id, every id, the largest id
+    py "
+with h5py.File(sys.argv[1], 'a') as f:
+    ids = np.sort(f['particles/id'][:])
+    f['sets/' + 'x' * 63] = ids[:1]
+    f['sets/.-_9'] = ids
+    f['sets/...'] = ids[-1:]
+    f['sets/A'] = ids[::7]
+" l.h5
+    run -0 pd-bonds -q --horizon 1.5 l.h5 -o m.h5
+    run -0 pd-run -q --c 1e3 --steps 2 --velocity-bc ...,z,-1 --velocity-bc .-_9,x,0 m.h5 -o r.h5
+    py "
+files = [h5py.File(a) for a in sys.argv[1:]]
+want = {k: v[:] for k, v in files[0]['sets'].items()}
+assert len(want) == 5, sorted(want)
+for f in files[1:]:
+    got = {k: v[:] for k, v in f['sets'].items()}
+    assert sorted(got) == sorted(want), (sorted(got), sorted(want))
+    for k in want:
+        assert got[k].dtype == np.int64 and np.array_equal(got[k], want[k]), k
+" l.h5 m.h5 r.h5
+    expect_runtime_error "the model has no set 'top'" pd-run --c 1e3 --steps 1 --velocity-bc top,y,1 \
+        m.h5 -o r2.h5
+    [ ! -e r2.h5 ]
+}
+
 @test "every file of the corpus has a test here" {
     for f in *.h5; do
         grep -q "${f%.h5}.h5" "$BATS_TEST_FILENAME" || { echo "no test for $f"; return 1; }

@@ -4,11 +4,16 @@
  * Fuzzing raw HDF5 bytes would mostly exercise HDF5's own parser; what pd
  * must get right is what it does with a well-formed HDF5 file whose
  * contents are wrong.  So the input is a recipe of edits to a small valid
- * run file (a 4x4x4 block with bonds, a pre-crack and one frame): each edit
- * picks a dataset or attribute and overwrites an element with raw bytes
- * (NaN, Inf, huge, negative), truncates or extends it, changes its type or
- * rank, or drops it.  The edited file is built in memory and handed to every reader
- * (particles, bonds, frames, damage, restart data, history).  A reader may
+ * run file (a 4x4x4 block with bonds, a pre-crack, two /sets, one frame with
+ * stress, von Mises and projectile attributes, a restart slot with the
+ * projectile's state, a plate thickness): each edit picks a dataset or
+ * attribute and overwrites an element with raw bytes (NaN, Inf, huge,
+ * negative), truncates, extends or multiplies it, changes its type or rank,
+ * swaps two elements (unsorted sets), drops it, or turns the body into a
+ * plate (dimension 2, with or without z = 0).  The edited file is built in
+ * memory and handed to every reader (particles, bonds, sets, frames, stress,
+ * von Mises, damage, restart data, history); the bytes past the edits are a
+ * scene text for pd_scene_args_text.  A reader may
  * refuse the file -- that is the point -- but must never crash, hang or
  * read out of bounds (AddressSanitizer and UndefinedBehaviorSanitizer
  * watch).
@@ -16,6 +21,7 @@
  * Build and run: make fuzz [FUZZ_SECONDS=60]  (clang with libFuzzer).
  */
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,12 +37,12 @@ typedef struct {
     const char *path; /* dataset path, or "group@attribute" */
     int type;
     int rank;
-    hsize_t dims[2];
+    hsize_t dims[3];
     unsigned char *data;
     int present;
 } field;
 
-#define MAX_FIELDS 32
+#define MAX_FIELDS 48
 static field base[MAX_FIELDS];
 static int nbase;
 
@@ -66,10 +72,14 @@ static void put(field *f, size_t k, double v)
 
 static size_t count(const field *f)
 {
-    return f->rank == 2 ? f->dims[0] * f->dims[1] : f->dims[0];
+    size_t m = 1;
+    for (int k = 0; k < f->rank; k++)
+        m *= f->dims[k];
+    return m;
 }
 
-static void add(const char *path, int type, int rank, hsize_t d0, hsize_t d1, const void *src)
+static void add3(const char *path, int type, int rank, hsize_t d0, hsize_t d1, hsize_t d2,
+                 const void *src)
 {
     field *f = &base[nbase++];
     f->path = path;
@@ -77,10 +87,30 @@ static void add(const char *path, int type, int rank, hsize_t d0, hsize_t d1, co
     f->rank = rank;
     f->dims[0] = d0;
     f->dims[1] = d1;
+    f->dims[2] = d2;
     f->present = 1;
     size_t bytes = count(f) * type_size[type];
     f->data = malloc(bytes ? bytes : 1);
     memcpy(f->data, src, bytes);
+}
+
+static void add(const char *path, int type, int rank, hsize_t d0, hsize_t d1, const void *src)
+{
+    add3(path, type, rank, d0, d1, 0, src);
+}
+
+static field *find(field *w, int nw, const char *path)
+{
+    for (int k = 0; k < nw; k++)
+        if (strcmp(w[k].path, path) == 0)
+            return &w[k];
+    return NULL;
+}
+
+static int cmp_i64(const void *a, const void *b)
+{
+    int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
 }
 
 /* The valid run file the edits start from. */
@@ -129,6 +159,30 @@ static void build_base(void)
     add("/restart/0/force", T_F64, 2, n, 3, vel);
     add("/restart/0/s0", T_F64, 1, n, 0, p->volume);
     add("/restart/0/contact_position", T_F64, 2, n, 3, pos);
+    /* the parts added with pd issues 3 and 4: sets, stress, projectile, plate */
+    int64_t left[16], right[4];
+    for (int k = 0; k < 16; k++)
+        left[k] = p->id[k];
+    for (int k = 0; k < 4; k++)
+        right[k] = p->id[n - 4 + (size_t)k];
+    qsort(left, 16, sizeof left[0], cmp_i64);
+    qsort(right, 4, sizeof right[0], cmp_i64);
+    double *stress = malloc(n * 9 * sizeof(double)), proj[9], ppos[3] = {1.5, 1.5, 5},
+           pvel[3] = {0, 0, -10}, penergy = 2.5, thickness = 0.25;
+    for (size_t k = 0; k < 9 * n; k++)
+        stress[k] = (double)(k % 9) - 4.0;
+    for (int k = 0; k < 9; k++)
+        proj[k] = k < 3 ? ppos[k] : k < 6 ? pvel[k - 3] : 0.0;
+    add("/sets/left", T_I64, 1, 16, 0, left);
+    add("/sets/right", T_I64, 1, 4, 0, right);
+    add3("/frames/00000007/stress", T_F64, 3, n, 3, 3, stress);
+    add("/frames/00000007/von_mises", T_F64, 1, n, 0, p->density);
+    add("/frames/00000007@projectile_position", T_F64, 1, 3, 0, ppos);
+    add("/frames/00000007@projectile_velocity", T_F64, 1, 3, 0, pvel);
+    add("/frames/00000007@projectile_energy", T_F64, 1, 1, 0, &penergy);
+    add("/restart/0@projectile", T_F64, 1, 9, 0, proj);
+    add("/particles@thickness", T_F64, 1, 1, 0, &thickness);
+    free(stress);
     add("/@pd_format_version", T_I64, 1, 1, 0, &version);
     add("/particles@spacing", T_F64, 1, 1, 0, &spacing);
     add("/particles@dimension", T_I64, 1, 1, 0, &dim);
@@ -161,7 +215,7 @@ static void edit(field *w, int nw, const uint8_t *op)
     uint32_t index;
     memcpy(&index, op + 2, 4);
     size_t m = count(f);
-    switch (op[1] % 6) {
+    switch (op[1] % 8) {
     case 0: /* overwrite an element with raw bytes (NaN, Inf, huge, negative) */
         if (m > 0) {
             size_t es = type_size[f->type], k = index % m;
@@ -172,9 +226,11 @@ static void edit(field *w, int nw, const uint8_t *op)
             memcpy(f->data + k * es, raw + (8 - es), es);
         }
         break;
-    case 1: { /* resize the first dimension */
-        hsize_t d0 = index % (f->dims[0] + 3);
+    case 1: { /* resize the first dimension; a high bit: multiply it (a huge set) */
         size_t old = count(f), es = type_size[f->type];
+        hsize_t d0 = index % (f->dims[0] + 3);
+        if ((op[7] & 0x80) && old * (1 + index % 16) <= (1u << 16)) /* at most 64 Ki elements */
+            d0 = f->dims[0] * (1 + index % 16);
         f->dims[0] = d0;
         size_t now = count(f);
         unsigned char *nd = calloc(now ? now : 1, es);
@@ -200,7 +256,14 @@ static void edit(field *w, int nw, const uint8_t *op)
         f->present = 0;
         break;
     case 4: /* change the rank (same elements) */
-        if (f->rank == 2) {
+        if (f->rank == 3) {
+            f->dims[1] *= f->dims[2];
+            f->rank = 2;
+        } else if (f->rank == 2 && f->dims[1] > 3 && f->dims[1] % 3 == 0 && (op[6] & 1)) {
+            f->dims[2] = 3;
+            f->dims[1] /= 3;
+            f->rank = 3;
+        } else if (f->rank == 2) {
             f->dims[0] *= f->dims[1];
             f->rank = 1;
         } else if (f->dims[0] % 3 == 0) {
@@ -211,6 +274,24 @@ static void edit(field *w, int nw, const uint8_t *op)
             f->dims[0] /= 2;
             f->dims[1] = 2;
             f->rank = 2;
+        }
+        break;
+    case 6: { /* a plate: dimension 2, and (op[6] odd) every z set to 0 */
+        field *dim = find(w, nw, "/particles@dimension"), *pos = find(w, nw, "/particles/position");
+        if (dim && count(dim) > 0)
+            put(dim, 0, 2.0);
+        if (pos && (op[6] & 1) && pos->rank == 2 && pos->dims[1] == 3)
+            for (size_t i = 0; i < pos->dims[0]; i++)
+                put(pos, 3 * i + 2, 0.0);
+        break;
+    }
+    case 7: /* swap two elements (ids out of order, offsets that decrease) */
+        if (m > 1) {
+            size_t es = type_size[f->type], a = index % m, c = (index / 7 + op[6]) % m;
+            unsigned char t[8];
+            memcpy(t, f->data + a * es, es);
+            memcpy(f->data + a * es, f->data + c * es, es);
+            memcpy(f->data + c * es, t, es);
         }
         break;
     default: /* a typed value: index-th element set to a small signed number */
@@ -224,7 +305,7 @@ static void write_field(hid_t fid, const field *f)
     char path[128];
     snprintf(path, sizeof path, "%s", f->path);
     char *at = strchr(path, '@');
-    hsize_t dims[2] = {f->dims[0], f->dims[1]};
+    hsize_t dims[3] = {f->dims[0], f->dims[1], f->dims[2]};
     hid_t sp = (at && count(f) == 1) ? H5Screate(H5S_SCALAR) : H5Screate_simple(f->rank, dims, NULL);
     if (at) {
         *at = '\0';
@@ -281,6 +362,37 @@ static void *image_of(const field *w, int nw, size_t *len)
     return img;
 }
 
+/* A refusal is one printable line; a format error names the file, once (a
+ * message wrapped in another must not have been overwritten by it). */
+static pd_status checked(pd_status st)
+{
+    if (st == PD_OK)
+        return st;
+    const char *m = pd_errmsg();
+    const char *name = strstr(m, "fuzz.h5");
+    int bad = m[0] == '\0' || strlen(m) >= 511 || (st == PD_ERR_FORMAT && !name) ||
+              (name && strstr(name + 1, "fuzz.h5"));
+    for (const char *c = m; *c && !bad; c++)
+        bad = (unsigned char)*c < 0x20 || *c == 0x7f;
+    if (bad) {
+        fprintf(stderr, "fuzz_readers: a bad error message: \"%s\"\n", m);
+        abort();
+    }
+    return st;
+}
+#define pd_read_history(...) checked(pd_read_history(__VA_ARGS__))
+#define pd_read_particles(...) checked(pd_read_particles(__VA_ARGS__))
+#define pd_read_bonds(...) checked(pd_read_bonds(__VA_ARGS__))
+#define pd_read_sets(...) checked(pd_read_sets(__VA_ARGS__))
+#define pd_list_frames(...) checked(pd_list_frames(__VA_ARGS__))
+#define pd_read_frame_info(...) checked(pd_read_frame_info(__VA_ARGS__))
+#define pd_read_frame_vectors(...) checked(pd_read_frame_vectors(__VA_ARGS__))
+#define pd_read_frame_stress(...) checked(pd_read_frame_stress(__VA_ARGS__))
+#define pd_read_frame_scalar(...) checked(pd_read_frame_scalar(__VA_ARGS__))
+#define pd_read_frame_damage(...) checked(pd_read_frame_damage(__VA_ARGS__))
+#define pd_read_frame_damage_run(...) checked(pd_read_frame_damage_run(__VA_ARGS__))
+#define pd_read_restart(...) checked(pd_read_restart(__VA_ARGS__))
+
 /* Every reader on the file; errors are expected, crashes are not. */
 static void read_all(const void *img, size_t len)
 {
@@ -294,6 +406,21 @@ static void read_all(const void *img, size_t len)
     pd_bonds *b = NULL;
     uint64_t *intact = NULL;
     if (pd_read_particles(f, &p) == PD_OK) {
+        pd_sets *sets = NULL;
+        if (pd_read_sets(f, p, &sets) == PD_OK) {
+            /* a set read is a set whose every id is a particle's */
+            for (int k = 0; k < sets->count; k++) {
+                int64_t *rows = NULL;
+                if (pd_set_rows(&sets->set[k], p, &rows) != PD_OK ||
+                    pd_sets_find(sets, sets->set[k].name) == NULL)
+                    abort();
+                for (int64_t q = 0; q < sets->set[k].n; q++)
+                    if (rows[q] < 0 || rows[q] >= p->n || p->id[rows[q]] != sets->set[k].id[q])
+                        abort();
+                free(rows);
+            }
+            pd_sets_free(sets);
+        }
         int64_t nf = 0;
         char **names = NULL;
         if (pd_read_bonds(f, p, &b) == PD_OK) {
@@ -305,7 +432,8 @@ static void read_all(const void *img, size_t len)
             b = NULL;
         }
         if (pd_list_frames(f, &nf, &names) == PD_OK) {
-            double *d[3], *v[3], *dmg = malloc((size_t)p->n * sizeof(double));
+            double *d[3], *v[3], *dmg = malloc((size_t)p->n * sizeof(double)),
+                   *stress = malloc((size_t)p->n * 9 * sizeof(double));
             for (int k = 0; k < 3; k++) {
                 d[k] = malloc((size_t)p->n * sizeof(double));
                 v[k] = malloc((size_t)p->n * sizeof(double));
@@ -314,6 +442,9 @@ static void read_all(const void *img, size_t len)
                 pd_frame_info fi = {0, 0, 0, 0};
                 pd_read_frame_info(f, names[k], &fi);
                 pd_read_frame_vectors(f, names[k], p->n, d, v);
+                int present = 0;
+                pd_read_frame_stress(f, names[k], p->n, stress, &present);
+                pd_read_frame_scalar(f, names[k], "von_mises", p->n, dmg, &present);
                 pd_read_frame_damage(f, p, names[k], &b, &intact, dmg);
                 int has_run = 0;
                 pd_read_frame_damage_run(f, p, names[k], &b, &intact, dmg, &has_run);
@@ -326,6 +457,7 @@ static void read_all(const void *img, size_t len)
                 free(v[k]);
             }
             free(dmg);
+            free(stress);
             pd_frames_free_list(nf, names);
         }
     }
@@ -348,8 +480,22 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         w[k].data = malloc(bytes ? bytes : 1);
         memcpy(w[k].data, base[k].data, bytes);
     }
-    for (size_t at = 0; at + 12 <= size && at < 12 * 16; at += 12)
+    size_t at = 0;
+    for (; at + 12 <= size && at < 12 * 16; at += 12)
         edit(w, nbase, data + at);
+    if (at < size) { /* the rest: a scene text (/scene options) */
+        char *text = malloc(size - at + 1);
+        memcpy(text, data + at, size - at);
+        text[size - at] = '\0';
+        int argc = 0;
+        char **argv = NULL;
+        if (pd_scene_args_text(text, "fuzz.h5", &argc, &argv) == PD_OK) {
+            for (int k = 0; k < argc; k++)
+                free(argv[k]);
+            free(argv);
+        }
+        free(text);
+    }
     size_t len = 0;
     void *img = image_of(w, nbase, &len);
     if (img)
