@@ -58,3 +58,20 @@ setup() {
     assert_failure 1
     assert_output --partial "BENCH_THREADS must be a positive integer"
 }
+
+@test "pd-run --timing: a failure row, and the rows' shares add up to at most the wall time" {
+    make_block
+    run pd-run model.h5 "${RUN_OPTS[@]}" --dt 1e-7 --steps 20 --every 0 --timing -o run.h5
+    assert_success
+    assert_line --regexp '^  failure +[0-9.]+ s +[0-9.]+%$'
+    for row in bonds contact "neighbour lists" indenter integration output; do
+        assert_line --regexp "^  $row +[0-9.]+ s +[0-9.]+%\$"
+    done
+    # no row negative (failure's time is moved out of bonds', not copied)
+    echo "$output" | awk '/^pd-run: timing/ { t = 1; next }
+        t && / s +[0-9.-]+%$/ { n++; p = $NF; sub(/%/, "", p); s += p; if ($(NF - 2) < 0) bad = 1 }
+        END { exit !(n == 7 && !bad && s <= 100.5) }' || {
+        echo "$output" | sed -n '/timing/,$p'
+        false
+    }
+}
