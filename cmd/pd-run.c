@@ -984,7 +984,7 @@ static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds
 static void print_timing(const pd_sim *sim, double wall, double output)
 {
     static const char *names[PD_T_COUNT] = {"bonds", "contact", "neighbour lists", "indenter",
-                                            "integration", "output"};
+                                            "integration", "output", "failure"};
     double t[PD_T_COUNT];
     memcpy(t, pd_sim_timers(sim), sizeof t);
     t[PD_T_OUTPUT] = output;

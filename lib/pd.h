@@ -336,7 +336,9 @@ typedef struct pd_sim pd_sim;
 /* Timers of the step (pd-run --timing). */
 typedef enum {
     PD_T_BONDS, PD_T_CONTACT, PD_T_NEIGHBOR, PD_T_INDENTER, PD_T_INTEGRATE,
-    PD_T_OUTPUT, PD_T_COUNT
+    PD_T_OUTPUT,
+    PD_T_FAILURE, /* failure's bookkeeping outside the fused bond kernel */
+    PD_T_COUNT
 } pd_timer;
 
 pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s,

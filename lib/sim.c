@@ -367,8 +367,11 @@ pd_status pd_sim_step(pd_sim *sim)
     sim->time = (double)sim->step * dt;
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
     s = constrain(sim, PD_PHASE_DRIFT);
-    if (s == PD_OK && away)
+    if (s == PD_OK && away) {
+        double tl = pd_wtime(); /* breaking the lost particles' bonds */
         s = take_lost(sim);
+        sim->timers[PD_T_FAILURE] += pd_wtime() - tl;
+    }
     if (s != PD_OK)
         return s;
     s = compute_forces(sim);

@@ -1,27 +1,54 @@
 #!/bin/sh
-# bench.sh -- pd-run against LAMMPS on the seed impact (what `make bench` runs).
+# bench.sh -- pd-run against LAMMPS on the seed impact, and how close pd-run
+# is to what the machine allows (what `make bench` runs).
 #
 # The seed example (examples/lammps-impact: 103,110 particles, 5,004,900
-# bonds, PMB + failure + contact + indenter, dt 1e-7) for BENCH_STEPS steps
-# (default 300) through
-#   (a) pd-run --threads BENCH_THREADS (default 2) --every 0 --timing
-#       (no frames but the last one, which pd-run always writes);
-#   (b) the seed LAMMPS script (examples/lammps-impact/in.impact) without its
-#       dump and with `run BENCH_STEPS`, through mpirun -np BENCH_NP (2) lmp;
-#   (c) pd-run on the same model with the effects added one by one, to show
-#       what each costs: bonds only (PMB, the disk at rest), + indenter,
-#       + failure, + contact (= the full scene of (a)).  The indenter comes
-#       second: without it nothing moves, so failure would never break a
-#       bond and the contact list would never be rebuilt, and their rows
-#       would measure effects that do no work.  Each row is pd-run's own
-#       loop time per step (file I/O excluded); the difference between two
-#       rows is what the effect added costs.
+# bonds, failure + contact + indenter, dt 1e-7) for BENCH_STEPS steps
+# (default 300), in parts that BENCH_SKIP can leave out:
+#   (a) PMB: pd-run --threads BENCH_THREADS (default 2) --every 0 --timing
+#       (no frames but the last one, which pd-run always writes) against
+#       the seed LAMMPS script (examples/lammps-impact/in.impact) without
+#       its dump and with `run BENCH_STEPS`, through mpirun -np BENCH_NP (2)
+#       lmp (peri/pmb);
+#   (b) LPS ("lps"): the same with pd-run --model lps --bulk-modulus K
+#       --shear-modulus G against the seed script with pair_style peri/lps
+#       (K = 14.9 GPa, the seed's; G = 8 GPa, as tests/lammps-agree.bats:
+#       3K - 5G is not 0, so the dilatation term does work);
+#   (without "lammps" in BENCH_SKIP, LAMMPS runs beside both);
+#   (c) the cost of each effect ("effects"): pd-run on the PMB model with
+#       the effects added one by one: bonds only (the disk at rest),
+#       + indenter, + failure, + contact (= the full scene of (a)).  The
+#       indenter comes second: without it nothing moves, failure would
+#       never break a bond and the contact list would never be rebuilt.
+#       Each row is pd-run's own loop time per step (file I/O excluded);
+#       the difference between two rows is what the effect added costs;
+#   (d) the roofline ("roofline"): share/stream.c, built here with
+#       -O3 -march=native, measures the memory bandwidth (a STREAM triad)
+#       and the peak FMA rate on BENCH_THREADS threads; the bond kernel's
+#       bytes and flops per bond (counted in README.md, "Performance")
+#       times the bonds of (a) over its "bonds" time are printed as
+#       fractions of them;
+#   (e) scaling with size ("scaling"): the impact scene on disks of about
+#       BENCH_SIZES particles (default "25k 100k 400k 1.6M"; a larger disk
+#       with the same spacing and thickness, radius 37 mm times the square
+#       root of the factor; the seed disk itself stands for 100k), for
+#       BENCH_STEPS x 103110 / N steps (at least 30, at most BENCH_STEPS;
+#       one status line, at the end):
+#       time per bond (i < j) per step and peak memory per particle;
+#   (f) threads ("threads"): the full PMB scene on 1 thread against (a):
+#       the speed-up, and whether the two last frames are identical
+#       (every dataset bit for bit, and every attribute but the thread
+#       count and the command history; /usr/bin/python3 with h5py).
 # Wall time and peak RSS come from /usr/bin/time -f '%e %M' around pd-run,
 # around mpirun (wall) and around each LAMMPS rank (peak RSS, summed).
 #
 # Environment: BENCH_STEPS (300), BENCH_THREADS (2), BENCH_NP (2),
-# BENCH_DIR (cache of the model and the runs, default $TMPDIR/pd-bench),
-# PD_BIN (default: bin/ of this tree), LMP (lmp), MPIRUN (mpirun).
+# BENCH_SIZES ("25k 100k 400k 1.6M": particle counts, k = 1e3, M = 1e6;
+# the 1.6M disk needs about 6 GB of memory and 3 GB in BENCH_DIR, and
+# minutes to build), BENCH_SKIP (words among lammps, lps, effects,
+# roofline, scaling, threads: the parts left out), BENCH_DIR (cache of the
+# models and the runs, default $TMPDIR/pd-bench), PD_BIN (default: bin/ of
+# this tree), LMP (lmp), MPIRUN (mpirun), CC (cc, for share/stream.c).
 # Run from anywhere; `make bench` builds the programs first.
 set -eu
 
@@ -36,28 +63,76 @@ PD_BIN=${PD_BIN:-$ROOT/bin}
 STEPS=${BENCH_STEPS:-300}
 THREADS=${BENCH_THREADS:-2}
 NP=${BENCH_NP:-2}
+SIZES=${BENCH_SIZES-25k 100k 400k 1.6M}
+SKIP=$(echo "${BENCH_SKIP:-}" | tr ',' ' ')
 DIR=${BENCH_DIR:-${TMPDIR:-/tmp}/pd-bench}
 LMP=${LMP:-lmp}
 MPIRUN=${MPIRUN:-mpirun}
+CC=${CC:-cc}
+PY=/usr/bin/python3
 EX=$ROOT/examples/lammps-impact
 SCENE=$EX/impact.scene
 TIME=/usr/bin/time
+SEED_N=103110 # particles of the seed disk (radius 37 mm)
+LPS_K=14.9e9
+LPS_G=8e9
 
 case $STEPS in '' | *[!0-9]*) die "BENCH_STEPS must be a positive integer, not '$STEPS'" ;; esac
 [ "$STEPS" -gt 0 ] || die "BENCH_STEPS must be a positive integer"
+case $THREADS in '' | *[!0-9]*) die "BENCH_THREADS must be a positive integer, not '$THREADS'" ;; esac
+[ "$THREADS" -gt 0 ] || die "BENCH_THREADS must be a positive integer"
+for w in $SKIP; do
+    case $w in
+    lammps | lps | effects | roofline | scaling | threads) ;;
+    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads)" ;;
+    esac
+done
+# skip PART: is PART left out?
+skip() {
+    case " $SKIP " in *" $1 "*) return 0 ;; esac
+    return 1
+}
+# particles N: the particle count of a BENCH_SIZES word (25k, 1.6M, 40000)
+particles() {
+    echo "$1" | awk '/^[0-9]+(\.[0-9]+)?[kKmM]?$/ {
+        v = $0 + 0; u = substr($0, length($0))
+        if (u == "k" || u == "K") v *= 1e3
+        if (u == "m" || u == "M") v *= 1e6
+        printf "%d\n", v; ok = 1 } END { exit !ok }'
+}
+NSIZES=
+for w in $SIZES; do
+    n=$(particles "$w") || die "BENCH_SIZES: '$w' is not a particle count (25k, 1.6M, 40000)"
+    [ "$n" -ge 2000 ] || die "BENCH_SIZES: '$w' is too small (at least 2000 particles)"
+    NSIZES="$NSIZES $n"
+done
+skip scaling || [ -n "$NSIZES" ] || die "BENCH_SIZES is empty (add 'scaling' to BENCH_SKIP instead)"
 for p in pd-lattice pd-bonds pd-run; do
     [ -x "$PD_BIN/$p" ] || die "$PD_BIN/$p not found (run 'make all' first, or set PD_BIN)"
 done
 [ -r "$SCENE" ] || die "$SCENE not found"
 [ -r "$EX/in.impact" ] || die "$EX/in.impact not found"
 [ -x "$TIME" ] || die "$TIME not found (GNU time; Debian package 'time')"
-command -v "$LMP" >/dev/null 2>&1 ||
-    die "'$LMP' not found: LAMMPS with the PERI package is needed (Debian package 'lammps'; or set LMP)"
-command -v "$MPIRUN" >/dev/null 2>&1 ||
-    die "'$MPIRUN' not found (Debian package 'openmpi-bin'; or set MPIRUN)"
-"$LMP" -h 2>/dev/null | grep -q 'peri/pmb' ||
-    die "'$LMP' has no pair style peri/pmb (LAMMPS without the PERI package)"
 command -v awk >/dev/null 2>&1 || die "awk not found"
+command -v h5ls >/dev/null 2>&1 || die "h5ls not found (Debian package 'hdf5-tools')"
+if ! skip lammps; then
+    command -v "$LMP" >/dev/null 2>&1 ||
+        die "'$LMP' not found: LAMMPS with the PERI package is needed (Debian package 'lammps'; or set LMP, or BENCH_SKIP=lammps)"
+    command -v "$MPIRUN" >/dev/null 2>&1 ||
+        die "'$MPIRUN' not found (Debian package 'openmpi-bin'; or set MPIRUN)"
+    "$LMP" -h 2>/dev/null | grep -q 'peri/pmb' ||
+        die "'$LMP' has no pair style peri/pmb (LAMMPS without the PERI package)"
+    skip lps || "$LMP" -h 2>/dev/null | grep -q 'peri/lps' ||
+        die "'$LMP' has no pair style peri/lps"
+fi
+if ! skip roofline; then
+    command -v "$CC" >/dev/null 2>&1 || die "'$CC' not found (a C compiler for share/stream.c; or set CC)"
+    [ -r "$ROOT/share/stream.c" ] || die "$ROOT/share/stream.c not found"
+fi
+if ! skip threads; then
+    "$PY" -c 'import h5py, numpy' 2>/dev/null ||
+        die "$PY with h5py and numpy is needed to compare the thread counts' outputs (or BENCH_SKIP=threads)"
+fi
 
 # Open MPI refuses to run as root without these (containers, CI).
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
@@ -65,20 +140,35 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 mkdir -p "$DIR" || die "cannot create $DIR"
 cd "$DIR"
 
-# --- the seed model, built once --------------------------------------------
-LATTICE="--spacing 0.0005 --cylinder y,0,0,0.037,-0.0025,0 --density 2200"
+# --- the models ----------------------------------------------------------------
 HORIZON=0.0015001
-stamp="pd-lattice $LATTICE | pd-bonds --horizon $HORIZON"
-if [ ! -s model.h5 ] || [ "$(cat model.stamp 2>/dev/null)" != "$stamp" ] ||
-    [ -n "$(find "$PD_BIN/pd-lattice" "$PD_BIN/pd-bonds" -newer model.h5 2>/dev/null)" ]; then
-    echo "$prog: building the seed model in $DIR" >&2
-    # shellcheck disable=SC2086 # LATTICE is a list of options
-    "$PD_BIN/pd-lattice" $LATTICE -q -o lattice.h5 || die "pd-lattice failed"
-    "$PD_BIN/pd-bonds" --horizon "$HORIZON" -q lattice.h5 -o model.h5.tmp || die "pd-bonds failed"
-    mv model.h5.tmp model.h5
-    rm -f lattice.h5
-    echo "$stamp" >model.stamp
-fi
+# build_model FILE RADIUS: the seed disk (spacing, thickness, density,
+# horizon) with the given radius, built once and kept in FILE
+build_model() {
+    lattice="--spacing 0.0005 --cylinder y,0,0,$2,-0.0025,0 --density 2200"
+    stamp="pd-lattice $lattice | pd-bonds --horizon $HORIZON"
+    if [ ! -s "$1" ] || [ "$(cat "$1.stamp" 2>/dev/null)" != "$stamp" ] ||
+        [ -n "$(find "$PD_BIN/pd-lattice" "$PD_BIN/pd-bonds" -newer "$1" 2>/dev/null)" ]; then
+        echo "$prog: building $1 (disk of radius $2 m) in $DIR" >&2
+        # shellcheck disable=SC2086 # lattice is a list of options
+        "$PD_BIN/pd-lattice" $lattice -q -o lattice.h5 || die "pd-lattice failed"
+        "$PD_BIN/pd-bonds" --horizon "$HORIZON" -q lattice.h5 -o "$1.tmp" || die "pd-bonds failed"
+        mv "$1.tmp" "$1"
+        rm -f lattice.h5
+        echo "$stamp" >"$1.stamp"
+    fi
+}
+# counts FILE: "PARTICLES BONDS" (bonds i < j) of a model file
+counts() {
+    h5ls "$1/particles/id" "$1/bonds/neighbor" 2>/dev/null |
+        sed -n 's/.*Dataset {\([0-9]*\).*/\1/p' | awk 'NR == 1 { n = $1 } NR == 2 { b = $1 / 2 }
+        END { if (n && b) print n, b; else exit 1 }'
+}
+build_model model.h5 0.037
+read -r N0 B0 <<EOF
+$(counts model.h5 || echo)
+EOF
+[ -n "$N0" ] || die "cannot read the particle and bond counts of $DIR/model.h5"
 
 # --- helpers ----------------------------------------------------------------
 # pd_loop LOG: "SECONDS BOND_UPDATES_PER_S" from pd-run's last log line
@@ -86,19 +176,80 @@ pd_loop() {
     sed -n 's/^pd-run: [0-9]* steps in \([0-9.eE+-]*\) s (\([0-9.eE+-]*\) bond updates\/s).*/\1 \2/p' "$1" |
         tail -n 1
 }
-# pd_bench NAME [pd-run option]...: pd-run on the model for STEPS steps;
-# NAME.log (its log), NAME.time ("wall peak_kB").
+# pd_row LOG ROW: the seconds of a row of pd-run --timing
+pd_row() {
+    awk -v r="$2" '/^pd-run: timing/ { t = 1; next }
+        t { s = $0; sub(/^ */, "", s); if (index(s, r " ") == 1) { n = split(s, w, " ");
+            print w[n - 2]; exit } }' "$1"
+}
+# pd_bench NAME MODEL NSTEPS [pd-run option]...: pd-run on MODEL for NSTEPS
+# steps on $nth threads (default THREADS); NAME.log (its log), NAME.time
+# ("wall peak_kB"), NAME.h5 (its output, removed unless keep=1).
+nth=
+keep=''
 pd_bench() {
-    name=$1
-    shift
-    echo "$prog: pd-run $name ($STEPS steps)" >&2
-    "$TIME" -f '%e %M' -o "$name.time" "$PD_BIN/pd-run" "$@" --threads "$THREADS" \
-        --steps "$STEPS" --every 0 model.h5 -o "$name.h5" 2>"$name.log" || {
+    name=$1 model=$2 ns=$3
+    shift 3
+    echo "$prog: pd-run $name ($ns steps)" >&2
+    "$TIME" -f '%e %M' -o "$name.time" "$PD_BIN/pd-run" "$@" --threads "${nth:-$THREADS}" \
+        --steps "$ns" --every 0 --timing "$model" -o "$name.h5" 2>"$name.log" || {
         cat "$name.log" >&2
         die "pd-run ($name) failed"
     }
-    rm -f "$name.h5"
+    [ -n "$keep" ] || rm -f "$name.h5"
     [ -n "$(pd_loop "$name.log")" ] || die "no timing line in $DIR/$name.log"
+}
+# lmp_bench NAME SCRIPT: mpirun -np NP lmp on SCRIPT; NAME.time (wall),
+# NAME.ranks (wall, peak kB of each rank), NAME.lammps (its log)
+lmp_bench() {
+    rm -f "$1.ranks"
+    echo "$prog: $MPIRUN -np $NP $LMP, $1 ($STEPS steps)" >&2
+    # one OpenMP thread per rank (LAMMPS's default, said so when unset)
+    OMP_NUM_THREADS=1 "$TIME" -f '%e %M' -o "$1.time" "$MPIRUN" -np "$NP" \
+        "$TIME" -a -o "$1.ranks" -f '%e %M' "$LMP" -in "$2" -log "$1.lammps" -screen none \
+        >"$1.out" 2>&1 || {
+        cat "$1.out" >&2
+        die "LAMMPS failed (see $DIR/$1.out, $DIR/$1.lammps)"
+    }
+    [ -n "$(lmp_loop "$1")" ] || die "no 'Loop time' in $DIR/$1.lammps"
+}
+lmp_loop() {
+    sed -n 's/^Loop time of \([0-9.eE+-]*\) on .*/\1/p' "$1.lammps" | tail -n 1
+}
+# versus TITLE PD LMP: the table of pd-run (PD.log, PD.time) against
+# LAMMPS (LMP.lammps, LMP.time, LMP.ranks; LMP empty: pd-run alone)
+versus() {
+    read -r pw pk <"$2.time"
+    read -r pl pr <<EOF
+$(pd_loop "$2.log")
+EOF
+    lw='' ll='' lk='' lr=0
+    if [ -n "$3" ]; then
+        read -r lw _ <"$3.time"
+        ll=$(lmp_loop "$3")
+        lk=$(awk '{ s += $2 } END { print s + 0 }' "$3.ranks")
+        lr=$(wc -l <"$3.ranks" | tr -d ' ')
+    fi
+    echo "$1"
+    awk -v pw="$pw" -v pl="$pl" -v pk="$pk" -v pr="$pr" -v lw="$lw" -v ll="$ll" -v lk="$lk" \
+        -v lr="$lr" -v n="$STEPS" -v th="$THREADS" -v np="$NP" -v b="$B0" 'BEGIN {
+        if (ll == "") {
+            printf "  %-34s %12s\n", "", "pd-run"
+            printf "  %-34s %12.2f\n", "wall time, whole process (s)", pw
+            printf "  %-34s %12.2f\n", "time stepping loop (s)", pl
+            printf "  %-34s %12.2f\n", "per step (ms)", 1000 * pl / n
+            printf "  %-34s %12.0f\n", "peak memory (MiB)", pk / 1024
+        } else {
+            printf "  %-34s %12s %12s %9s\n", "", "pd-run", "LAMMPS", "LAMMPS/pd"
+            printf "  %-34s %12.2f %12.2f %9.2f\n", "wall time, whole process (s)", pw, lw, lw / pw
+            printf "  %-34s %12.2f %12.2f %9.2f\n", "time stepping loop (s)", pl, ll, ll / pl
+            printf "  %-34s %12.2f %12.2f %9.2f\n", "per step (ms)", 1000 * pl / n, 1000 * ll / n, ll / pl
+            printf "  %-34s %12.0f %12.0f %9.2f\n", "peak memory (MiB)", pk / 1024, lk / 1024, lk / pk
+        }
+        printf "  %-34s %12.3g  (%.3g bonds i < j)\n", "pd-run bond updates per second", pr, pr / 2
+        if (ll == "") printf "  (%d threads)\n", th
+        else printf "  (%d threads; LAMMPS: %d ranks, memory summed over %d ranks)\n", th, np, lr
+    }'
 }
 
 # --- machine -----------------------------------------------------------------
@@ -108,89 +259,233 @@ cores=$(lscpu 2>/dev/null | awk -F: '/^Core\(s\) per socket/ { c = $2 } /^Socket
     END { if (c && s) printf "%d", c * s }')
 mem=$(awk '/^MemTotal/ { printf "%.1f GiB", $2 / 1048576 }' /proc/meminfo 2>/dev/null || true)
 load0=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo '?')
-lmpver=$("$LMP" -h 2>/dev/null | sed -n 's/^Large-scale.*Simulator - //p' | head -n 1)
+lmpver=
+skip lammps || lmpver=$("$LMP" -h 2>/dev/null | sed -n 's/^Large-scale.*Simulator - //p' | head -n 1)
 pdver=$("$PD_BIN/pd-run" --version 2>/dev/null | head -n 1)
 
-# --- (a) pd-run, the full scene ------------------------------------------
-pd_bench full --scene "$SCENE" --timing
+# --- (a) PMB: pd-run, the full scene; LAMMPS, the seed script without its dump --
+keep=1 pd_bench full model.h5 "$STEPS" --scene "$SCENE"
+keep=''
+if ! skip lammps; then
+    sed -e '/^dump/d' -e "s/^run .*/run             $STEPS/" "$EX/in.impact" >in.bench
+    grep -q "^run  *$STEPS\$" in.bench || die "cannot set 'run $STEPS' in in.bench"
+    lmp_bench lmp in.bench
+fi
 
-# --- (b) LAMMPS, the seed script without its dump ------------------------------
-sed -e '/^dump/d' -e "s/^run .*/run             $STEPS/" "$EX/in.impact" >in.bench
-grep -q "^run  *$STEPS\$" in.bench || die "cannot set 'run $STEPS' in in.bench"
-rm -f lmp.ranks
-echo "$prog: $MPIRUN -np $NP $LMP ($STEPS steps)" >&2
-# one OpenMP thread per rank (LAMMPS's default, said so when unset)
-OMP_NUM_THREADS=1 "$TIME" -f '%e %M' -o lmp.time "$MPIRUN" -np "$NP" \
-    "$TIME" -a -o lmp.ranks -f '%e %M' "$LMP" -in in.bench -log log.lammps -screen none \
-    >lmp.out 2>&1 || {
-    cat lmp.out >&2
-    die "LAMMPS failed (see $DIR/lmp.out, $DIR/log.lammps)"
-}
-lmp_loop=$(sed -n 's/^Loop time of \([0-9.eE+-]*\) on .*/\1/p' log.lammps | tail -n 1)
-[ -n "$lmp_loop" ] || die "no 'Loop time' in $DIR/log.lammps"
+# --- (b) LPS ------------------------------------------------------------------
+if ! skip lps; then
+    pd_bench lps model.h5 "$STEPS" --scene "$SCENE" --model lps --bulk-modulus "$LPS_K" \
+        --shear-modulus "$LPS_G"
+    if ! skip lammps; then
+        # pair_coeff * * K G horizon s00 alpha, from the seed's * * c horizon s00 alpha
+        sed -e 's|^pair_style .*|pair_style      peri/lps|' \
+            -e "s|^\(pair_coeff  *\* *\* *\)[^ ]*|\1$LPS_K $LPS_G|" in.bench >in.lps
+        grep -q "^pair_coeff .*$LPS_K $LPS_G $HORIZON" in.lps ||
+            die "cannot write pair_coeff for peri/lps in in.lps"
+        lmp_bench lmp-lps in.lps
+    fi
+fi
 
 # --- (c) the cost of each effect ----------------------------------------------
-# the same numbers as the scene (c, failure, indenter, dt), stated here once
-C=$(sed -n 's/^c  *//p' "$SCENE")
-FAILURE=$(sed -n 's/^failure  *//p' "$SCENE")
-INDENTER=$(sed -n 's/^indenter  *//p' "$SCENE")
-DT=$(sed -n 's/^dt  *//p' "$SCENE")
-if [ -z "$C" ] || [ -z "$FAILURE" ] || [ -z "$INDENTER" ] || [ -z "$DT" ]; then
-    die "cannot read c, failure, indenter and dt from $SCENE"
+if ! skip effects; then
+    # the same numbers as the scene (c, failure, indenter, dt), stated here once
+    C=$(sed -n 's/^c  *//p' "$SCENE")
+    FAILURE=$(sed -n 's/^failure  *//p' "$SCENE")
+    INDENTER=$(sed -n 's/^indenter  *//p' "$SCENE")
+    DT=$(sed -n 's/^dt  *//p' "$SCENE")
+    if [ -z "$C" ] || [ -z "$FAILURE" ] || [ -z "$INDENTER" ] || [ -z "$DT" ]; then
+        die "cannot read c, failure, indenter and dt from $SCENE"
+    fi
+    pd_bench bonds model.h5 "$STEPS" --c "$C" --dt "$DT"
+    pd_bench indenter model.h5 "$STEPS" --c "$C" --dt "$DT" --indenter "$INDENTER"
+    pd_bench failure model.h5 "$STEPS" --c "$C" --dt "$DT" --indenter "$INDENTER" --failure "$FAILURE"
+    # + contact is the full scene of (a)
 fi
-pd_bench bonds --c "$C" --dt "$DT"
-pd_bench indenter --c "$C" --dt "$DT" --indenter "$INDENTER"
-pd_bench failure --c "$C" --dt "$DT" --indenter "$INDENTER" --failure "$FAILURE"
-# + contact is the full scene of (a)
+
+# --- (d) the roofline -----------------------------------------------------------
+if ! skip roofline; then
+    echo "$prog: building and running share/stream.c ($THREADS threads)" >&2
+    "$CC" -std=gnu11 -O3 -march=native -ffp-contract=fast -fopenmp "$ROOT/share/stream.c" \
+        -o stream 2>stream.err || {
+        cat stream.err >&2
+        die "cannot build share/stream.c with $CC"
+    }
+    OMP_NUM_THREADS=$THREADS OMP_PROC_BIND=close ./stream >stream.out || die "stream failed"
+fi
+
+# --- (e) scaling with size ----------------------------------------------------
+if ! skip scaling; then
+    for n in $NSIZES; do
+        if awk -v n="$n" -v s="$SEED_N" 'BEGIN { exit !(n > 0.9 * s && n < 1.1 * s) }'; then
+            m=model.h5 # about 100k: the seed disk
+        else
+            m=disk-$n.h5
+            build_model "$m" "$(awk -v n="$n" -v s="$SEED_N" 'BEGIN { printf "%.6g", 0.037 * sqrt(n / s) }')"
+        fi
+        ns=$(awk -v n="$n" -v s="$SEED_N" -v st="$STEPS" 'BEGIN {
+            k = int(st * s / n + 0.5); if (k < 30) k = 30; if (k > st) k = st; print k }')
+        # one status line (at the end): each costs an energy pass over the
+        # bonds, and the default, every steps/10, would charge the short
+        # runs of the large disks more of them per step
+        pd_bench "size-$n" "$m" "$ns" --scene "$SCENE" --status "$ns"
+        echo "$n $m $ns" >"size-$n.run"
+    done
+fi
+
+# --- (f) threads ------------------------------------------------------------------
+if ! skip threads; then
+    keep=1 nth=1 pd_bench t1 model.h5 "$STEPS" --scene "$SCENE"
+    keep='' nth=''
+    # every dataset bit for bit; every attribute but threads and history
+    "$PY" - t1.h5 full.h5 >same.out <<'EOF' || die "cannot compare t1.h5 and full.h5"
+import sys
+import h5py
+import numpy as np
+
+def items(name):
+    out = {}
+    with h5py.File(name, "r") as f:
+        def visit(path, obj):
+            for k, v in obj.attrs.items():
+                if k not in ("threads", "history"):
+                    out["%s@%s" % (path, k)] = np.asarray(v)
+            if isinstance(obj, h5py.Dataset):
+                out[path] = np.asarray(obj[()])
+        visit("/", f)
+        f.visititems(visit)
+    return out
+
+a, b = items(sys.argv[1]), items(sys.argv[2])
+diff = sorted(set(a) ^ set(b))
+worst = 0.0
+for k in sorted(set(a) & set(b)):
+    x, y = a[k], b[k]
+    if x.shape != y.shape or x.dtype != y.dtype or x.tobytes() != y.tobytes():
+        diff.append(k)
+        if x.shape == y.shape and x.dtype.kind == "f":
+            worst = max(worst, float(np.nanmax(np.abs(x.astype(float) - y.astype(float)))))
+if not diff:
+    print("identical (%d datasets and attributes, bit for bit)" % len(a))
+else:
+    print("DIFFERENT: %d items (%s%s), largest difference %.3g"
+          % (len(diff), ", ".join(diff[:4]), ", ..." if len(diff) > 4 else "", worst))
+EOF
+    rm -f t1.h5
+fi
+rm -f full.h5
 
 # --- report ---------------------------------------------------------------------
-read -r pd_wall pd_kb <full.time
-read -r pd_lt pd_rate <<EOF
-$(pd_loop full.log)
-EOF
-read -r lmp_wall _ <lmp.time
-lmp_kb=$(awk '{ s += $2 } END { print s + 0 }' lmp.ranks)
-lmp_ranks=$(wc -l <lmp.ranks | tr -d ' ')
-
 echo
-echo "pd bench: seed impact (examples/lammps-impact), 103110 particles, $STEPS steps"
+echo "pd bench: seed impact (examples/lammps-impact), $N0 particles, $B0 bonds, $STEPS steps"
 echo "machine:  ${cpu:-unknown CPU}, $ncpu CPUs (${cores:-?} cores), ${mem:-? memory}"
 echo "load:     $load0 (1/5/15 min, at the start)"
 echo "pd:       ${pdver:-?}, pd-run --threads $THREADS"
-echo "LAMMPS:   ${lmpver:-?}, $MPIRUN -np $NP $LMP (peri/pmb)"
+skip lammps || echo "LAMMPS:   ${lmpver:-?}, $MPIRUN -np $NP $LMP"
 echo
-awk -v pw="$pd_wall" -v pl="$pd_lt" -v pk="$pd_kb" -v pr="$pd_rate" \
-    -v lw="$lmp_wall" -v ll="$lmp_loop" -v lk="$lmp_kb" -v lr="$lmp_ranks" \
-    -v n="$STEPS" -v th="$THREADS" -v np="$NP" 'BEGIN {
-    printf "%-34s %12s %12s %9s\n", "", "pd-run", "LAMMPS", "LAMMPS/pd"
-    printf "%-34s %12.2f %12.2f %9.2f\n", "wall time, whole process (s)", pw, lw, lw / pw
-    printf "%-34s %12.2f %12.2f %9.2f\n", "time stepping loop (s)", pl, ll, ll / pl
-    printf "%-34s %12.2f %12.2f %9.2f\n", "per step (ms)", 1000 * pl / n, 1000 * ll / n, ll / pl
-    printf "%-34s %12.0f %12.0f %9.2f\n", "peak memory (MiB)", pk / 1024, lk / 1024, lk / pk
-    printf "%-34s %12.3g\n", "pd-run bond updates per second", pr
-    printf "(%d threads; LAMMPS: %d ranks, memory summed over %d ranks)\n", th, np, lr
-}'
-echo
-echo "pd-run: cost of each effect ($STEPS steps, --threads $THREADS, loop time per step)"
-prev=
-for row in bonds indenter failure full; do
-    read -r t _ <<EOF
+lmp=lmp
+skip lammps && lmp=
+versus "PMB (LAMMPS peri/pmb):" full "$lmp"
+if ! skip lps; then
+    echo
+    lmp='lmp-lps'
+    skip lammps && lmp=
+    versus "LPS, K = $LPS_K Pa, G = $LPS_G Pa (LAMMPS peri/lps):" lps "$lmp"
+fi
+
+if ! skip effects; then
+    echo
+    echo "pd-run: cost of each effect ($STEPS steps, --threads $THREADS, loop time per step)"
+    prev=
+    for row in bonds indenter failure full; do
+        read -r t _ <<EOF
 $(pd_loop "$row.log")
 EOF
-    case $row in
-    bonds) label="bonds only (PMB, disk at rest)" ;;
-    indenter) label="+ indenter" ;;
-    failure) label="+ failure" ;;
-    full) label="+ contact (= full scene)" ;;
-    esac
-    awk -v l="$label" -v t="$t" -v p="$prev" -v n="$STEPS" 'BEGIN {
-        if (p == "") printf "  %-32s %9.2f ms/step\n", l, 1000 * t / n
-        else printf "  %-32s %9.2f ms/step  (%+.2f ms/step)\n", l, 1000 * t / n, 1000 * (t - p) / n
-    }'
-    prev=$t
-done
+        case $row in
+        bonds) label="bonds only (PMB, disk at rest)" ;;
+        indenter) label="+ indenter" ;;
+        failure) label="+ failure" ;;
+        full) label="+ contact (= full scene)" ;;
+        esac
+        awk -v l="$label" -v t="$t" -v p="$prev" -v n="$STEPS" 'BEGIN {
+            if (p == "") printf "  %-32s %9.2f ms/step\n", l, 1000 * t / n
+            else printf "  %-32s %9.2f ms/step  (%+.2f ms/step)\n", l, 1000 * t / n, 1000 * (t - p) / n
+        }'
+        prev=$t
+    done
+fi
 echo
-echo "pd-run --timing of the full scene:"
+echo "pd-run --timing of the full PMB scene:"
 sed -n '/^pd-run: timing/,$p' full.log | sed 's/^/  /'
+
+if ! skip roofline; then
+    bw=$(sed -n 's/^triad_bytes_per_s //p' stream.out)
+    fl=$(sed -n 's/^fma_flops_per_s //p' stream.out)
+    tb=$(pd_row full.log bonds)
+    { [ -n "$bw" ] && [ -n "$fl" ] && [ -n "$tb" ]; } || die "cannot read stream.out or the bonds row of full.log"
+    echo
+    echo "roofline of the PMB bond kernel (with failure), $THREADS threads:"
+    # bytes and flops per bond i < j: see README.md, "Performance"
+    awk -v bw="$bw" -v fl="$fl" -v tb="$tb" -v n="$N0" -v b="$B0" -v st="$STEPS" 'BEGIN {
+        per = b / n                        # bonds i < j per particle
+        bb = 4 + 8 + 8 + 1 / 8 + 104 / per # streamed per bond + per particle / per
+        ff = 31
+        rate = b * (st + 1) / tb           # bonds per second in the kernel
+                                           # (setup evaluates the forces once more)
+        ai = ff / bb
+        printf "  machine: triad %.1f GB/s, FMA peak %.1f GFLOP/s (share/stream.c; balance %.2f flop/B)\n",
+            bw / 1e9, fl / 1e9, fl / bw
+        printf "  kernel:  %.1f bytes and %d flops per bond (%.2f flop/B; 3 divisions and 1 sqrt among the flops)\n",
+            bb, ff, ai
+        printf "  bonds row %.3f s for %d x %d bonds: %.3g bonds/s, %.2f ns per bond\n",
+            tb, st + 1, b, rate, 1e9 / rate
+        printf "  achieved %.2f GB/s = %.0f%% of the triad, %.2f GFLOP/s = %.0f%% of the FMA peak\n",
+            rate * bb / 1e9, 100 * rate * bb / bw, rate * ff / 1e9, 100 * rate * ff / fl
+        roof = ai * bw < fl ? ai * bw : fl
+        printf "  roofline bound %.3g bonds/s (%s-bound): achieved %.0f%% of it\n",
+            roof / ff, ai * bw < fl ? "memory" : "compute", 100 * rate * ff / roof
+    }'
+fi
+
+if ! skip scaling; then
+    echo
+    echo "scaling with size (the impact scene on larger disks, --threads $THREADS;"
+    echo "  per step: the loop time less output, over the steps + the setup's forces):"
+    printf "  %10s %11s %6s %14s %14s %14s\n" particles bonds steps "ms/step" "ns/bond/step" "peak B/particle"
+    for n in $NSIZES; do
+        read -r _ m ns <"size-$n.run"
+        read -r np nb <<EOF
+$(counts "$m")
+EOF
+        read -r t _ <<EOF
+$(pd_loop "size-$n.log")
+EOF
+        read -r _ kb <"size-$n.time"
+        # the loop less its output (the last frame), over the steps and the
+        # setup's force evaluation, which the loop time also holds
+        to=$(pd_row "size-$n.log" output)
+        awk -v np="$np" -v nb="$nb" -v ns="$ns" -v t="$t" -v to="${to:-0}" -v kb="$kb" 'BEGIN {
+            t = (t - to) / (ns + 1)
+            printf "  %10d %11d %6d %14.2f %14.3f %14.0f\n", np, nb, ns, 1000 * t,
+                1e9 * t / nb, 1024 * kb / np }'
+    done | tee scaling.out
+    awk '{ t = $5; m = $6; if (NR == 1 || t < t0) t0 = t; if (t > t1) t1 = t
+           if (NR == 1 || m < m0) m0 = m; if (m > m1) m1 = m }
+        END { if (NR > 1) printf "  spread: time per bond %.0f%% (max/min - 1; target <= 30%%), memory per particle %.0f%%\n",
+            100 * (t1 / t0 - 1), 100 * (m1 / m0 - 1) }' scaling.out
+fi
+
+if ! skip threads; then
+    echo
+    read -r t1 _ <<EOF
+$(pd_loop t1.log)
+EOF
+    read -r t2 _ <<EOF
+$(pd_loop full.log)
+EOF
+    awk -v a="$t1" -v b="$t2" -v th="$THREADS" -v n="$STEPS" 'BEGIN {
+        printf "threads: 1 thread %.2f ms/step, %d threads %.2f ms/step: speed-up %.2fx\n",
+            1000 * a / n, th, 1000 * b / n, a / b }'
+    echo "  outputs of 1 and $THREADS threads: $(cat same.out)"
+fi
 echo
-echo "(runs and logs in $DIR; the model is kept there for the next run)"
+echo "(runs and logs in $DIR; the models are kept there for the next run)"
