@@ -5,8 +5,9 @@
  * with cell lists of edge delta (linear in N).  Stored as CSR with reference
  * lengths, partial-volume factors (seed 000, "Modification to the Particle
  * Volume") and the bond state mu as one bit per bond.  Particles are first
- * sorted by horizon-sized cells, row by row along the longest axis, so that
- * families sit close in memory; ids travel with them.
+ * sorted (pd_particles_sort_spatial: in lattice order on a lattice, else by
+ * horizon-sized cells, row by row along the longest axis), so that families
+ * sit close in memory; ids travel with them.
  *
  * Pre-cracks (--crack): every bond whose reference segment crosses a given
  * planar crack is created broken (mu = 0, seed 004) and marked in

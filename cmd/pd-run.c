@@ -140,6 +140,9 @@ static void usage(FILE *out)
             "  --dt DT               time step, s (default: stable step x safety)\n"
             "  --safety F            safety factor on the stable step (default 0.8)\n"
             "  --force-dt            run a --dt above the stable step anyway\n"
+            "  --bond-list           walk the PMB bonds as a list even when the body is\n"
+            "                        on a lattice (the lattice stencil kernel is the\n"
+            "                        default there; the two agree to rounding)\n"
             "  --lost-margin D       a particle farther than D (m) outside the body's\n"
             "                        bounding box is lost: its bonds break and it stays\n"
             "                        at rest (default 10 x the box's largest edge)\n"
@@ -402,7 +405,7 @@ static int parse_options(int argc, char **argv, struct options *o)
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
            OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID, OPT_MATERIAL,
-           OPT_INTERFACE, OPT_FIBRE, OPT_LAMBDA, OPT_TAU, OPT_YIELD };
+           OPT_INTERFACE, OPT_FIBRE, OPT_LAMBDA, OPT_TAU, OPT_YIELD, OPT_BONDLIST };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -419,6 +422,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"dt", required_argument, 0, OPT_DT},
         {"safety", required_argument, 0, OPT_SAFETY},
         {"force-dt", no_argument, 0, OPT_FORCE_DT},
+        {"bond-list", no_argument, 0, OPT_BONDLIST},
         {"every", required_argument, 0, OPT_EVERY},
         {"threads", required_argument, 0, OPT_THREADS},
         {"status", required_argument, 0, OPT_STATUS},
@@ -574,6 +578,9 @@ static int parse_options(int argc, char **argv, struct options *o)
                 return rc;
             if (o->sc.safety > 1)
                 return usage_error("--safety must not exceed 1, not", optarg);
+            break;
+        case OPT_BONDLIST:
+            o->sc.bond_list = 1;
             break;
         case OPT_FORCE_DT:
             o->force_dt = 1;
@@ -823,6 +830,8 @@ static char *scene_text(const pd_scene *s)
     p += sprintf(p, "lost-margin %.17g\n", s->lost_margin);
     if (s->dt > s->dt_stable)
         p += sprintf(p, "force-dt\n");
+    if (s->bond_list)
+        p += sprintf(p, "bond-list\n");
     for (int k = 0; k < s->nbc; k++) {
         p += sprintf(p, "%s %s,%c,%s\n", pd_bc_option(s->bc[k].kind), s->bc[k].set,
                      'x' + s->bc[k].axis, prof[k]);
@@ -1235,6 +1244,9 @@ int main(int argc, char **argv)
                      ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
                 (long long)p->n, (long long)(b->count / 2), pd_sim_effects(sim), sc->dt,
                 sc->dt_stable, (long long)nsteps, restart ? " more" : "");
+    if (!o.quiet && pd_sim_stencil(sim) > 0)
+        fprintf(stderr, PROG ": bonds walked as a lattice stencil of %d offsets%s\n",
+                pd_sim_stencil(sim), sc->has_contact ? ", with the contact of its pairs" : "");
     if (!o.quiet)
         log_constants(p, sc, &o);
     for (int k = 0; k < o.nbc && !o.quiet; k++) {

@@ -231,38 +231,48 @@ static int cmp_item(const void *a, const void *b)
 pd_status pd_particles_sort_spatial(pd_particles *p, double cell)
 {
     int64_t n = p->n;
-    pd_cells c;
-    pd_status st = pd_cells_build(&c, n, p->x, cell);
+    int64_t *order;
+    pd_status st = pd_lattice_order(p, &order);
     if (st != PD_OK)
+        return st;
+    pd_cells c = {0};
+    if (order == NULL && (st = pd_cells_build(&c, n, p->x, cell)) != PD_OK)
         return st;
     sort_item *items = malloc((size_t)(n > 0 ? n : 1) * sizeof *items);
     pd_particles *q = pd_particles_new(n);
     if (items == NULL || q == NULL) {
         free(items);
+        free(order);
         pd_particles_free(q);
         pd_cells_free(&c);
         return pd_fail(PD_ERR_NOMEM, "out of memory sorting particles");
     }
-    /* the longest axis outermost: slabs across it are the thinnest */
-    int outer = 0;
-    for (int d = 1; d < 3; d++)
-        if (c.dim[d] > c.dim[outer])
-            outer = d;
-    int mid = (outer + 1) % 3, inner = (outer + 2) % 3;
-    if (c.dim[inner] > c.dim[mid]) {
-        int t = mid;
-        mid = inner;
-        inner = t;
+    if (order) { /* a lattice: its own order */
+        for (int64_t i = 0; i < n; i++)
+            items[i].index = order[i];
+        free(order);
+    } else {
+        /* the longest axis outermost: slabs across it are the thinnest */
+        int outer = 0;
+        for (int d = 1; d < 3; d++)
+            if (c.dim[d] > c.dim[outer])
+                outer = d;
+        int mid = (outer + 1) % 3, inner = (outer + 2) % 3;
+        if (c.dim[inner] > c.dim[mid]) {
+            int t = mid;
+            mid = inner;
+            inner = t;
+        }
+        for (int64_t i = 0; i < n; i++) {
+            double x[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
+            int64_t k[3];
+            pd_cells_locate(&c, x, k);
+            items[i].key = (uint64_t)((k[outer] * c.dim[mid] + k[mid]) * c.dim[inner] + k[inner]);
+            items[i].index = i;
+        }
+        pd_cells_free(&c);
+        qsort(items, (size_t)n, sizeof *items, cmp_item);
     }
-    for (int64_t i = 0; i < n; i++) {
-        double x[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
-        int64_t k[3];
-        pd_cells_locate(&c, x, k);
-        items[i].key = (uint64_t)((k[outer] * c.dim[mid] + k[mid]) * c.dim[inner] + k[inner]);
-        items[i].index = i;
-    }
-    pd_cells_free(&c);
-    qsort(items, (size_t)n, sizeof *items, cmp_item);
     for (int64_t i = 0; i < n; i++) {
         int64_t s = items[i].index;
         for (int d = 0; d < 3; d++)

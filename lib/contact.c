@@ -70,6 +70,8 @@ static int64_t candidates(const pd_sim *sim, const pd_cells *c, double reach2, i
     double *const *y = sim->y;
     if (sim->lost && sim->lost[i]) /* out of the body for good: no contact */
         return 0;
+    /* the stencil pairs' contact is the lattice kernel's (lib/grid.c) */
+    const pd_grid *grid = pd_grid_contact(sim->grid) ? sim->grid : NULL;
     double yi[3] = {y[0][i], y[1][i], y[2][i]};
     int64_t cells[27];
     int ncells = pd_cells_adjacent(c, yi, cells);
@@ -77,7 +79,7 @@ static int64_t candidates(const pd_sim *sim, const pd_cells *c, double reach2, i
     for (int q = 0; q < ncells; q++)
         for (int64_t e = c->start[cells[q]]; e < c->start[cells[q] + 1]; e++) {
             int32_t j = c->index[e];
-            if (j == i)
+            if (j == i || (grid && pd_grid_pair(grid, i, j)))
                 continue;
             double dx = yi[0] - y[0][j], dy = yi[1] - y[1][j], dz = yi[2] - y[2][j];
             if (dx * dx + dy * dy + dz * dz > reach2)
@@ -216,6 +218,7 @@ double *const *pd_contact_positions(void *state)
 static void contact_energy(const pd_sim *sim, void *state, double *e)
 {
     const contact_list *cl = state;
+    pd_grid_contact_energy(sim, e);
     if (sim->contact_builds == 0)
         return;
     const double k = PD_CONTACT_SCALE * sim->sc.c / sim->b->horizon;

@@ -244,11 +244,24 @@ int pd_crack_crosses(const pd_crack *c, const double x[3], const double y[3]);
 pd_status pd_bonds_precrack(const pd_particles *p, pd_bonds *b, const pd_crack *cracks,
                             int ncracks, int64_t *counts);
 
-/* Reorder particles by horizon-sized cells, row by row with the longest
- * axis outermost, so that families are close in memory and every bond joins
- * rows a bounded distance apart (a few slabs of cells): the run's kernel
- * cuts rows into blocks of that distance.  Ids travel with the particles. */
+/* Reorder particles so that families are close in memory and every bond
+ * joins rows a bounded distance apart (the run's kernels cut rows into
+ * blocks of that distance): on a lattice, in lattice order
+ * (pd_lattice_order, what pd-run's stencil kernel walks), otherwise by
+ * horizon-sized cells, row by row with the longest axis outermost.  Ids
+ * travel with the particles. */
 pd_status pd_particles_sort_spatial(pd_particles *p, double cell);
+
+/* Are the particles on the lattice of their spacing (every site within
+ * 1e-6 spacing of lo + spacing c, c integer)?  Then axis[] gets the axes in
+ * the order inner (the longest extent), mid (the shortest), outer, and
+ * lc[a][i] (when lc is not NULL) particle i's coordinate along axis[a].
+ * Returns 1 or 0. */
+int pd_lattice_coords(const pd_particles *p, int axis[3], int32_t *lc[3]);
+/* Lattice order: sorted by (outer, mid, inner) coordinate.  *order gets
+ * the old index of each new position (malloc'd), or NULL when the
+ * particles are not on a lattice. */
+pd_status pd_lattice_order(const pd_particles *p, int64_t **order);
 
 /* ---------------------------------------------------------------- scene */
 
@@ -285,6 +298,8 @@ typedef struct {
     double s00;            /* critical stretch parameter s00               */
     double alpha;          /* s0 = s00 - alpha s_min (seed 000 eq. 9)       */
     int has_contact;
+    int bond_list;         /* walk the bond list even on a lattice (pd-run
+                              --bond-list; lib/grid.c)                     */
     double contact_skin;   /* m                                            */
     int has_indenter;
     double ind_center[3];  /* centre at t = 0, m                            */
@@ -447,6 +462,9 @@ pd_status pd_sim_step(pd_sim *sim);
 
 /* Names of the active effects, e.g. "pmb+failure contact indenter". */
 const char *pd_sim_effects(const pd_sim *sim);
+/* The PMB bonds' kernel: the half-stencil offsets of the lattice kernel
+ * (lib/grid.c), or 0 when the bond list is walked. */
+int pd_sim_stencil(const pd_sim *sim);
 int64_t pd_sim_stepno(const pd_sim *sim);
 double pd_sim_time(const pd_sim *sim);
 double pd_sim_kinetic(const pd_sim *sim);

@@ -128,6 +128,7 @@ pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_h
 
 void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact)
 {
+    h->epoch++;
     /* a half bond i-j (j > i) takes the bit of its copy in i's family */
     for (int64_t w = 0; w < pd_bits_words(h->count); w++)
         h->intact[w] = 0;
@@ -142,8 +143,15 @@ void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *inta
     }
 }
 
+int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j)
+{
+    int64_t q = lower_bound(h->neighbor, h->offset[i], h->offset[i + 1], (int32_t)j);
+    return q < h->offset[i + 1] && h->neighbor[q] == j ? q : -1;
+}
+
 void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i)
 {
+    h->epoch++;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
         int32_t j = b->neighbor[k];
         int64_t row = j < i ? j : i, other = j < i ? i : j;
@@ -328,6 +336,8 @@ static void pmb_kernel(pd_sim *sim, int failure)
 static pd_status pmb_force(pd_sim *sim, void *state)
 {
     (void)state;
+    if (sim->grid)
+        return pd_grid_pmb(sim, 0);
     pmb_kernel(sim, 0);
     return PD_OK;
 }
@@ -338,10 +348,17 @@ static pd_status pmb_failure_force(pd_sim *sim, void *state)
     if (sim->setup) {
         /* the initial state: forces only; s0 stays +inf (seed 000,
          * "Breaking Bonds": no bond breaks before the second step) */
+        if (sim->grid)
+            return pd_grid_pmb(sim, 0);
         pmb_kernel(sim, 0);
         return PD_OK;
     }
-    pmb_kernel(sim, 1);
+    if (sim->grid) {
+        pd_status st = pd_grid_pmb(sim, 1);
+        if (st != PD_OK)
+            return st;
+    } else
+        pmb_kernel(sim, 1);
     double *t = sim->s0;
     sim->s0 = sim->s0_new;
     sim->s0_new = t;
@@ -473,7 +490,9 @@ static void pmb_stress_laws(const pd_sim *sim, double *out)
 
 static void pmb_energy(const pd_sim *sim, void *state, double *e)
 {
-    if (pd_scene_has_laws(&sim->sc))
+    if (sim->grid)
+        pd_grid_pmb_energy(sim, e);
+    else if (pd_scene_has_laws(&sim->sc))
         pmb_energy_laws(sim, e);
     else
         pmb_energy_uniform(sim, state, e);

@@ -107,6 +107,8 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
         hs = pd_bond_laws_check(p, s);
     if (hs == PD_OK && pd_scene_has_laws(s))
         hs = pd_half_laws(p, b, s, &sim->half);
+    if (hs == PD_OK)
+        hs = pd_grid_new(sim, &sim->grid);
     if (hs != PD_OK) {
         pd_sim_free(sim);
         return hs;
@@ -174,6 +176,7 @@ void pd_sim_free(pd_sim *sim)
     }
     free(sim->intact);
     pd_half_free(&sim->half);
+    pd_grid_free(sim->grid);
     free(sim->s0);
     free(sim->s0_new);
     free(sim->lost);
@@ -393,6 +396,11 @@ pd_status pd_sim_step(pd_sim *sim)
 const char *pd_sim_effects(const pd_sim *sim)
 {
     return sim->names;
+}
+
+int pd_sim_stencil(const pd_sim *sim)
+{
+    return pd_grid_offsets(sim->grid);
 }
 
 int64_t pd_sim_stepno(const pd_sim *sim)

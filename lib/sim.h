@@ -41,6 +41,8 @@ double pd_sum_fixed(const double *x, int64_t n);
 
 #define PD_MAX_EFFECTS 8
 
+typedef struct pd_grid pd_grid; /* lib/grid.c */
+
 /* The bonds of a run, each stored once (i < j), as the PMB kernel walks
  * them; the directed bonds of the file are expanded from it on demand. */
 typedef struct {
@@ -61,6 +63,8 @@ typedef struct {
     double *kfail;     /* per bond s00_bond / s00: the bond breaks at
                           kfail min(s0_i, s0_j) (lib/materials.c); NULL:
                           all 1, the kernel of old                       */
+    uint64_t epoch;    /* bumped when `intact` is changed from outside the
+                          kernels (a restart, a lost particle)           */
 } pd_half_bonds;
 
 pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h);
@@ -87,6 +91,7 @@ struct pd_sim {
     double *v[3];       /* velocities, m/s                               */
     double *f[3];       /* force densities, N/m^3                        */
     pd_half_bonds half; /* the bonds as the kernel walks them             */
+    pd_grid *grid;      /* the same as a lattice stencil, or NULL         */
     uint64_t *intact;   /* directed bond state bits mu (1 = intact), kept
                            up to date from `half` on demand              */
     int intact_stale;   /* `intact` lags behind half.intact              */
@@ -142,6 +147,26 @@ double pd_bond_stiffness_laws(const pd_particles *p, const pd_bonds *b, const pd
 
 /* Break every bond of particle i (both halves). */
 void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i);
+/* The half bond i-j (i < j): its index, or -1 when there is none. */
+int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j);
+
+/* The PMB bonds of a body on a lattice, walked as a stencil (lib/grid.c).
+ * pd_grid_new leaves *out NULL when the scene or the body does not allow
+ * it (then lib/pmb.c's bond list serves). */
+pd_status pd_grid_new(pd_sim *sim, pd_grid **out);
+void pd_grid_free(pd_grid *g);
+/* The PMB forces (and with `failure` the breaking test and s0), and the
+ * contact forces of the stencil pairs when the scene has contact. */
+pd_status pd_grid_pmb(pd_sim *sim, int failure);
+/* Half-stencil offsets (0: no grid); does the kernel take the contact of
+ * the stencil pairs; is i-j a stencil pair. */
+int pd_grid_offsets(const pd_grid *g);
+int pd_grid_contact(const pd_grid *g);
+int pd_grid_pair(const pd_grid *g, int64_t i, int64_t j);
+/* The bonds' elastic energy, J, added to e[i]. */
+void pd_grid_pmb_energy(const pd_sim *sim, double *e);
+/* The contact energy of the stencil pairs, J, added to e[i]. */
+void pd_grid_contact_energy(const pd_sim *sim, double *e);
 
 pd_status pd_contact_restore(pd_sim *sim, void *state, double *const yb[3], int64_t builds);
 double *const *pd_contact_positions(void *state);

@@ -1,0 +1,974 @@
+/*
+ * grid.c -- the PMB bonds of a body on a lattice, walked as a stencil.
+ *
+ * A body made by pd-lattice sits on a simple cubic (or, for a plate,
+ * square) lattice of spacing h, and pd-bonds gives every particle a bond to
+ * each particle at a lattice offset d with |d| h <= delta.  Such a bond is
+ * named by its first particle and its offset: no neighbour index, length or
+ * weight needs to be stored per bond, only one bit of state.  When pd-run
+ * finds a PMB scene on such a body (pd_grid_new checks every condition
+ * below; any other scene keeps the bond list of lib/pmb.c), it walks the
+ * bonds as a stencil:
+ *
+ *   - Lattice coordinates.  Particle i sits at lo + h c_i with integer c_i
+ *     (to 1e-6 h).  The axes are taken in the order inner (the longest
+ *     extent), mid (the shortest), outer (the other one), and "grid order"
+ *     sorts the particles by (outer, mid, inner): a row (fixed outer and
+ *     mid) is then made of runs of particles consecutive along the inner
+ *     axis and in memory.  pd-bonds writes its particles in grid order
+ *     (pd_particles_sort_spatial), so a run needs no copies; otherwise the
+ *     positions and forces are gathered and scattered every step.
+ *   - The half stencil.  Of the offsets d and -d the kernel keeps the one
+ *     that is lexicographically positive in (outer, mid, inner), so the
+ *     partner j of a bond comes later in grid order; bond i-j is stored
+ *     once, as bit k of i's mask.  Per offset k the table holds the
+ *     reference length |xi_k|, c V nu_k (volumes and radii must be equal
+ *     over the body, and nu the same for every bond of an offset) and the
+ *     contact distance d_k = min(0.9 |xi_k|, 1.35 (r + r)).
+ *   - Segments.  For a run A and an offset k the partners of A's particles
+ *     lie in one or more runs of the row at (mid, outer) + d; each overlap
+ *     is a segment: particles g in [lo, hi) with partner g + shift.  A
+ *     segment is a loop over consecutive particles with consecutive
+ *     partners: the loads and the force updates of both ends are
+ *     contiguous, and the loop vectorizes without gathers or scatters.
+ *   - Threads.  Outer planes are cut into blocks at least as thick as the
+ *     stencil's reach, so a block's bonds write only to the block and the
+ *     next one; even blocks run in parallel, then odd blocks (lib/pmb.c's
+ *     scheme).  Every sum is taken in an order fixed by the blocks: the
+ *     result does not depend on the thread count.
+ *
+ * The arithmetic of a bond is lib/pmb.c's (the stretch, the eps_machine
+ * guard, the failure test against min(s0_i, s0_j) of the previous step and
+ * the new s0 of both ends), with one division by r per bond and the
+ * reciprocal of |xi| from the table.  The contact forces of seed 000 eqs.
+ * 13-15 between the two ends of every stencil pair, bonded or not, are
+ * added in the same pass (their d_ij is d_k); lib/contact.c leaves these
+ * pairs out of its list, which then holds only pairs that were farther
+ * than the horizon apart in the reference configuration.  Sums are rounded
+ * in another order than the bond list's, so the two kernels agree to
+ * rounding, not bit for bit.
+ *
+ * The bond state lives in both places: the masks (walked every step) and
+ * the half bonds' bits (lib/pmb.c), which the rest of pd-run reads.  A bond
+ * the kernel breaks is cleared in both (and its energy booked as
+ * released); a change made to the half bonds from outside (a restart, a
+ * lost particle) bumps their epoch and the masks are rebuilt from them.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim.h"
+
+#define GRID_TOL 1e-6    /* a site within 1e-6 h of the lattice is on it  */
+#define GRID_NU_TOL 1e-9 /* nu of one offset equal to this, relatively    */
+#define GRID_CHUNK 256   /* particles per vector pass of a segment        */
+#define GRID_SAFE 16     /* shifts below this take the two-pass loop      */
+
+typedef struct {
+    int64_t lo, hi; /* first particles g of the segment, grid order      */
+    int64_t shift;  /* partner g + shift                                  */
+    int32_t k;      /* half-stencil offset                                */
+} grid_seg;
+
+typedef struct {
+    int64_t lo, hi;   /* particles of a run, grid order                   */
+    int64_t s0, s1;   /* its segments                                     */
+} grid_span;
+
+typedef struct {
+    int64_t n, cap;
+    int64_t *g;     /* grid index of the first end                        */
+    int32_t *k;     /* offset                                             */
+    int64_t *j;     /* grid index of the partner                          */
+} grid_breaks;
+
+struct pd_grid {
+    int64_t n;
+    int nk, words;       /* half-stencil offsets, mask words per particle  */
+    int reach;           /* largest |d| component of the stencil           */
+    int (*off)[3];       /* nk offsets, (inner, mid, outer)                */
+    double *len, *inv_len, *w, *dc;
+    int16_t *lookup;     /* (2 reach + 1)^3: k for d, -1 - k for -d, or
+                            INT16_MIN: not a stencil offset                */
+    int axis[3];         /* inner, mid, outer: 0, 1, 2 for x, y, z         */
+    int32_t *lc[3];      /* lattice coordinates of particle i (sim order)  */
+    int64_t *perm;       /* g -> i, NULL when grid order is sim order      */
+    uint64_t *mask;      /* words per particle: bond intact                */
+    uint64_t *cmask;     /* words per particle: contact pair (NULL: none)  */
+    grid_seg *seg;
+    int64_t nseg;
+    grid_span *run;      /* the runs: particles [lo, hi), segments [s0, s1) */
+    int64_t nrun;
+    int64_t nblocks;
+    int64_t *block_seg;  /* nblocks + 1                                    */
+    int64_t *block_run;  /* nblocks + 1                                    */
+    grid_breaks *breaks; /* per block                                      */
+    double *released;    /* per block                                      */
+    double kc;           /* (c_S / delta) V: contact force per overlap     */
+    double *y[3], *f[3], *s0, *s0n; /* grid-order copies (perm only)       */
+    uint64_t epoch;      /* of the half bonds the masks were built from    */
+    int status;          /* PD_OK, or the error a parallel pass met        */
+};
+
+void pd_grid_free(pd_grid *G)
+{
+    if (G == NULL)
+        return;
+    free(G->off);
+    free(G->len);
+    free(G->inv_len);
+    free(G->w);
+    free(G->dc);
+    free(G->lookup);
+    for (int d = 0; d < 3; d++) {
+        free(G->lc[d]);
+        free(G->y[d]);
+        free(G->f[d]);
+    }
+    free(G->perm);
+    free(G->mask);
+    free(G->cmask);
+    free(G->seg);
+    free(G->run);
+    free(G->block_seg);
+    free(G->block_run);
+    if (G->breaks)
+        for (int64_t b = 0; b < G->nblocks; b++) {
+            free(G->breaks[b].g);
+            free(G->breaks[b].k);
+            free(G->breaks[b].j);
+        }
+    free(G->breaks);
+    free(G->released);
+    free(G->s0);
+    free(G->s0n);
+    free(G);
+}
+
+/* ------------------------------------------------------------ the lattice */
+
+int pd_lattice_coords(const pd_particles *p, int axis[3], int32_t *lc[3])
+{
+    const double h = p->spacing;
+    if (!(h > 0) || p->n == 0)
+        return 0;
+    double lo[3], hi[3];
+    for (int d = 0; d < 3; d++) {
+        lo[d] = INFINITY;
+        hi[d] = -INFINITY;
+        for (int64_t i = 0; i < p->n; i++) {
+            lo[d] = fmin(lo[d], p->x[d][i]);
+            hi[d] = fmax(hi[d], p->x[d][i]);
+        }
+        if (!isfinite(lo[d]) || !isfinite(hi[d]) || (hi[d] - lo[d]) / h > 1e9)
+            return 0;
+    }
+    /* inner: the longest extent; outer: the next; mid: the shortest (ties
+     * by axis number) */
+    int ord[3] = {0, 1, 2};
+    for (int a = 0; a < 3; a++)
+        for (int b = a + 1; b < 3; b++)
+            if (hi[ord[b]] - lo[ord[b]] > hi[ord[a]] - lo[ord[a]]) {
+                int t = ord[a];
+                ord[a] = ord[b];
+                ord[b] = t;
+            }
+    axis[0] = ord[0];
+    axis[1] = ord[2];
+    axis[2] = ord[1];
+    for (int a = 0; a < 3; a++) {
+        int d = axis[a];
+        for (int64_t i = 0; i < p->n; i++) {
+            double c = (p->x[d][i] - lo[d]) / h, r = nearbyint(c);
+            if (!(fabs(c - r) <= GRID_TOL))
+                return 0;
+            if (lc)
+                lc[a][i] = (int32_t)r;
+        }
+    }
+    return 1;
+}
+
+typedef struct {
+    int64_t g;
+    int32_t c[3];
+} order_item;
+
+static int cmp_order(const void *a, const void *b)
+{
+    const order_item *x = a, *y = b;
+    for (int d = 2; d >= 0; d--)
+        if (x->c[d] != y->c[d])
+            return (x->c[d] > y->c[d]) - (x->c[d] < y->c[d]);
+    return (x->g > y->g) - (x->g < y->g);
+}
+
+pd_status pd_lattice_order(const pd_particles *p, int64_t **order)
+{
+    *order = NULL;
+    int axis[3];
+    int32_t *lc[3] = {NULL, NULL, NULL};
+    order_item *it = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof *it);
+    int64_t *o = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof *o);
+    for (int d = 0; d < 3; d++)
+        lc[d] = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof(int32_t));
+    pd_status s = PD_OK;
+    if (!it || !o || !lc[0] || !lc[1] || !lc[2])
+        s = pd_fail(PD_ERR_NOMEM, "out of memory ordering the lattice");
+    else if (pd_lattice_coords(p, axis, lc)) {
+        for (int64_t i = 0; i < p->n; i++) {
+            it[i].g = i;
+            for (int d = 0; d < 3; d++)
+                it[i].c[d] = lc[d][i];
+        }
+        qsort(it, (size_t)p->n, sizeof *it, cmp_order);
+        for (int64_t g = 0; g < p->n; g++)
+            o[g] = it[g].g;
+        *order = o;
+        o = NULL;
+    }
+    free(it);
+    free(o);
+    for (int d = 0; d < 3; d++)
+        free(lc[d]);
+    return s;
+}
+
+/* --------------------------------------------------------------- building */
+
+static inline int lookup_index(const pd_grid *G, const int d[3])
+{
+    const int r = G->reach, w = 2 * r + 1;
+    for (int a = 0; a < 3; a++)
+        if (d[a] < -r || d[a] > r)
+            return -1;
+    return ((d[2] + r) * w + (d[1] + r)) * w + (d[0] + r);
+}
+
+/* The half-stencil offset of d: k >= 0 for d itself, -1 - k for -d, or
+ * INT16_MIN when d is not in the stencil. */
+static inline int offset_of(const pd_grid *G, const int d[3])
+{
+    int q = lookup_index(G, d);
+    return q < 0 ? INT16_MIN : G->lookup[q];
+}
+
+static inline int positive(const int d[3])
+{
+    return d[2] > 0 || (d[2] == 0 && (d[1] > 0 || (d[1] == 0 && d[0] > 0)));
+}
+
+static inline int64_t gidx_of(const int64_t *inv, int64_t i)
+{
+    return inv ? inv[i] : i;
+}
+
+/* The stencil from the file's bonds: every offset a bond has, with its
+ * length and nu from the first bond of it (and nu checked on all).
+ * Returns 0 when the bonds are not a stencil. */
+static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
+{
+    int reach = 0;
+    for (int64_t i = 0; i < b->n; i++)
+        for (int64_t q = b->offset[i]; q < b->offset[i + 1]; q++)
+            for (int a = 0; a < 3; a++) {
+                int d = abs(G->lc[a][b->neighbor[q]] - G->lc[a][i]);
+                reach = d > reach ? d : reach;
+            }
+    if (reach > 12) /* (2 reach + 1)^3 half offsets must fit an int16 */
+        return 0;
+    G->reach = reach;
+    const int w = 2 * reach + 1;
+    G->lookup = malloc((size_t)w * w * w * sizeof(int16_t));
+    double *nu = malloc((size_t)w * w * w * sizeof(double));
+    double *len = malloc((size_t)w * w * w * sizeof(double));
+    if (!G->lookup || !nu || !len) {
+        free(nu);
+        free(len);
+        return -1;
+    }
+    for (int q = 0; q < w * w * w; q++) {
+        G->lookup[q] = INT16_MIN;
+        nu[q] = NAN;
+    }
+    int ok = 1;
+    for (int64_t i = 0; i < b->n && ok; i++)
+        for (int64_t q = b->offset[i]; q < b->offset[i + 1] && ok; q++) {
+            int32_t j = b->neighbor[q];
+            int d[3] = {G->lc[0][j] - G->lc[0][i], G->lc[1][j] - G->lc[1][i],
+                        G->lc[2][j] - G->lc[2][i]};
+            int at = lookup_index(G, d);
+            if (d[0] == 0 && d[1] == 0 && d[2] == 0)
+                ok = 0;
+            else if (isnan(nu[at])) {
+                nu[at] = b->vfactor[q];
+                len[at] = b->length[q];
+            } else
+                ok = fabs(b->vfactor[q] - nu[at]) <= GRID_NU_TOL * nu[at];
+        }
+    /* the half stencil, in lookup order (outer, mid, inner ascending) */
+    int nk = 0;
+    for (int q = 0; q < w * w * w && ok; q++) {
+        int d[3] = {q % w - reach, (q / w) % w - reach, q / (w * w) - reach};
+        int m[3] = {-d[0], -d[1], -d[2]};
+        int mq = lookup_index(G, m);
+        if (isnan(nu[q]) != isnan(nu[mq]) ||
+            (!isnan(nu[q]) && fabs(nu[q] - nu[mq]) > GRID_NU_TOL * nu[q]))
+            ok = 0; /* the family of d and -d must match */
+        nk += !isnan(nu[q]) && positive(d);
+    }
+    if (ok && nk > 0) {
+        G->nk = nk;
+        G->words = (nk + 63) / 64;
+        G->off = malloc((size_t)nk * sizeof *G->off);
+        G->len = malloc((size_t)nk * sizeof(double));
+        G->inv_len = malloc((size_t)nk * sizeof(double));
+        G->w = malloc((size_t)nk * sizeof(double));
+        G->dc = malloc((size_t)nk * sizeof(double));
+        if (!G->off || !G->len || !G->inv_len || !G->w || !G->dc) {
+            free(nu);
+            free(len);
+            return -1;
+        }
+        int k = 0;
+        for (int q = 0; q < w * w * w; q++) {
+            int d[3] = {q % w - reach, (q / w) % w - reach, q / (w * w) - reach};
+            if (isnan(nu[q]) || !positive(d))
+                continue;
+            int m[3] = {-d[0], -d[1], -d[2]};
+            G->lookup[q] = (int16_t)k;
+            G->lookup[lookup_index(G, m)] = (int16_t)(-1 - k);
+            for (int a = 0; a < 3; a++)
+                G->off[k][a] = d[a];
+            G->len[k] = len[q];
+            G->inv_len[k] = 1.0 / len[q];
+            G->w[k] = nu[q]; /* times c V below */
+            G->dc[k] = fmin(PD_CONTACT_REF_FRAC * len[q], PD_CONTACT_RADIUS_FAC * 2.0 * p->radius[0]);
+            k++;
+        }
+    }
+    free(nu);
+    free(len);
+    return ok && nk > 0;
+}
+
+typedef struct {
+    int64_t start;   /* grid index of the first particle */
+    int32_t a0, a1;  /* inner coordinates [a0, a1)       */
+} grid_run;
+
+/* The runs and the segments; blocks of outer planes. */
+static int build_segments(pd_grid *G, const int64_t *inv)
+{
+    const int64_t n = G->n;
+    int32_t lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX}, hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
+    for (int a = 0; a < 3; a++)
+        for (int64_t i = 0; i < n; i++) {
+            lo[a] = G->lc[a][i] < lo[a] ? G->lc[a][i] : lo[a];
+            hi[a] = G->lc[a][i] > hi[a] ? G->lc[a][i] : hi[a];
+        }
+    const int64_t nmid = (int64_t)hi[1] - lo[1] + 1, nout = (int64_t)hi[2] - lo[2] + 1;
+    if (nmid * nout > 4 * n + 1024) /* a sparse body: rows would be mostly empty */
+        return 0;
+    /* coordinates by grid index */
+    int32_t *gc[3] = {malloc((size_t)n * 4), malloc((size_t)n * 4), malloc((size_t)n * 4)};
+    grid_run *run = malloc((size_t)n * sizeof *run);
+    int64_t *row_first = malloc((size_t)(nmid * nout + 1) * sizeof(int64_t));
+    if (!gc[0] || !gc[1] || !gc[2] || !run || !row_first) {
+        for (int a = 0; a < 3; a++)
+            free(gc[a]);
+        free(run);
+        free(row_first);
+        return -1;
+    }
+    for (int64_t i = 0; i < n; i++) {
+        int64_t g = gidx_of(inv, i);
+        for (int a = 0; a < 3; a++)
+            gc[a][g] = G->lc[a][i];
+    }
+    /* runs, in grid order; rows index them */
+    int64_t nrun = 0;
+    for (int64_t r = 0; r <= nmid * nout; r++)
+        row_first[r] = -1;
+    for (int64_t g = 0; g < n; g++) {
+        int same = g > 0 && gc[2][g] == gc[2][g - 1] && gc[1][g] == gc[1][g - 1] &&
+                   gc[0][g] == gc[0][g - 1] + 1;
+        if (same) {
+            run[nrun - 1].a1++;
+            continue;
+        }
+        run[nrun].start = g;
+        run[nrun].a0 = gc[0][g];
+        run[nrun].a1 = gc[0][g] + 1;
+        int64_t row = (int64_t)(gc[2][g] - lo[2]) * nmid + (gc[1][g] - lo[1]);
+        if (row_first[row] < 0)
+            row_first[row] = nrun;
+        nrun++;
+    }
+    /* rows without runs point at the next row's first run, so that
+     * [row_first[r], row_first[r + 1]) are the runs of row r */
+    row_first[nmid * nout] = nrun;
+    for (int64_t r = nmid * nout - 1; r >= 0; r--)
+        if (row_first[r] < 0)
+            row_first[r] = row_first[r + 1];
+    /* blocks: outer planes in slabs at least the stencil's reach thick */
+    int thick = 0;
+    for (int k = 0; k < G->nk; k++)
+        thick = G->off[k][2] > thick ? G->off[k][2] : thick;
+    thick = thick > 0 ? thick : 1;
+    G->nblocks = (nout + thick - 1) / thick;
+    G->block_seg = calloc((size_t)G->nblocks + 1, sizeof(int64_t));
+    G->block_run = calloc((size_t)G->nblocks + 1, sizeof(int64_t));
+    G->run = malloc((size_t)(nrun > 0 ? nrun : 1) * sizeof *G->run);
+    G->nrun = nrun;
+    int64_t cap = nrun * G->nk + 16, nseg = 0;
+    G->seg = malloc((size_t)cap * sizeof *G->seg);
+    int ok = G->block_seg && G->block_run && G->run && G->seg;
+    for (int64_t A = 0; A < nrun && ok; A++) {
+        const int64_t blk = (gc[2][run[A].start] - lo[2]) / thick;
+        G->run[A].lo = run[A].start;
+        G->run[A].hi = run[A].start + (run[A].a1 - run[A].a0);
+        G->run[A].s0 = nseg;
+        for (int k = 0; k < G->nk && ok; k++) {
+            const int *d = G->off[k];
+            int64_t m = gc[1][run[A].start] + d[1] - lo[1], o = gc[2][run[A].start] + d[2] - lo[2];
+            if (m < 0 || m >= nmid || o < 0 || o >= nout)
+                continue;
+            int64_t row = o * nmid + m;
+            for (int64_t B = row_first[row]; B < row_first[row + 1]; B++) {
+                int32_t from = run[A].a0 > run[B].a0 - d[0] ? run[A].a0 : run[B].a0 - d[0];
+                int32_t to = run[A].a1 < run[B].a1 - d[0] ? run[A].a1 : run[B].a1 - d[0];
+                if (from >= to)
+                    continue;
+                if (nseg == cap) {
+                    cap += cap / 2;
+                    grid_seg *ns = realloc(G->seg, (size_t)cap * sizeof *ns);
+                    if (ns == NULL) {
+                        ok = 0;
+                        break;
+                    }
+                    G->seg = ns;
+                }
+                grid_seg *s = &G->seg[nseg++];
+                s->lo = run[A].start + (from - run[A].a0);
+                s->hi = run[A].start + (to - run[A].a0);
+                s->shift = run[B].start - run[A].start + (run[A].a0 - run[B].a0) + d[0];
+                s->k = k;
+            }
+        }
+        G->run[A].s1 = nseg;
+        G->block_seg[blk + 1] = nseg;
+        G->block_run[blk + 1] = A + 1;
+    }
+    G->nseg = nseg;
+    for (int64_t blk = 1; blk <= G->nblocks && ok; blk++) { /* blocks without runs */
+        if (G->block_seg[blk] < G->block_seg[blk - 1])
+            G->block_seg[blk] = G->block_seg[blk - 1];
+        if (G->block_run[blk] < G->block_run[blk - 1])
+            G->block_run[blk] = G->block_run[blk - 1];
+    }
+    for (int a = 0; a < 3; a++)
+        free(gc[a]);
+    free(run);
+    free(row_first);
+    return ok ? 1 : -1;
+}
+
+/* Rebuild the masks from the half bonds' bits (and the contact masks from
+ * the pairs and the lost flags). */
+static void grid_sync(pd_sim *sim, pd_grid *G)
+{
+    const int W = G->words;
+    const int64_t n = G->n;
+    int64_t *inv = NULL;
+    memset(G->mask, 0, (size_t)n * W * sizeof(uint64_t));
+    if (G->perm) { /* i -> g, from the perm (a scratch made here) */
+        inv = malloc((size_t)n * sizeof(int64_t));
+        if (inv == NULL) {
+            G->status = pd_fail(PD_ERR_NOMEM, "out of memory for the lattice bonds");
+            return;
+        }
+        for (int64_t g = 0; g < n; g++)
+            inv[G->perm[g]] = g;
+    }
+    const pd_half_bonds *h = &sim->half;
+    for (int64_t i = 0; i < n; i++)
+        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
+            if (!pd_bond_intact(h->intact, q))
+                continue;
+            int32_t j = h->neighbor[q];
+            int d[3] = {G->lc[0][j] - G->lc[0][i], G->lc[1][j] - G->lc[1][i],
+                        G->lc[2][j] - G->lc[2][i]};
+            int k = offset_of(G, d);
+            int64_t owner = k >= 0 ? gidx_of(inv, i) : gidx_of(inv, j);
+            k = k >= 0 ? k : -1 - k;
+            G->mask[owner * W + (k >> 6)] |= UINT64_C(1) << (k & 63);
+        }
+    if (G->cmask) {
+        memset(G->cmask, 0, (size_t)n * W * sizeof(uint64_t));
+        const uint8_t *lost = sim->lost;
+        for (int64_t s = 0; s < G->nseg; s++) {
+            const grid_seg *sg = &G->seg[s];
+            for (int64_t g = sg->lo; g < sg->hi; g++) {
+                if (lost) {
+                    int64_t i = G->perm ? G->perm[g] : g, j = G->perm ? G->perm[g + sg->shift] : g + sg->shift;
+                    if (lost[i] || lost[j])
+                        continue;
+                }
+                G->cmask[g * W + (sg->k >> 6)] |= UINT64_C(1) << (sg->k & 63);
+            }
+        }
+    }
+    free(inv);
+    G->epoch = h->epoch;
+}
+
+pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
+{
+    *out = NULL;
+    const pd_particles *p = sim->p;
+    const pd_bonds *b = sim->b;
+    const pd_scene *sc = &sim->sc;
+    /* PMB with one c and s00 for every bond, equal volumes and radii */
+    if (sc->bond_list || PD_MODEL_STATE_BASED(sc->model) || pd_scene_has_laws(sc) ||
+        sim->half.kfail || p->n < 2 || b->count == 0)
+        return PD_OK;
+    for (int64_t i = 1; i < p->n; i++)
+        if (p->volume[i] != p->volume[0] || p->radius[i] != p->radius[0])
+            return PD_OK;
+    pd_grid *G = calloc(1, sizeof *G);
+    if (G == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the lattice bonds");
+    const int64_t n = p->n;
+    G->n = n;
+    for (int d = 0; d < 3; d++)
+        G->lc[d] = malloc((size_t)n * sizeof(int32_t));
+    int64_t *order = NULL, *inv = NULL;
+    int ok = G->lc[0] && G->lc[1] && G->lc[2] ? 1 : -1;
+    if (ok > 0)
+        ok = pd_lattice_coords(p, G->axis, G->lc);
+    if (ok > 0 && pd_lattice_order(p, &order) != PD_OK)
+        ok = -1;
+    if (ok > 0 && order) {
+        int identity = 1;
+        for (int64_t g = 0; g < n && identity; g++)
+            identity = order[g] == g;
+        if (!identity) {
+            G->perm = order;
+            order = NULL;
+            if ((inv = malloc((size_t)n * sizeof(int64_t))) == NULL)
+                ok = -1;
+            else
+                for (int64_t g = 0; g < n; g++)
+                    inv[G->perm[g]] = g;
+        }
+    }
+    free(order);
+    if (ok > 0)
+        ok = build_stencil(G, p, b);
+    /* the file's families are the whole stencil: each particle has a bond
+     * to every particle at a stencil offset (counted over the segments) */
+    if (ok > 0)
+        ok = build_segments(G, inv);
+    if (ok > 0) {
+        int64_t pairs = 0;
+        for (int64_t s = 0; s < G->nseg; s++)
+            pairs += G->seg[s].hi - G->seg[s].lo;
+        ok = 2 * pairs == b->count;
+    }
+    if (ok > 0) {
+        const double V = p->volume[0];
+        for (int k = 0; k < G->nk; k++)
+            G->w[k] = sc->c * V * G->w[k]; /* c V nu, as pd_half_build */
+        G->kc = PD_CONTACT_SCALE * sc->c / b->horizon * V;
+        size_t words = (size_t)n * G->words;
+        G->mask = malloc(words * sizeof(uint64_t));
+        if (sc->has_contact)
+            G->cmask = malloc(words * sizeof(uint64_t));
+        G->breaks = calloc((size_t)G->nblocks, sizeof *G->breaks);
+        G->released = calloc((size_t)G->nblocks, sizeof(double));
+        if (!G->mask || (sc->has_contact && !G->cmask) || !G->breaks || !G->released)
+            ok = -1;
+        if (G->perm && ok > 0) {
+            for (int d = 0; d < 3; d++) {
+                G->y[d] = malloc((size_t)n * sizeof(double));
+                G->f[d] = malloc((size_t)n * sizeof(double));
+                ok = G->y[d] && G->f[d] ? ok : -1;
+            }
+            if (sc->has_failure) {
+                G->s0 = malloc((size_t)n * sizeof(double));
+                G->s0n = malloc((size_t)n * sizeof(double));
+                ok = G->s0 && G->s0n ? ok : -1;
+            }
+        }
+    }
+    free(inv);
+    if (ok <= 0) {
+        pd_grid_free(G);
+        return ok < 0 ? pd_fail(PD_ERR_NOMEM, "out of memory for the lattice bonds") : PD_OK;
+    }
+    grid_sync(sim, G);
+    if (G->status != PD_OK) {
+        pd_status s = G->status;
+        pd_grid_free(G);
+        return s;
+    }
+    /* the offsets hold what the half bonds' lengths and weights held */
+    pd_half_bonds *h = &sim->half;
+    if (h->w_ji != h->w_ij)
+        free(h->w_ji);
+    free(h->w_ij);
+    free(h->length);
+    h->w_ij = h->w_ji = h->length = NULL;
+    *out = G;
+    return PD_OK;
+}
+
+int pd_grid_offsets(const pd_grid *G)
+{
+    return G ? G->nk : 0;
+}
+
+int pd_grid_contact(const pd_grid *G)
+{
+    return G && G->cmask;
+}
+
+int pd_grid_pair(const pd_grid *G, int64_t i, int64_t j)
+{
+    int d[3] = {G->lc[0][j] - G->lc[0][i], G->lc[1][j] - G->lc[1][i], G->lc[2][j] - G->lc[2][i]};
+    return offset_of(G, d) != INT16_MIN;
+}
+
+/* ----------------------------------------------------------------- kernel */
+
+/* The elastic energy of bond i-j at offset k, J: 1/2 c s^2 |xi| nu V V
+ * (lib/pmb.c's bond_energy with the offset's |xi| and c V nu). */
+static double bond_energy(const pd_sim *sim, const pd_grid *G, int64_t i, int64_t j, int k)
+{
+    const double dx = sim->y[0][j] - sim->y[0][i], dy = sim->y[1][j] - sim->y[1][i],
+                 dz = sim->y[2][j] - sim->y[2][i];
+    double dr = sqrt(dx * dx + dy * dy + dz * dz) - G->len[k];
+    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+    const double s = dr * G->inv_len[k];
+    return 0.5 * s * s * G->len[k] * G->w[k] * sim->p->volume[0];
+}
+
+typedef struct {
+    const double *y0, *y1, *y2, *s0;
+    double *f0, *f1, *f2, *s0n;
+    double s00, alpha;
+} grid_arrays;
+
+static int record_break(grid_breaks *bl, int64_t g, int32_t k, int64_t j)
+{
+    if (bl->n == bl->cap) {
+        int64_t cap = bl->cap ? 2 * bl->cap : 64;
+        int64_t *ng = realloc(bl->g, (size_t)cap * sizeof(int64_t));
+        if (ng)
+            bl->g = ng;
+        int32_t *nk = realloc(bl->k, (size_t)cap * sizeof(int32_t));
+        if (nk)
+            bl->k = nk;
+        int64_t *nj = realloc(bl->j, (size_t)cap * sizeof(int64_t));
+        if (nj)
+            bl->j = nj;
+        if (!ng || !nk || !nj)
+            return -1;
+        bl->cap = cap;
+    }
+    bl->g[bl->n] = g;
+    bl->k[bl->n] = k;
+    bl->j[bl->n] = j;
+    bl->n++;
+    return 0;
+}
+
+/* The bonds (and contacts) of one segment.  `fused`: one pass that updates
+ * both ends as it goes (the shift is at least GRID_SAFE, so the two ends of
+ * the lanes of one vector never overlap); otherwise the forces go to
+ * scratch first and the two ends are updated in two loops. */
+static inline __attribute__((always_inline)) int
+seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failure,
+          const int contact, const int one_word, grid_breaks *bl)
+{
+    const int k = sg->k, W = one_word ? 1 : G->words, word = k >> 6;
+    const uint64_t bit = UINT64_C(1) << (k & 63);
+    const int64_t shift = sg->shift;
+    const double L = G->len[k], iL = G->inv_len[k], w = G->w[k], dc = G->dc[k], kc = G->kc;
+    const double s00 = A->s00, alpha = A->alpha;
+    const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
+    const double *restrict s0 = A->s0;
+    double *f0 = A->f0, *f1 = A->f1, *f2 = A->f2, *s0n = A->s0n;
+    const uint64_t *restrict mask = G->mask + word, *restrict cmask = G->cmask + word;
+    double brk[GRID_CHUNK], gx[GRID_CHUNK], gy[GRID_CHUNK], gz[GRID_CHUNK], t[GRID_CHUNK];
+    const int fused = shift >= GRID_SAFE;
+    for (int64_t c0 = sg->lo; c0 < sg->hi; c0 += GRID_CHUNK) {
+        const int64_t m = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;
+        double nbreak = 0;
+        if (fused) {
+#pragma omp simd reduction(+ : nbreak) safelen(GRID_SAFE)
+            for (int64_t q = 0; q < m; q++) {
+                const int64_t g = c0 + q, j = g + shift;
+                const double mu = (mask[g * W] & bit) ? 1.0 : 0.0;
+                const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
+                const double r = sqrt(dx * dx + dy * dy + dz * dz);
+                double dr = r - L;
+                dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+                const double s = dr * iL;
+                double fb = w * s * mu;
+                if (contact) {
+                    const double cm = (cmask[g * W] & bit) ? 1.0 : 0.0;
+                    fb += r < dc ? kc * (r - dc) * cm : 0.0;
+                }
+                const double fs = r > 0.0 ? fb / r : 0.0;
+                f0[g] += fs * dx;
+                f1[g] += fs * dy;
+                f2[g] += fs * dz;
+                f0[j] -= fs * dx;
+                f1[j] -= fs * dy;
+                f2[j] -= fs * dz;
+                if (failure) {
+                    const double thr = s0[g] < s0[j] ? s0[g] : s0[j];
+                    const double b = s > thr ? mu : 0.0;
+                    const double tt = mu > 0 ? s00 - alpha * s : -INFINITY;
+                    s0n[g] = tt > s0n[g] ? tt : s0n[g];
+                    s0n[j] = tt > s0n[j] ? tt : s0n[j];
+                    brk[q] = b;
+                    nbreak += b;
+                }
+            }
+        } else {
+            for (int64_t q = 0; q < m; q++) {
+                const int64_t g = c0 + q, j = g + shift;
+                const double mu = (mask[g * W] & bit) ? 1.0 : 0.0;
+                const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
+                const double r = sqrt(dx * dx + dy * dy + dz * dz);
+                double dr = r - L;
+                dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+                const double s = dr * iL;
+                double fb = w * s * mu;
+                if (contact) {
+                    const double cm = (cmask[g * W] & bit) ? 1.0 : 0.0;
+                    fb += r < dc ? kc * (r - dc) * cm : 0.0;
+                }
+                const double fs = r > 0.0 ? fb / r : 0.0;
+                gx[q] = fs * dx;
+                gy[q] = fs * dy;
+                gz[q] = fs * dz;
+                if (failure) {
+                    const double thr = s0[g] < s0[j] ? s0[g] : s0[j];
+                    brk[q] = s > thr ? mu : 0.0;
+                    t[q] = mu > 0 ? s00 - alpha * s : -INFINITY;
+                    nbreak += brk[q];
+                }
+            }
+            for (int64_t q = 0; q < m; q++) {
+                f0[c0 + q] += gx[q];
+                f1[c0 + q] += gy[q];
+                f2[c0 + q] += gz[q];
+                if (failure)
+                    s0n[c0 + q] = t[q] > s0n[c0 + q] ? t[q] : s0n[c0 + q];
+            }
+            for (int64_t q = 0; q < m; q++) {
+                const int64_t j = c0 + q + shift;
+                f0[j] -= gx[q];
+                f1[j] -= gy[q];
+                f2[j] -= gz[q];
+                if (failure)
+                    s0n[j] = t[q] > s0n[j] ? t[q] : s0n[j];
+            }
+        }
+        if (failure && nbreak > 0)
+            for (int64_t q = 0; q < m; q++)
+                if (brk[q] > 0) {
+                    G->mask[(c0 + q) * W + word] &= ~bit;
+                    if (record_break(bl, c0 + q, k, c0 + q + shift))
+                        return -1;
+                }
+    }
+    return 0;
+}
+
+/* The kernel's variants: with or without failure and contact, and with
+ * one mask word per particle (up to 64 offsets, delta < 3.3 h: the
+ * words load as one vector) or more. */
+#define GRID_BLOCK(name, failure, contact, one_word)                                          \
+    PD_VECTOR_CLONES static int name(pd_grid *G, int64_t blk, const grid_arrays *A)          \
+    {                                                                                         \
+        for (int64_t s = G->block_seg[blk]; s < G->block_seg[blk + 1]; s++)                   \
+            if (seg_bonds(G, &G->seg[s], A, failure, contact, one_word, &G->breaks[blk]))     \
+                return -1;                                                                    \
+        return 0;                                                                             \
+    }
+GRID_BLOCK(grid_block_000, 0, 0, 0)
+GRID_BLOCK(grid_block_010, 0, 1, 0)
+GRID_BLOCK(grid_block_100, 1, 0, 0)
+GRID_BLOCK(grid_block_110, 1, 1, 0)
+GRID_BLOCK(grid_block_001, 0, 0, 1)
+GRID_BLOCK(grid_block_011, 0, 1, 1)
+GRID_BLOCK(grid_block_101, 1, 0, 1)
+GRID_BLOCK(grid_block_111, 1, 1, 1)
+
+typedef int (*grid_block_fn)(pd_grid *, int64_t, const grid_arrays *);
+static const grid_block_fn grid_blocks[8] = {grid_block_000, grid_block_001, grid_block_010,
+                                             grid_block_011, grid_block_100, grid_block_101,
+                                             grid_block_110, grid_block_111};
+
+pd_status pd_grid_pmb(pd_sim *sim, int failure)
+{
+    pd_grid *G = sim->grid;
+    const int64_t n = G->n;
+    if (G->epoch != sim->half.epoch) {
+        grid_sync(sim, G);
+        if (G->status != PD_OK)
+            return G->status;
+    }
+    double tf = pd_wtime();
+    grid_arrays A = {.s00 = sim->sc.s00, .alpha = sim->sc.alpha};
+    const int64_t *perm = G->perm;
+    if (perm) {
+#pragma omp parallel for schedule(static)
+        for (int64_t g = 0; g < n; g++) {
+            const int64_t i = perm[g];
+            for (int d = 0; d < 3; d++) {
+                G->y[d][g] = sim->y[d][i];
+                G->f[d][g] = 0;
+            }
+            if (failure) {
+                G->s0[g] = sim->s0[i];
+                G->s0n[g] = -INFINITY;
+            }
+        }
+        A.y0 = G->y[0], A.y1 = G->y[1], A.y2 = G->y[2];
+        A.f0 = G->f[0], A.f1 = G->f[1], A.f2 = G->f[2];
+        A.s0 = G->s0, A.s0n = G->s0n;
+    } else {
+        A.y0 = sim->y[0], A.y1 = sim->y[1], A.y2 = sim->y[2];
+        A.f0 = sim->f[0], A.f1 = sim->f[1], A.f2 = sim->f[2];
+        A.s0 = sim->s0, A.s0n = sim->s0_new;
+        if (failure)
+#pragma omp parallel for schedule(static)
+            for (int64_t g = 0; g < n; g++)
+                sim->s0_new[g] = -INFINITY;
+    }
+    tf = pd_wtime() - tf;
+    const int contact = G->cmask != NULL;
+    const grid_block_fn fn = grid_blocks[4 * (failure != 0) + 2 * contact + (G->words == 1)];
+    int bad = 0;
+    for (int64_t blk = 0; blk < G->nblocks; blk++)
+        G->breaks[blk].n = 0;
+    for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel for schedule(dynamic, 1) reduction(| : bad)
+        for (int64_t blk = phase; blk < G->nblocks; blk += 2) {
+            int r = fn(G, blk, &A);
+            bad |= r != 0;
+        }
+    }
+    if (bad)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the broken bonds of a step");
+    double t0 = pd_wtime();
+    if (perm) {
+#pragma omp parallel for schedule(static)
+        for (int64_t g = 0; g < n; g++) {
+            const int64_t i = perm[g];
+            for (int d = 0; d < 3; d++)
+                sim->f[d][i] += G->f[d][g];
+            if (failure)
+                sim->s0_new[i] = G->s0n[g];
+        }
+    }
+    if (failure) {
+#pragma omp parallel for schedule(static)
+        for (int64_t i = 0; i < n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
+            if (sim->s0_new[i] == -INFINITY)
+                sim->s0_new[i] = DBL_MAX;
+        /* the broken bonds into the half bonds, and their energy, in block
+         * order: the same at any thread count */
+        for (int64_t blk = 0; blk < G->nblocks; blk++) {
+            const grid_breaks *bl = &G->breaks[blk];
+            double rel = 0;
+            for (int64_t e = 0; e < bl->n; e++) {
+                int64_t i = perm ? perm[bl->g[e]] : bl->g[e], j = perm ? perm[bl->j[e]] : bl->j[e];
+                int64_t q = pd_half_find(&sim->half, i < j ? i : j, i < j ? j : i);
+                if (q < 0)
+                    continue; /* cannot be: the masks came from the half bonds */
+                pd_bond_break(sim->half.intact, q);
+                rel += bond_energy(sim, G, i, j, bl->k[e]);
+            }
+            sim->released += rel;
+        }
+    }
+    tf += pd_wtime() - t0;
+    sim->timers[PD_T_FAILURE] += tf;
+    sim->timers[PD_T_BONDS] -= tf;
+    return PD_OK;
+}
+
+/* The contact energy of the stencil pairs, half of each pair to each end:
+ * e_i += 1/4 (c_S/delta) (d_k - r)^2 V_i V_j (lib/contact.c's). */
+void pd_grid_contact_energy(const pd_sim *sim, double *e)
+{
+    const pd_grid *G = sim->grid;
+    if (G == NULL || G->cmask == NULL)
+        return;
+    const double V = sim->p->volume[0];
+    const int W = G->words;
+    for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
+            for (int64_t s = G->block_seg[blk]; s < G->block_seg[blk + 1]; s++) {
+                const grid_seg *sg = &G->seg[s];
+                const int k = sg->k;
+                const uint64_t bit = UINT64_C(1) << (k & 63);
+                for (int64_t g = sg->lo; g < sg->hi; g++) {
+                    if (!(G->cmask[g * W + (k >> 6)] & bit))
+                        continue;
+                    int64_t i = G->perm ? G->perm[g] : g;
+                    int64_t j = G->perm ? G->perm[g + sg->shift] : g + sg->shift;
+                    double dx = sim->y[0][j] - sim->y[0][i], dy = sim->y[1][j] - sim->y[1][i],
+                           dz = sim->y[2][j] - sim->y[2][i];
+                    double r = sqrt(dx * dx + dy * dy + dz * dz);
+                    if (r < G->dc[k]) {
+                        double x = 0.25 * G->kc * (G->dc[k] - r) * (G->dc[k] - r) * V;
+                        e[i] += x;
+                        e[j] += x;
+                    }
+                }
+            }
+    }
+}
+
+/* The bonds' elastic energy, half of each bond to each end: e_i += 1/4 c
+ * s^2 |xi| nu V_i V_j (lib/pmb.c's pmb_energy, each bond once). */
+void pd_grid_pmb_energy(const pd_sim *sim, double *e)
+{
+    const pd_grid *G = sim->grid;
+    const double V = sim->p->volume[0];
+    const int W = G->words;
+    for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
+            for (int64_t s = G->block_seg[blk]; s < G->block_seg[blk + 1]; s++) {
+                const grid_seg *sg = &G->seg[s];
+                const int k = sg->k;
+                const uint64_t bit = UINT64_C(1) << (k & 63);
+                const double L = G->len[k], iL = G->inv_len[k], c = 0.25 * G->w[k] * L * V;
+                for (int64_t g = sg->lo; g < sg->hi; g++) {
+                    if (!(G->mask[g * W + (k >> 6)] & bit))
+                        continue;
+                    int64_t i = G->perm ? G->perm[g] : g;
+                    int64_t j = G->perm ? G->perm[g + sg->shift] : g + sg->shift;
+                    double dx = sim->y[0][j] - sim->y[0][i], dy = sim->y[1][j] - sim->y[1][i],
+                           dz = sim->y[2][j] - sim->y[2][i];
+                    double dr = sqrt(dx * dx + dy * dy + dz * dz) - L;
+                    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+                    const double s2 = (dr * iL) * (dr * iL);
+                    e[i] += c * s2;
+                    e[j] += c * s2;
+                }
+            }
+    }
+}
