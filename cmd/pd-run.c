@@ -1310,8 +1310,11 @@ int main(int argc, char **argv)
                     tty ? "\r\033[K" : "", (long long)n, (long long)pd_sim_lost(sim),
                     sc->lost_margin);
         lost = pd_sim_lost(sim);
-        if (((n - first) % status_every == 0 || n == sc->steps) && !o.quiet)
+        if (((n - first) % status_every == 0 || n == sc->steps) && !o.quiet) {
+            double t0 = pd_wtime(); /* its energy pass is output's time */
             status_line(sim, sc->steps, tty);
+            t_output += pd_wtime() - t0;
+        }
         if ((sc->every > 0 && n % sc->every == 0) || n == sc->steps)
             s = write_frame(out, p, b, sim, o.sc.fields, &t_output);
         if (tty) {

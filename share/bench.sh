@@ -6,7 +6,8 @@
 # bonds, failure + contact + indenter, dt 1e-7) for BENCH_STEPS steps
 # (default 300), in parts that BENCH_SKIP can leave out:
 #   (a) PMB: pd-run --threads BENCH_THREADS (default 2) --every 0 --timing
-#       (no frames but the last one, which pd-run always writes) against
+#       (no frames but the last one, which pd-run always writes; a status
+#       line every 200 steps, the script's thermo interval) against
 #       the seed LAMMPS script (examples/lammps-impact/in.impact) without
 #       its dump and with `run BENCH_STEPS`, through mpirun -np BENCH_NP (2)
 #       lmp (peri/pmb);
@@ -39,6 +40,10 @@
 #       the speed-up, and whether the two last frames are identical
 #       (every dataset bit for bit, and every attribute but the thread
 #       count and the command history; /usr/bin/python3 with h5py).
+#   (g) kernels ("kernels"): the full PMB scene with --bond-list against
+#       (a), which walks the bonds as a lattice stencil: the speed-up, the
+#       largest position difference after BENCH_STEPS steps and the
+#       damaged particles of each (the accuracy the faster mode costs);
 # Wall time and peak RSS come from /usr/bin/time -f '%e %M' around pd-run,
 # around mpirun (wall) and around each LAMMPS rank (peak RSS, summed).
 #
@@ -46,7 +51,7 @@
 # BENCH_SIZES ("25k 100k 400k 1.6M": particle counts, k = 1e3, M = 1e6;
 # the 1.6M disk needs about 6 GB of memory and 3 GB in BENCH_DIR, and
 # minutes to build), BENCH_SKIP (words among lammps, lps, effects,
-# roofline, scaling, threads: the parts left out), BENCH_DIR (cache of the
+# roofline, scaling, threads, kernels: the parts left out), BENCH_DIR (cache of the
 # models and the runs, default $TMPDIR/pd-bench), PD_BIN (default: bin/ of
 # this tree), LMP (lmp), MPIRUN (mpirun), CC (cc, for share/stream.c).
 # Run from anywhere; `make bench` builds the programs first.
@@ -83,8 +88,8 @@ case $THREADS in '' | *[!0-9]*) die "BENCH_THREADS must be a positive integer, n
 [ "$THREADS" -gt 0 ] || die "BENCH_THREADS must be a positive integer"
 for w in $SKIP; do
     case $w in
-    lammps | lps | effects | roofline | scaling | threads) ;;
-    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads)" ;;
+    lammps | lps | effects | roofline | scaling | threads | kernels) ;;
+    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels)" ;;
     esac
 done
 # skip PART: is PART left out?
@@ -264,7 +269,11 @@ skip lammps || lmpver=$("$LMP" -h 2>/dev/null | sed -n 's/^Large-scale.*Simulato
 pdver=$("$PD_BIN/pd-run" --version 2>/dev/null | head -n 1)
 
 # --- (a) PMB: pd-run, the full scene; LAMMPS, the seed script without its dump --
-keep=1 pd_bench full model.h5 "$STEPS" --scene "$SCENE"
+# pd-run's status lines (each an energy balance over the bonds) at the
+# script's thermo interval, as LAMMPS prints its thermo lines
+THERMO=$(sed -n 's/^thermo  *\([0-9][0-9]*\) *$/\1/p' "$EX/in.impact")
+[ -n "$THERMO" ] || die "cannot read the thermo interval of $EX/in.impact"
+keep=1 pd_bench full model.h5 "$STEPS" --scene "$SCENE" --status "$THERMO"
 keep=''
 if ! skip lammps; then
     sed -e '/^dump/d' -e "s/^run .*/run             $STEPS/" "$EX/in.impact" >in.bench
@@ -275,7 +284,7 @@ fi
 # --- (b) LPS ------------------------------------------------------------------
 if ! skip lps; then
     pd_bench lps model.h5 "$STEPS" --scene "$SCENE" --model lps --bulk-modulus "$LPS_K" \
-        --shear-modulus "$LPS_G"
+        --shear-modulus "$LPS_G" --status "$THERMO"
     if ! skip lammps; then
         # pair_coeff * * K G horizon s00 alpha, from the seed's * * c horizon s00 alpha
         sed -e 's|^pair_style .*|pair_style      peri/lps|' \
@@ -334,7 +343,7 @@ fi
 
 # --- (f) threads ------------------------------------------------------------------
 if ! skip threads; then
-    keep=1 nth=1 pd_bench t1 model.h5 "$STEPS" --scene "$SCENE"
+    keep=1 nth=1 pd_bench t1 model.h5 "$STEPS" --scene "$SCENE" --status "$THERMO"
     keep='' nth=''
     # every dataset bit for bit; every attribute but threads and history
     "$PY" - t1.h5 full.h5 >same.out <<'EOF' || die "cannot compare t1.h5 and full.h5"
@@ -371,6 +380,35 @@ else:
           % (len(diff), ", ".join(diff[:4]), ", ..." if len(diff) > 4 else "", worst))
 EOF
     rm -f t1.h5
+fi
+
+# --- (g) kernels: the bond list against the lattice stencil -----------------------
+if ! skip kernels; then
+    keep=1 pd_bench list model.h5 "$STEPS" --scene "$SCENE" --status "$THERMO" --bond-list
+    keep=''
+    # the largest position difference, the damaged particles of each, the
+    # particles damaged in one run only, the difference of broken bonds
+    "$PY" - full.h5 list.h5 >kernels.out <<'EOF' || die "cannot compare list.h5 and full.h5"
+import sys
+import h5py
+import numpy as np
+
+def last(name):
+    f = h5py.File(name, "r")
+    g = max(f["frames"].values(), key=lambda g: g.attrs["step"])
+    # damaged: a particle with a broken bond (directed bond states, by row)
+    off, count = f["bonds/offset"][:], int(f["bonds"].attrs["count"])
+    state = np.unpackbits(g["state"][:], bitorder="little")[:count].astype(np.int64)
+    broken = np.add.reduceat(1 - state, off[:-1]) if count else np.zeros(len(off) - 1)
+    broken[off[:-1] == off[1:]] = 0  # reduceat of an empty row
+    order = np.argsort(f["particles/id"][:])
+    return g["displacement"][:][order], broken[order] > 0, int(g.attrs["broken_bonds"])
+
+(ua, da, ba), (ub, db, bb) = last(sys.argv[1]), last(sys.argv[2])
+print("%.3g %.3g %d %d %d %d" % (np.abs(ua - ub).max(), np.abs(ua).max(), da.sum(), db.sum(),
+                                 (da != db).sum(), ba - bb))
+EOF
+    rm -f list.h5
 fi
 rm -f full.h5
 
@@ -423,19 +461,27 @@ if ! skip roofline; then
     tb=$(pd_row full.log bonds)
     { [ -n "$bw" ] && [ -n "$fl" ] && [ -n "$tb" ]; } || die "cannot read stream.out or the bonds row of full.log"
     echo
-    echo "roofline of the PMB bond kernel (with failure), $THREADS threads:"
+    # which kernel ran: the lattice stencil (lib/grid.c) or the bond list
+    stencil=0
+    grep -q 'bonds walked as a lattice stencil' full.log && stencil=1
+    echo "roofline of the PMB bond kernel (with failure$([ $stencil = 1 ] && echo ', the lattice stencil with the contact of its pairs'), $THREADS threads:"
     # bytes and flops per bond i < j: see README.md, "Performance"
-    awk -v bw="$bw" -v fl="$fl" -v tb="$tb" -v n="$N0" -v b="$B0" -v st="$STEPS" 'BEGIN {
+    awk -v bw="$bw" -v fl="$fl" -v tb="$tb" -v n="$N0" -v b="$B0" -v st="$STEPS" -v stencil="$stencil" 'BEGIN {
         per = b / n                        # bonds i < j per particle
-        bb = 4 + 8 + 8 + 1 / 8 + 104 / per # streamed per bond + per particle / per
-        ff = 31
+        if (stencil) {                     # per particle only: positions, forces,
+            bb = 112 / per                 # s0, s0_new, the two mask words
+            ff = 29; nd = 1
+        } else {
+            bb = 4 + 8 + 8 + 1 / 8 + 104 / per # streamed per bond + per particle / per
+            ff = 31; nd = 3
+        }
         rate = b * (st + 1) / tb           # bonds per second in the kernel
                                            # (setup evaluates the forces once more)
         ai = ff / bb
         printf "  machine: triad %.1f GB/s, FMA peak %.1f GFLOP/s (share/stream.c; balance %.2f flop/B)\n",
             bw / 1e9, fl / 1e9, fl / bw
-        printf "  kernel:  %.1f bytes and %d flops per bond (%.2f flop/B; 3 divisions and 1 sqrt among the flops)\n",
-            bb, ff, ai
+        printf "  kernel:  %.1f bytes and %d flops per bond (%.2f flop/B; %d division%s and 1 sqrt among the flops)\n",
+            bb, ff, ai, nd, nd > 1 ? "s" : ""
         printf "  bonds row %.3f s for %d x %d bonds: %.3g bonds/s, %.2f ns per bond\n",
             tb, st + 1, b, rate, 1e9 / rate
         printf "  achieved %.2f GB/s = %.0f%% of the triad, %.2f GFLOP/s = %.0f%% of the FMA peak\n",
@@ -486,6 +532,24 @@ EOF
         printf "threads: 1 thread %.2f ms/step, %d threads %.2f ms/step: speed-up %.2fx\n",
             1000 * a / n, th, 1000 * b / n, a / b }'
     echo "  outputs of 1 and $THREADS threads: $(cat same.out)"
+fi
+
+if ! skip kernels; then
+    echo
+    read -r tl _ <<EOF
+$(pd_loop list.log)
+EOF
+    read -r ts _ <<EOF
+$(pd_loop full.log)
+EOF
+    read -r du umax dmg_s dmg_l ddiff bdiff <kernels.out
+    echo "kernels: the lattice stencil (default) against the bond list (--bond-list), full scene:"
+    awk -v a="$tl" -v b="$ts" -v n="$STEPS" 'BEGIN {
+        printf "  bond list %.2f ms/step, stencil %.2f ms/step: the stencil is %.2fx faster\n",
+            1000 * a / n, 1000 * b / n, a / b }'
+    echo "  after $STEPS steps: largest position difference $du m (largest displacement $umax m);"
+    echo "  damaged particles $dmg_s (stencil) and $dmg_l (list), $ddiff damaged in one run only;"
+    echo "  broken bonds differ by $bdiff (the two sum in another order: they agree to rounding)"
 fi
 echo
 echo "(runs and logs in $DIR; the models are kept there for the next run)"
