@@ -707,9 +707,9 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
     const int fused = shift >= GRID_SAFE;
     for (int64_t c0 = sg->lo; c0 < sg->hi; c0 += GRID_CHUNK) {
         const int64_t m = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;
-        double nbreak = 0;
+        double nbreak = 0, near = 0;
         if (fused) {
-#pragma omp simd reduction(+ : nbreak) safelen(GRID_SAFE)
+#pragma omp simd reduction(+ : nbreak, near) safelen(GRID_SAFE)
             for (int64_t q = 0; q < m; q++) {
                 const int64_t g = c0 + q, j = g + shift;
                 const double mu = (mask[g * W] & bit) ? 1.0 : 0.0;
@@ -718,11 +718,9 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
                 double dr = r - L;
                 dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
                 const double s = dr * iL;
-                double fb = w * s * mu;
-                if (contact) {
-                    const double cm = (cmask[g * W] & bit) ? 1.0 : 0.0;
-                    fb += r < dc ? kc * (r - dc) * cm : 0.0;
-                }
+                const double fb = w * s * mu;
+                if (contact)
+                    near += r < dc ? 1.0 : 0.0;
                 const double fs = r > 0.0 ? fb / r : 0.0;
                 f0[g] += fs * dx;
                 f1[g] += fs * dy;
@@ -749,11 +747,9 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
                 double dr = r - L;
                 dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
                 const double s = dr * iL;
-                double fb = w * s * mu;
-                if (contact) {
-                    const double cm = (cmask[g * W] & bit) ? 1.0 : 0.0;
-                    fb += r < dc ? kc * (r - dc) * cm : 0.0;
-                }
+                const double fb = w * s * mu;
+                if (contact)
+                    near += r < dc ? 1.0 : 0.0;
                 const double fs = r > 0.0 ? fb / r : 0.0;
                 gx[q] = fs * dx;
                 gy[q] = fs * dy;
@@ -781,6 +777,24 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
                     s0n[j] = t[q] > s0n[j] ? t[q] : s0n[j];
             }
         }
+        /* contact: pairs closer than d_k are rare (a compression of 10%
+         * and more), so the bond pass only counts them, and a second pass
+         * over the chunk adds their forces when there are any */
+        if (contact && near > 0)
+            for (int64_t q = 0; q < m; q++) {
+                const int64_t g = c0 + q, j = g + shift;
+                const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
+                const double r = sqrt(dx * dx + dy * dy + dz * dz);
+                if (!(r < dc) || !(r > 0.0) || !(cmask[g * W] & bit))
+                    continue;
+                const double fs = kc * (r - dc) / r;
+                f0[g] += fs * dx;
+                f1[g] += fs * dy;
+                f2[g] += fs * dz;
+                f0[j] -= fs * dx;
+                f1[j] -= fs * dy;
+                f2[j] -= fs * dz;
+            }
         if (failure && nbreak > 0)
             for (int64_t q = 0; q < m; q++)
                 if (brk[q] > 0) {
