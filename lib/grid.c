@@ -155,16 +155,10 @@ int pd_lattice_coords(const pd_particles *p, int axis[3], int32_t *lc[3])
     if (!(h > 0) || p->n == 0)
         return 0;
     double lo[3], hi[3];
-    for (int d = 0; d < 3; d++) {
-        lo[d] = INFINITY;
-        hi[d] = -INFINITY;
-        for (int64_t i = 0; i < p->n; i++) {
-            lo[d] = fmin(lo[d], p->x[d][i]);
-            hi[d] = fmax(hi[d], p->x[d][i]);
-        }
+    pd_particles_bounds(p, lo, hi);
+    for (int d = 0; d < 3; d++)
         if (!isfinite(lo[d]) || !isfinite(hi[d]) || (hi[d] - lo[d]) / h > 1e9)
             return 0;
-    }
     /* inner: the longest extent; outer: the next; mid: the shortest (ties
      * by axis number) */
     int ord[3] = {0, 1, 2};

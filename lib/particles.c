@@ -2,6 +2,7 @@
  * particles.c -- the particle arrays (structure of arrays) and their
  * lifecycle.
  */
+#include <math.h>
 #include <stdlib.h>
 
 #include "pd.h"
@@ -41,4 +42,16 @@ void pd_particles_free(pd_particles *p)
     free(p->material);
     free(p->id);
     free(p);
+}
+
+void pd_particles_bounds(const pd_particles *p, double lo[3], double hi[3])
+{
+    for (int d = 0; d < 3; d++) {
+        lo[d] = INFINITY;
+        hi[d] = -INFINITY;
+        for (int64_t i = 0; i < p->n; i++) {
+            lo[d] = fmin(lo[d], p->x[d][i]);
+            hi[d] = fmax(hi[d], p->x[d][i]);
+        }
+    }
 }

@@ -84,6 +84,8 @@ typedef struct {
 
 pd_particles *pd_particles_new(int64_t n);
 void pd_particles_free(pd_particles *p);
+/* The bounding box of the reference positions (+inf, -inf when empty). */
+void pd_particles_bounds(const pd_particles *p, double lo[3], double hi[3]);
 
 /* ---------------------------------------------------------------- regions */
 

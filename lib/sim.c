@@ -33,23 +33,10 @@ static pd_status add_effect(pd_sim *sim, const pd_effect *e)
     return PD_OK;
 }
 
-/* The bounding box of the reference positions. */
-static void bounding_box(const pd_particles *p, double lo[3], double hi[3])
-{
-    for (int d = 0; d < 3; d++) {
-        lo[d] = INFINITY;
-        hi[d] = -INFINITY;
-        for (int64_t i = 0; i < p->n; i++) {
-            lo[d] = fmin(lo[d], p->x[d][i]);
-            hi[d] = fmax(hi[d], p->x[d][i]);
-        }
-    }
-}
-
 double pd_lost_margin_default(const pd_particles *p)
 {
     double lo[3], hi[3], edge = p->spacing;
-    bounding_box(p, lo, hi);
+    pd_particles_bounds(p, lo, hi);
     for (int d = 0; d < 3; d++)
         if (hi[d] > lo[d])
             edge = fmax(edge, hi[d] - lo[d]);
@@ -61,7 +48,7 @@ double pd_lost_margin_default(const pd_particles *p)
 static void lost_box(pd_sim *sim)
 {
     double margin = sim->sc.lost_margin > 0 ? sim->sc.lost_margin : pd_lost_margin_default(sim->p);
-    bounding_box(sim->p, sim->box_lo, sim->box_hi);
+    pd_particles_bounds(sim->p, sim->box_lo, sim->box_hi);
     for (int d = 0; d < 3; d++) {
         sim->box_lo[d] -= margin;
         sim->box_hi[d] += margin;
