@@ -87,9 +87,19 @@
  *
  * Each particle walks its own (directed) family and writes only its own
  * force, theta, s0 and bond history: no scatter, so the sums are in a
- * fixed order and the result does not depend on the thread count.  The bond states stay
- * in the run's half bonds (sim->half), reached through a map from the
- * directed bonds.
+ * fixed order and the result does not depend on the thread count.
+ *
+ * Storage.  The walk reads the file's directed bonds (neighbor, |xi|, nu)
+ * and the run's directed state bits mu (sim->intact, the copy pd_sim_intact
+ * keeps; bit k is bond k's, so the walk reads the bits in order and needs
+ * no map to the half bonds).  A bond that breaks is cleared in both of its
+ * directed copies and in the run's half bonds (sim->half.intact, which the
+ * run counts and writes), found by a search, as breaking is rare.
+ * omega is stored per directed bond only when it depends on the bond's
+ * direction (ellipsoids); otherwise it is omega(|xi|), computed where it is
+ * used from the bond's length (the same double as a stored one).  Per
+ * directed bond LPS keeps 1 bit (the breaks of this step); VES adds 16 B
+ * (e^d_n, e^b_n), EPS 16 B (e^p, the reverse bond).
  */
 #include <float.h>
 #include <math.h>
@@ -101,9 +111,10 @@
 typedef struct {
     double *m;         /* n: weighted volume m_i, m^5 times omega's unit */
     double *theta;     /* n: dilatation of this step                     */
-    double *omega;     /* directed bonds: omega(|xi|) d(xi/|xi|)         */
-    int64_t *half;     /* directed bond -> its half bond in sim->half    */
-    uint8_t *kill;     /* directed bonds: breaks in this step            */
+    double *omega;     /* directed bonds: omega(|xi|) d(xi/|xi|) with
+                          ellipsoids; NULL: omega(|xi|), see weight()    */
+    pd_influence influence; /* omega(|xi|) of the scene                 */
+    uint64_t *kill;    /* directed bonds, bits: breaks in this step      */
     uint8_t *touched;  /* n: particle with a bond breaking in this step  */
     double *released;  /* n: energy released at each particle, J         */
     pd_model_kind model; /* PD_MODEL_LPS, PD_MODEL_VES or PD_MODEL_EPS   */
@@ -160,9 +171,15 @@ void pd_lps_weighted_volume(const pd_particles *p, const pd_bonds *b, pd_influen
     }
 }
 
+/* omega of directed bond k: the stored one (ellipsoids) or omega(|xi|). */
+static inline double weight(const lps_state *st, const pd_bonds *b, int64_t k)
+{
+    return st->omega ? st->omega[k] : pd_lps_influence(st->influence, b->length[k], b->horizon);
+}
+
 /* The weight of every directed bond, omega[k] = omega(|xi|) d(xi/|xi|)
  * (lib/influence.c: d = 1 without ellipsoids), and m_i from it (Algorithm
- * 3, in pd_lps_weighted_volume's order of products). */
+ * 3, in pd_lps_weighted_volume's order of products); omega NULL: m only. */
 static void bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
                          double *omega, double *m)
 {
@@ -174,8 +191,10 @@ static void bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scen
             const double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
                          dz = p->x[2][i] - p->x[2][j];
             const double rsq = dx * dx + dy * dy + dz * dz, xi[3] = {-dx, -dy, -dz};
-            omega[k] = pd_bond_influence(s, b->length[k], b->horizon, xi);
-            sum += omega[k] * rsq * p->volume[j] * b->vfactor[k];
+            const double om = pd_bond_influence(s, b->length[k], b->horizon, xi);
+            if (omega != NULL)
+                omega[k] = om;
+            sum += om * rsq * p->volume[j] * b->vfactor[k];
         }
         m[i] = sum;
     }
@@ -189,7 +208,6 @@ static void lps_free(void *state)
     free(st->m);
     free(st->theta);
     free(st->omega);
-    free(st->half);
     free(st->kill);
     free(st->touched);
     free(st->released);
@@ -207,27 +225,36 @@ static pd_status eps_init(const pd_sim *sim, lps_state *st)
 {
     const pd_bonds *b = sim->b;
     const double Y = sim->sc.yield_stress;
-    const int64_t nh = sim->half.count;
+    const pd_half_bonds *h = &sim->half;
+    const int64_t nh = h->count;
     int64_t *first = malloc((size_t)(nh > 0 ? nh : 1) * sizeof(int64_t));
     if (first == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the EPS state of %lld bonds",
                        (long long)b->count);
     for (int64_t q = 0; q < nh; q++)
         first[q] = -1;
-    for (int64_t k = 0; k < b->count; k++) {
-        const int64_t q = st->half[k];
-        if (first[q] < 0)
+    /* the half bond of each directed bond: row i meets its bonds to j < i
+     * in ascending i for each j, so a cursor per row finds them */
+    for (int64_t i = 0; i < sim->n; i++)
+        h->cursor[i] = h->offset[i];
+    for (int64_t i = 0; i < sim->n; i++) {
+        int64_t own = h->offset[i];
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            const int32_t j = b->neighbor[k];
+            const int64_t q = j < i ? h->cursor[j]++ : own++;
+            if (first[q] < 0)
             first[q] = k;
-        else {
-            st->rev[k] = first[q];
-            st->rev[first[q]] = k;
+            else {
+                st->rev[k] = first[q];
+                st->rev[first[q]] = k;
+            }
         }
     }
     free(first);
     for (int64_t i = 0; i < b->n; i++) {
         double I = 0;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-            I += st->omega[k] * st->omega[k] * b->length[k] * b->length[k] *
+            I += weight(st, b, k) * weight(st, b, k) * b->length[k] * b->length[k] *
                  sim->p->volume[b->neighbor[k]] * b->vfactor[k];
         st->psi0[i] = st->m[i] > 0 ? 2.5 * Y * Y * I / (st->m[i] * st->m[i]) : INFINITY;
     }
@@ -243,13 +270,14 @@ static pd_status lps_init(pd_sim *sim, void **state)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS state");
     st->m = malloc(n * sizeof(double));
     st->theta = calloc(n, sizeof(double));
-    st->omega = malloc(nb * sizeof(double));
-    st->half = malloc(nb * sizeof(int64_t));
-    st->kill = calloc(nb, 1);
+    st->influence = sim->sc.influence;
+    if (sim->sc.nellipsoids > 0) /* omega depends on the direction */
+        st->omega = malloc(nb * sizeof(double));
+    st->kill = calloc((size_t)pd_bits_words(b->count) + 1, sizeof(uint64_t));
     st->touched = calloc(n, 1);
     st->released = calloc(n, sizeof(double));
-    if (!st->m || !st->theta || !st->omega || !st->half || !st->kill || !st->touched ||
-        !st->released) {
+    if (!st->m || !st->theta || (sim->sc.nellipsoids > 0 && !st->omega) || !st->kill ||
+        !st->touched || !st->released) {
         lps_free(st);
         return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS state of %lld bonds",
                        (long long)b->count);
@@ -281,18 +309,10 @@ static pd_status lps_init(pd_sim *sim, void **state)
         }
     }
     bond_weights(sim->p, b, &sim->sc, st->omega, st->m);
-    /* the half bond of each directed bond: row i meets its bonds to j < i
-     * in ascending i for each j, so a cursor per row finds them */
-    const pd_half_bonds *h = &sim->half;
-    for (int64_t i = 0; i < sim->n; i++)
-        h->cursor[i] = h->offset[i];
-    for (int64_t i = 0; i < sim->n; i++) {
-        int64_t own = h->offset[i];
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            const int32_t j = b->neighbor[k];
-            st->half[k] = j < i ? h->cursor[j]++ : own++;
-        }
-    }
+    /* the directed bits from the half bonds, so that both copies of a bond
+     * agree (the file's bits may not) */
+    sim->intact_stale = 1;
+    (void)pd_sim_intact(sim);
     pd_status es = st->model == PD_MODEL_EPS ? eps_init(sim, st) : PD_OK;
     if (es != PD_OK) {
         lps_free(st);
@@ -315,17 +335,17 @@ static inline double extension(const pd_sim *sim, int64_t i, int64_t k, double d
     return fabs(e) < PD_NEAR_ZERO ? 0.0 : e;
 }
 
-/* theta_i over the bonds intact in `bits` (half bonds), Algorithm 4. */
+/* theta_i over the bonds intact in `bits` (directed bonds), Algorithm 4. */
 static double theta_row(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i)
 {
     const pd_bonds *b = sim->b;
     const double *V = sim->p->volume;
     double sum = 0, d[3], r;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const double e = extension(sim, i, k, d, &r);
-        sum += st->omega[k] * b->length[k] * e * V[b->neighbor[k]] * b->vfactor[k];
+        sum += weight(st, b, k) * b->length[k] * e * V[b->neighbor[k]] * b->vfactor[k];
     }
     return st->m[i] != 0.0 ? (3.0 / st->m[i]) * sum : 0.0;
 }
@@ -341,11 +361,11 @@ static double ves_energy(const pd_sim *sim, const lps_state *st, const uint64_t 
     double sum = 0, d[3], r;
     const int eps = st->model == PD_MODEL_EPS; /* W of EPS: lambda = 1, e^b = e^p */
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const double ed = extension(sim, i, k, d, &r) - th * b->length[k] / 3.0;
         const double ev = ed - (eps ? st->hist[k] : st->hist[2 * k + 1]);
-        sum += st->omega[k] * ((1.0 - lam) * ed * ed + lam * ev * ev) * V[b->neighbor[k]] *
+        sum += weight(st, b, k) * ((1.0 - lam) * ed * ed + lam * ev * ev) * V[b->neighbor[k]] *
                b->vfactor[k];
     }
     return 0.5 * sim->sc.bulk_modulus * th * th +
@@ -361,10 +381,10 @@ static double energy_row(const pd_sim *sim, const lps_state *st, const uint64_t 
         return 0.0;
     double sum = 0, d[3], r;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const double e = extension(sim, i, k, d, &r);
-        sum += st->omega[k] * e * e * V[b->neighbor[k]] * b->vfactor[k];
+        sum += weight(st, b, k) * e * e * V[b->neighbor[k]] * b->vfactor[k];
     }
     const double th = theta_row(sim, st, bits, i);
     if (st->model != PD_MODEL_LPS)
@@ -382,7 +402,7 @@ static inline double ves_pair(const pd_sim *sim, lps_state *st, int64_t i, int64
 {
     const pd_bonds *b = sim->b;
     const int32_t j = b->neighbor[k];
-    const double *m = st->m, om = st->omega[k], len = b->length[k];
+    const double *m = st->m, om = weight(st, b, k), len = b->length[k];
     const double w = sim->p->volume[j] * b->vfactor[k], lam = sim->sc.ves_lambda;
     const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
     const double td = ((3.0 * K) * w * ((om * theta[i] / m[i]) + (om * theta[j] / m[j]))) * len;
@@ -408,7 +428,7 @@ static inline double eps_pair(const pd_sim *sim, const lps_state *st, int64_t i,
 {
     const pd_bonds *b = sim->b;
     const int32_t j = b->neighbor[k];
-    const double *m = st->m, om = st->omega[k], len = b->length[k];
+    const double *m = st->m, om = weight(st, b, k), len = b->length[k];
     const double w = sim->p->volume[j] * b->vfactor[k];
     const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
     const double td = ((3.0 * K) * w * ((om * theta[i] / m[i]) + (om * theta[j] / m[j]))) * len;
@@ -424,14 +444,14 @@ static inline double eps_pair(const pd_sim *sim, const lps_state *st, int64_t i,
 static void eps_yield_row(const pd_sim *sim, lps_state *st, int64_t i)
 {
     const pd_bonds *b = sim->b;
-    const uint64_t *bits = sim->half.intact;
+    const uint64_t *bits = sim->intact; /* fresh: lps_kernel */
     const double alpha = PD_LPS_SHEAR_FACTOR * sim->sc.shear_modulus / st->m[i];
     double norm = 0, d[3], r;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const double ed = extension(sim, i, k, d, &r) - st->theta[i] * b->length[k] / 3.0;
-        const double t = alpha * st->omega[k] * (ed - st->hist[k]);
+        const double t = alpha * weight(st, b, k) * (ed - st->hist[k]);
         norm += t * t * sim->p->volume[b->neighbor[k]] * b->vfactor[k];
     }
     st->ratio[i] = st->m[i] > 0 && 0.5 * norm > st->psi0[i] ? sqrt(2.0 * st->psi0[i] / norm) : 1.0;
@@ -443,13 +463,13 @@ static void eps_yield_row(const pd_sim *sim, lps_state *st, int64_t i)
 static void eps_flow_row(const pd_sim *sim, lps_state *st, int64_t i)
 {
     const pd_bonds *b = sim->b;
-    const uint64_t *bits = sim->half.intact;
+    const uint64_t *bits = sim->intact; /* fresh: lps_kernel */
     const double ri = st->ratio[i];
     if (ri == 1.0)
         return;
     double d[3], r;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const double ed = extension(sim, i, k, d, &r) - st->theta[i] * b->length[k] / 3.0;
         st->hist[k] = ed - ri * (ed - st->hist[k]);
@@ -461,7 +481,7 @@ static void eps_flow_row(const pd_sim *sim, lps_state *st, int64_t i)
 static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
 {
     const pd_bonds *b = sim->b;
-    const uint64_t *bits = sim->half.intact;
+    const uint64_t *bits = sim->intact; /* fresh: lps_kernel */
     const double *V = sim->p->volume, *m = st->m, *theta = st->theta;
     const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
     const double dil = (3.0 * K) - (5.0 * G), s00 = sim->sc.s00, alpha = sim->sc.alpha;
@@ -469,11 +489,11 @@ static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
     double fx = 0, fy = 0, fz = 0, s0_new = -INFINITY, d[3], r;
     int broke = 0;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const int32_t j = b->neighbor[k];
         const double e = extension(sim, i, k, d, &r);
-        const double om = st->omega[k], len = b->length[k];
+        const double om = weight(st, b, k), len = b->length[k];
         double fb;
         if (st->model == PD_MODEL_VES) {
             fb = ves_pair(sim, st, i, k, e, theta, !sim->setup);
@@ -493,7 +513,8 @@ static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
         if (failure) {
             const double s = e / len;
             if (s > fmin(s0i, sim->s0[j])) {
-                st->kill[k] = 1;
+#pragma omp atomic
+                st->kill[k >> 6] |= UINT64_C(1) << (k & 63);
                 broke = 1;
             }
             s0_new = fmax(s0_new, s00 - (alpha * s));
@@ -508,31 +529,51 @@ static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
     }
 }
 
+/* The index of j in the ascending list a[lo..hi), or hi. */
+static int64_t find32(const int32_t *a, int64_t lo, int64_t hi, int32_t j)
+{
+    const int64_t end = hi;
+    while (lo < hi) {
+        const int64_t mid = lo + (hi - lo) / 2;
+        if (a[mid] < j)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < end && a[lo] == j ? lo : end;
+}
+
 /* Break the bonds the force pass marked, booking the drop of W* of every
- * particle that loses a bond; returns the energy released, J. */
+ * particle that loses a bond; returns the energy released, J.  A bond
+ * breaks as its end i < j marked it (both ends do, the test being
+ * symmetric): its directed copy j-i is found in j's family and its half
+ * bond in i's half row (ascending). */
 static double break_marked(pd_sim *sim, lps_state *st)
 {
     const pd_bonds *b = sim->b;
-    uint64_t *bits = sim->half.intact;
+    const pd_half_bonds *h = &sim->half;
+    uint64_t *bits = sim->intact;
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++)
         st->released[i] = st->touched[i] ? energy_row(sim, st, bits, i) : 0.0;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(dynamic, 256)
     for (int64_t i = 0; i < sim->n; i++) {
         if (!st->touched[i])
             continue;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            if (!st->kill[k])
+            const int32_t j = b->neighbor[k];
+            if (j < i || !pd_bond_intact(st->kill, k))
                 continue;
-            st->kill[k] = 0;
-            if (b->neighbor[k] > i) { /* each half bond once (both ends marked it) */
-                const int64_t q = st->half[k];
-                const uint64_t keep = ~(UINT64_C(1) << (q & 63));
-#pragma omp atomic
-                bits[q >> 6] &= keep;
-            }
+            pd_bond_break(bits, k);
+            for (int64_t r = b->offset[j]; r < b->offset[j + 1]; r++)
+                if (b->neighbor[r] == i)
+                    pd_bond_break(bits, r);
+            const int64_t q = find32(h->neighbor, h->offset[i], h->offset[i + 1], j);
+            if (q < h->offset[i + 1])
+                pd_bond_break(h->intact, q);
         }
     }
+    memset(st->kill, 0, (size_t)pd_bits_words(b->count) * sizeof(uint64_t));
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++)
         if (st->touched[i]) {
@@ -544,7 +585,7 @@ static double break_marked(pd_sim *sim, lps_state *st)
 
 static void lps_kernel(pd_sim *sim, lps_state *st, int failure)
 {
-    const uint64_t *bits = sim->half.intact;
+    const uint64_t *bits = pd_sim_intact(sim); /* sim->intact, up to date */
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++)
         st->theta[i] = theta_row(sim, st, bits, i);
@@ -583,17 +624,17 @@ static pd_status lps_failure_force(pd_sim *sim, void *state)
     lps_kernel(sim, state, 1);
     double *t = sim->s0;
     sim->s0 = sim->s0_new;
-    sim->s0_new = t;
-    sim->intact_stale = 1;
+    sim->s0_new = t; /* sim->intact stays fresh: break_marked keeps it */
     return PD_OK;
 }
 
 static void lps_energy(const pd_sim *sim, void *state, double *e)
 {
     const lps_state *st = state;
+    const uint64_t *bits = pd_sim_intact(sim);
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++)
-        e[i] += energy_row(sim, st, sim->half.intact, i);
+        e[i] += energy_row(sim, st, bits, i);
 }
 
 /* The static virial of each particle's intact bonds (pd_sim_stress):
@@ -604,7 +645,7 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
 {
     const lps_state *st = state;
     const pd_bonds *b = sim->b;
-    const uint64_t *bits = sim->half.intact;
+    const uint64_t *bits = pd_sim_intact(sim);
     const double *V = sim->p->volume, *m = st->m;
     const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
     const double dil = (3.0 * K) - (5.0 * G);
@@ -619,13 +660,13 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
     for (int64_t i = 0; i < sim->n; i++) {
         double sum[9] = {0}, d[3], r;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            if (!pd_bond_intact(bits, st->half[k]))
+            if (!pd_bond_intact(bits, k))
                 continue;
             const int32_t j = b->neighbor[k];
             const double e = extension(sim, i, k, d, &r);
             if (!(r > 0.0))
                 continue;
-            const double om = st->omega[k], w = V[j] * b->vfactor[k];
+            const double om = weight(st, b, k), w = V[j] * b->vfactor[k];
             double t = dil * w * (om * theta[i] / m[i] + om * theta[j] / m[j]) * b->length[k] +
                        PD_LPS_SHEAR_FACTOR * G * w * (om / m[i] + om / m[j]) * e;
             if (st->model == PD_MODEL_EPS) /* with the stored plastic extensions */
@@ -691,9 +732,10 @@ pd_status pd_sim_dilatation(const pd_sim *sim, double *theta)
 {
     const lps_state *st = lps_of(sim);
     if (st != NULL) {
+        const uint64_t *bits = pd_sim_intact(sim);
 #pragma omp parallel for schedule(static)
         for (int64_t i = 0; i < sim->n; i++)
-            theta[i] = theta_row(sim, st, sim->half.intact, i);
+            theta[i] = theta_row(sim, st, bits, i);
         return PD_OK;
     }
     return pd_fail(PD_ERR_INVALID, "the run has no LPS model, so no dilatation");
