@@ -103,6 +103,7 @@
  */
 #include <float.h>
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -124,7 +125,13 @@ typedef struct {
     double *psi0;      /* EPS: n, the yield value psi_0 of each particle */
     double *ratio;     /* EPS: n, sqrt(2 psi_0)/|t^d_trial| (1: elastic) */
     double decay, beta;/* VES: d = exp(-dt/tau), beta = 1 - tau/dt (1 - d) */
+    int nthreads;      /* threads of the kernel, each with its scratch   */
+    int64_t family;    /* the largest family, directed bonds             */
+    double *scratch;   /* nthreads x LPS_ROWS x family: one row's terms  */
 } lps_state;
+
+/* The row arrays of a thread's scratch: omega, then six bond terms. */
+#define LPS_ROWS 7
 
 const char *pd_influence_name(pd_influence w)
 {
@@ -215,6 +222,7 @@ static void lps_free(void *state)
     free(st->rev);
     free(st->psi0);
     free(st->ratio);
+    free(st->scratch);
     free(st);
 }
 
@@ -307,6 +315,16 @@ static pd_status lps_init(pd_sim *sim, void **state)
             return pd_fail(PD_ERR_NOMEM, "out of memory for the VES history of %lld bonds",
                            (long long)b->count);
         }
+    }
+    st->nthreads = omp_get_max_threads();
+    for (int64_t i = 0; i < sim->n; i++)
+        if (b->offset[i + 1] - b->offset[i] > st->family)
+            st->family = b->offset[i + 1] - b->offset[i];
+    st->scratch = malloc((size_t)st->nthreads * LPS_ROWS * (size_t)(st->family > 0 ? st->family : 1) *
+                         sizeof(double));
+    if (st->scratch == NULL) {
+        lps_free(st);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS scratch");
     }
     bond_weights(sim->p, b, &sim->sc, st->omega, st->m);
     /* the directed bits from the half bonds, so that both copies of a bond
@@ -529,6 +547,157 @@ static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
     }
 }
 
+/*
+ * The fast rows of the kernel.  Each row is done in two loops: the first
+ * computes every bond's term into the thread's scratch with no sum across
+ * bonds (so GCC vectorizes it, gathers included, and each term is rounded
+ * exactly as the one-bond-at-a-time code rounds it: the same operations in
+ * the same order, no contraction), a broken bond's term set to +-0; the
+ * second adds the terms in the family's order.  Adding +-0 changes no sum
+ * that is not -0, and these sums never are (they start at +0, and a sum of
+ * two numbers rounds to -0 only when both are -0), so the result is
+ * bit for bit that of theta_row and force_row, with the divisions and
+ * square roots done several at a time and no branch per bond.
+ */
+
+/* omega of the cnt bonds of a row from k0 into w (or the stored ones). */
+PD_VECTOR_CLONES static const double *row_weights(const lps_state *st, const pd_bonds *b,
+                                                  int64_t k0, int64_t cnt, double *w)
+{
+    if (st->omega != NULL)
+        return st->omega + k0;
+    const double *len = b->length + k0;
+    if (st->influence == PD_INFLUENCE_INV_R)
+        for (int64_t q = 0; q < cnt; q++)
+            w[q] = 1.0 / len[q]; /* pd_lps_influence, 1/r */
+    else
+        for (int64_t q = 0; q < cnt; q++)
+            w[q] = pd_lps_influence(st->influence, len[q], b->horizon);
+    return w;
+}
+
+/* Dilatation terms tt[q] = omega |xi| e nu_ij V_j of the cnt bonds of row
+ * i from k0 (e as extension() has it), +0 where broken in `bits`. */
+PD_VECTOR_CLONES static void theta_terms(int64_t i, int64_t k0, int64_t cnt,
+                                         const uint64_t *restrict bits,
+                                         const int32_t *restrict nb, const double *restrict len,
+                                         const double *restrict nu, const double *restrict om,
+                                         const double *restrict V, const double *restrict y0,
+                                         const double *restrict y1, const double *restrict y2,
+                                         double *restrict tt)
+{
+    for (int64_t q = 0; q < cnt; q++) {
+        const int32_t j = nb[q];
+        const double dx = y0[j] - y0[i], dy = y1[j] - y1[i], dz = y2[j] - y2[i];
+        const double r = sqrt(dx * dx + dy * dy + dz * dz);
+        double e = r - len[q];
+        e = fabs(e) < PD_NEAR_ZERO ? 0.0 : e;
+        const double t = om[q] * len[q] * e * V[j] * nu[q];
+        tt[q] = (bits[(k0 + q) >> 6] >> ((k0 + q) & 63)) & 1 ? t : 0.0;
+    }
+}
+
+/* LPS pair-force terms of the cnt bonds of row i from k0 (Algorithm 2, as
+ * force_row): f?[q] = (y_j - y_i) t_ij / r, 0 where r = 0; with failure
+ * (s0 not NULL) sv[q] = s00 - alpha s, s = e/|xi|, and kq[q] = 1 where
+ * s > min(s0_i, s0_j) (the bond breaks), else 0.  A bond broken in `bits`
+ * has forces +-0, sv = -inf and kq = 0. */
+PD_VECTOR_CLONES static void force_terms(int64_t i, int64_t k0, int64_t cnt,
+                                         const uint64_t *restrict bits,
+                                         const int32_t *restrict nb, const double *restrict len,
+                                         const double *restrict nu, const double *restrict om,
+                                         const double *restrict V, const double *restrict y0,
+                                         const double *restrict y1, const double *restrict y2,
+                                         const double *restrict theta, const double *restrict m,
+                                         double dil, double G, const double *restrict s0,
+                                         double s00, double alpha, double *restrict fx,
+                                         double *restrict fy, double *restrict fz,
+                                         double *restrict sv, double *restrict kq)
+{
+    const double ti = theta[i], mi = m[i], s0i = s0 ? s0[i] : 0;
+    for (int64_t q = 0; q < cnt; q++) {
+        const int32_t j = nb[q];
+        const double dx = y0[j] - y0[i], dy = y1[j] - y1[i], dz = y2[j] - y2[i];
+        const double r = sqrt(dx * dx + dy * dy + dz * dz);
+        double e = r - len[q];
+        e = fabs(e) < PD_NEAR_ZERO ? 0.0 : e;
+        const double o = om[q];
+        double t = dil * V[j] * nu[q] * ((o * ti / mi) + (o * theta[j] / m[j])) * len[q];
+        t += PD_LPS_SHEAR_FACTOR * (G * V[j] * nu[q]) * ((o / mi) + (o / m[j])) * e;
+        const int mu = (bits[(k0 + q) >> 6] >> ((k0 + q) & 63)) & 1;
+        const double rs = r > 0.0 ? r : 1.0;
+        const double tr = t / rs, s = e / len[q];
+        const double fb = (r > 0.0) & mu ? tr : 0.0;
+        fx[q] = dx * fb;
+        fy[q] = dy * fb;
+        fz[q] = dz * fb;
+        sv[q] = s; /* for the failure loop below */
+    }
+    if (s0 == NULL)
+        return;
+    for (int64_t q = 0; q < cnt; q++) {
+        const int mu = (bits[(k0 + q) >> 6] >> ((k0 + q) & 63)) & 1;
+        const double s = sv[q], s0j = s0[nb[q]], smin = s0i < s0j ? s0i : s0j;
+        kq[q] = mu & (s > smin) ? 1.0 : 0.0; /* s0 is never NaN: min is fmin */
+        sv[q] = mu ? s00 - (alpha * s) : -INFINITY;
+    }
+}
+
+/* theta_row with the terms of theta_terms; buf: a thread's scratch. */
+static double theta_fast(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i,
+                         double *buf)
+{
+    const pd_bonds *b = sim->b;
+    const int64_t k0 = b->offset[i], cnt = b->offset[i + 1] - k0;
+    const double *om = row_weights(st, b, k0, cnt, buf);
+    double *tt = buf + st->family;
+    theta_terms(i, k0, cnt, bits, b->neighbor + k0, b->length + k0, b->vfactor + k0, om,
+                sim->p->volume, sim->y[0], sim->y[1], sim->y[2], tt);
+    double sum = 0;
+    for (int64_t q = 0; q < cnt; q++)
+        sum += tt[q];
+    return st->m[i] != 0.0 ? (3.0 / st->m[i]) * sum : 0.0;
+}
+
+/* force_row of LPS with the terms of force_terms; buf: a thread's scratch. */
+static void force_fast(pd_sim *sim, lps_state *st, int64_t i, int failure, double *buf)
+{
+    const pd_bonds *b = sim->b;
+    const int64_t k0 = b->offset[i], cnt = b->offset[i + 1] - k0, F = st->family;
+    const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
+    const double dil = (3.0 * K) - (5.0 * G);
+    const double *om = row_weights(st, b, k0, cnt, buf);
+    double *tx = buf + F, *ty = buf + 2 * F, *tz = buf + 3 * F, *sv = buf + 4 * F,
+           *kq = buf + 5 * F;
+    force_terms(i, k0, cnt, sim->intact /* fresh: lps_kernel */, b->neighbor + k0,
+                b->length + k0, b->vfactor + k0, om, sim->p->volume, sim->y[0], sim->y[1],
+                sim->y[2], st->theta, st->m, dil, G, failure ? sim->s0 : NULL, sim->sc.s00,
+                sim->sc.alpha, tx, ty, tz, sv, kq);
+    double fx = 0, fy = 0, fz = 0, s0_new = -INFINITY;
+    for (int64_t q = 0; q < cnt; q++) {
+        fx += tx[q];
+        fy += ty[q];
+        fz += tz[q];
+    }
+    sim->f[0][i] += fx;
+    sim->f[1][i] += fy;
+    sim->f[2][i] += fz;
+    if (!failure)
+        return;
+    int broke = 0;
+    for (int64_t q = 0; q < cnt; q++) {
+        s0_new = sv[q] > s0_new ? sv[q] : s0_new; /* fmax: sv is never NaN */
+        if (kq[q] != 0.0) {
+            const int64_t k = k0 + q;
+#pragma omp atomic
+            st->kill[k >> 6] |= UINT64_C(1) << (k & 63);
+            broke = 1;
+        }
+    }
+    sim->s0_new[i] = s0_new == -INFINITY ? DBL_MAX : s0_new; /* no intact bond: +inf */
+    st->touched[i] = (uint8_t)broke;
+}
+
 /* The index of j in the ascending list a[lo..hi), or hi. */
 static int64_t find32(const int32_t *a, int64_t lo, int64_t hi, int32_t j)
 {
@@ -586,19 +755,26 @@ static double break_marked(pd_sim *sim, lps_state *st)
 static void lps_kernel(pd_sim *sim, lps_state *st, int failure)
 {
     const uint64_t *bits = pd_sim_intact(sim); /* sim->intact, up to date */
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++)
-        st->theta[i] = theta_row(sim, st, bits, i);
-    if (st->model == PD_MODEL_EPS) {
-#pragma omp parallel for schedule(dynamic, 256)
-        for (int64_t i = 0; i < sim->n; i++)
-            eps_yield_row(sim, st, i);
-    }
     int broke = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(| : broke)
-    for (int64_t i = 0; i < sim->n; i++) {
-        force_row(sim, st, i, failure);
-        broke |= failure && st->touched[i];
+#pragma omp parallel num_threads(st->nthreads)
+    {
+        double *buf = st->scratch + (size_t)omp_get_thread_num() * LPS_ROWS * (size_t)st->family;
+#pragma omp for schedule(static)
+        for (int64_t i = 0; i < sim->n; i++)
+            st->theta[i] = theta_fast(sim, st, bits, i, buf);
+        if (st->model == PD_MODEL_EPS) {
+#pragma omp for schedule(dynamic, 256)
+            for (int64_t i = 0; i < sim->n; i++)
+                eps_yield_row(sim, st, i);
+        }
+#pragma omp for schedule(dynamic, 256) reduction(| : broke)
+        for (int64_t i = 0; i < sim->n; i++) {
+            if (st->model == PD_MODEL_LPS)
+                force_fast(sim, st, i, failure, buf);
+            else
+                force_row(sim, st, i, failure);
+            broke |= failure && st->touched[i];
+        }
     }
     if (st->model == PD_MODEL_EPS && !sim->setup) {
 #pragma omp parallel for schedule(dynamic, 256)
