@@ -99,7 +99,9 @@
  * direction (ellipsoids); otherwise it is omega(|xi|), computed where it is
  * used from the bond's length (the same double as a stored one).  Per
  * directed bond LPS keeps 1 bit (the breaks of this step); VES adds 16 B
- * (e^d_n, e^b_n), EPS 16 B (e^p, the reverse bond).
+ * (e^d_n, e^b_n), EPS 16 B (e^p, the reverse bond).  Each thread has a
+ * scratch of a few rows of the largest family, where the kernel puts one
+ * family's bond terms before it sums them (see theta_fast).
  */
 #include <float.h>
 #include <math.h>
@@ -205,6 +207,16 @@ static void bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scen
         }
         m[i] = sum;
     }
+}
+
+/* omega of directed bond k of row i, as bond_weights has it. */
+static double bond_omega(const pd_particles *p, const pd_bonds *b, const pd_scene *s, int64_t i,
+                         int64_t k)
+{
+    const int32_t j = b->neighbor[k];
+    const double xi[3] = {-(p->x[0][i] - p->x[0][j]), -(p->x[1][i] - p->x[1][j]),
+                          -(p->x[2][i] - p->x[2][j])};
+    return pd_bond_influence(s, b->length[k], b->horizon, xi);
 }
 
 static void lps_free(void *state)
@@ -935,18 +947,16 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
     const int64_t n = b->n;
     double *m = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
     double *S = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
-    double *omega = malloc((size_t)(b->count > 0 ? b->count : 1) * sizeof(double));
-    if (m == NULL || S == NULL || omega == NULL) {
+    if (m == NULL || S == NULL) {
         free(m);
         free(S);
-        free(omega);
         return NAN;
     }
-    bond_weights(p, b, s, omega, m);
+    bond_weights(p, b, s, NULL, m);
     for (int64_t i = 0; i < n; i++) {
         S[i] = 0;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-            S[i] += omega[k] * b->length[k] * b->vfactor[k] * p->volume[b->neighbor[k]];
+            S[i] += bond_omega(p, b, s, i, k) * b->length[k] * b->vfactor[k] * p->volume[b->neighbor[k]];
     }
     /* VES (see the top): theta_i enters t_ij with 3K omega/m_i - 5G omega
      * (1/m_i + 1/m_j), theta_j with 3K omega/m_j; with m_i ~ m_j both are
@@ -961,7 +971,7 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
         double sum = 0;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
             const int32_t j = b->neighbor[k];
-            const double om = omega[k];
+            const double om = bond_omega(p, b, s, i, k);
             const double C = om * b->vfactor[k] *
                              (PD_LPS_SHEAR_FACTOR * G * (1.0 / m[i] + 1.0 / m[j]) +
                               3.0 * dil * b->length[k] * (S[i] / (m[i] * m[i]) + S[j] / (m[j] * m[j])));
@@ -972,6 +982,5 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
     }
     free(m);
     free(S);
-    free(omega);
     return best;
 }
