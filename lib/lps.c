@@ -87,12 +87,25 @@
  *
  * Each particle walks its own (directed) family and writes only its own
  * force, theta, s0 and bond history: no scatter, so the sums are in a
- * fixed order and the result does not depend on the thread count.  The bond states stay
- * in the run's half bonds (sim->half), reached through a map from the
- * directed bonds.
+ * fixed order and the result does not depend on the thread count.
+ *
+ * Storage.  The walk reads the file's directed bonds (neighbor, |xi|, nu)
+ * and the run's directed state bits mu (sim->intact, the copy pd_sim_intact
+ * keeps; bit k is bond k's, so the walk reads the bits in order and needs
+ * no map to the half bonds).  A bond that breaks is cleared in both of its
+ * directed copies and in the run's half bonds (sim->half.intact, which the
+ * run counts and writes), found by a search, as breaking is rare.
+ * omega is stored per directed bond only when it depends on the bond's
+ * direction (ellipsoids); otherwise it is omega(|xi|), computed where it is
+ * used from the bond's length (the same double as a stored one).  Per
+ * directed bond LPS keeps 1 bit (the breaks of this step); VES adds 16 B
+ * (e^d_n, e^b_n), EPS 16 B (e^p, the reverse bond).  Each thread has a
+ * scratch of a few rows of the largest family, where the kernel puts one
+ * family's bond terms before it sums them (see theta_fast).
  */
 #include <float.h>
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -101,9 +114,10 @@
 typedef struct {
     double *m;         /* n: weighted volume m_i, m^5 times omega's unit */
     double *theta;     /* n: dilatation of this step                     */
-    double *omega;     /* directed bonds: omega(|xi|) d(xi/|xi|)         */
-    int64_t *half;     /* directed bond -> its half bond in sim->half    */
-    uint8_t *kill;     /* directed bonds: breaks in this step            */
+    double *omega;     /* directed bonds: omega(|xi|) d(xi/|xi|) with
+                          ellipsoids; NULL: omega(|xi|), see weight()    */
+    pd_influence influence; /* omega(|xi|) of the scene                 */
+    uint64_t *kill;    /* directed bonds, bits: breaks in this step      */
     uint8_t *touched;  /* n: particle with a bond breaking in this step  */
     double *released;  /* n: energy released at each particle, J         */
     pd_model_kind model; /* PD_MODEL_LPS, PD_MODEL_VES or PD_MODEL_EPS   */
@@ -113,7 +127,13 @@ typedef struct {
     double *psi0;      /* EPS: n, the yield value psi_0 of each particle */
     double *ratio;     /* EPS: n, sqrt(2 psi_0)/|t^d_trial| (1: elastic) */
     double decay, beta;/* VES: d = exp(-dt/tau), beta = 1 - tau/dt (1 - d) */
+    int nthreads;      /* threads of the kernel, each with its scratch   */
+    int64_t family;    /* the largest family, directed bonds             */
+    double *scratch;   /* nthreads x LPS_ROWS x family: one row's terms  */
 } lps_state;
+
+/* The row arrays of a thread's scratch: omega, then six bond terms. */
+#define LPS_ROWS 7
 
 const char *pd_influence_name(pd_influence w)
 {
@@ -160,9 +180,15 @@ void pd_lps_weighted_volume(const pd_particles *p, const pd_bonds *b, pd_influen
     }
 }
 
+/* omega of directed bond k: the stored one (ellipsoids) or omega(|xi|). */
+static inline double weight(const lps_state *st, const pd_bonds *b, int64_t k)
+{
+    return st->omega ? st->omega[k] : pd_lps_influence(st->influence, b->length[k], b->horizon);
+}
+
 /* The weight of every directed bond, omega[k] = omega(|xi|) d(xi/|xi|)
  * (lib/influence.c: d = 1 without ellipsoids), and m_i from it (Algorithm
- * 3, in pd_lps_weighted_volume's order of products). */
+ * 3, in pd_lps_weighted_volume's order of products); omega NULL: m only. */
 static void bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
                          double *omega, double *m)
 {
@@ -174,11 +200,23 @@ static void bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scen
             const double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
                          dz = p->x[2][i] - p->x[2][j];
             const double rsq = dx * dx + dy * dy + dz * dz, xi[3] = {-dx, -dy, -dz};
-            omega[k] = pd_bond_influence(s, b->length[k], b->horizon, xi);
-            sum += omega[k] * rsq * p->volume[j] * b->vfactor[k];
+            const double om = pd_bond_influence(s, b->length[k], b->horizon, xi);
+            if (omega != NULL)
+                omega[k] = om;
+            sum += om * rsq * p->volume[j] * b->vfactor[k];
         }
         m[i] = sum;
     }
+}
+
+/* omega of directed bond k of row i, as bond_weights has it. */
+static double bond_omega(const pd_particles *p, const pd_bonds *b, const pd_scene *s, int64_t i,
+                         int64_t k)
+{
+    const int32_t j = b->neighbor[k];
+    const double xi[3] = {-(p->x[0][i] - p->x[0][j]), -(p->x[1][i] - p->x[1][j]),
+                          -(p->x[2][i] - p->x[2][j])};
+    return pd_bond_influence(s, b->length[k], b->horizon, xi);
 }
 
 static void lps_free(void *state)
@@ -189,7 +227,6 @@ static void lps_free(void *state)
     free(st->m);
     free(st->theta);
     free(st->omega);
-    free(st->half);
     free(st->kill);
     free(st->touched);
     free(st->released);
@@ -197,6 +234,7 @@ static void lps_free(void *state)
     free(st->rev);
     free(st->psi0);
     free(st->ratio);
+    free(st->scratch);
     free(st);
 }
 
@@ -207,27 +245,36 @@ static pd_status eps_init(const pd_sim *sim, lps_state *st)
 {
     const pd_bonds *b = sim->b;
     const double Y = sim->sc.yield_stress;
-    const int64_t nh = sim->half.count;
+    const pd_half_bonds *h = &sim->half;
+    const int64_t nh = h->count;
     int64_t *first = malloc((size_t)(nh > 0 ? nh : 1) * sizeof(int64_t));
     if (first == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the EPS state of %lld bonds",
                        (long long)b->count);
     for (int64_t q = 0; q < nh; q++)
         first[q] = -1;
-    for (int64_t k = 0; k < b->count; k++) {
-        const int64_t q = st->half[k];
-        if (first[q] < 0)
+    /* the half bond of each directed bond: row i meets its bonds to j < i
+     * in ascending i for each j, so a cursor per row finds them */
+    for (int64_t i = 0; i < sim->n; i++)
+        h->cursor[i] = h->offset[i];
+    for (int64_t i = 0; i < sim->n; i++) {
+        int64_t own = h->offset[i];
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            const int32_t j = b->neighbor[k];
+            const int64_t q = j < i ? h->cursor[j]++ : own++;
+            if (first[q] < 0)
             first[q] = k;
-        else {
-            st->rev[k] = first[q];
-            st->rev[first[q]] = k;
+            else {
+                st->rev[k] = first[q];
+                st->rev[first[q]] = k;
+            }
         }
     }
     free(first);
     for (int64_t i = 0; i < b->n; i++) {
         double I = 0;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-            I += st->omega[k] * st->omega[k] * b->length[k] * b->length[k] *
+            I += weight(st, b, k) * weight(st, b, k) * b->length[k] * b->length[k] *
                  sim->p->volume[b->neighbor[k]] * b->vfactor[k];
         st->psi0[i] = st->m[i] > 0 ? 2.5 * Y * Y * I / (st->m[i] * st->m[i]) : INFINITY;
     }
@@ -243,13 +290,14 @@ static pd_status lps_init(pd_sim *sim, void **state)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS state");
     st->m = malloc(n * sizeof(double));
     st->theta = calloc(n, sizeof(double));
-    st->omega = malloc(nb * sizeof(double));
-    st->half = malloc(nb * sizeof(int64_t));
-    st->kill = calloc(nb, 1);
+    st->influence = sim->sc.influence;
+    if (sim->sc.nellipsoids > 0) /* omega depends on the direction */
+        st->omega = malloc(nb * sizeof(double));
+    st->kill = calloc((size_t)pd_bits_words(b->count) + 1, sizeof(uint64_t));
     st->touched = calloc(n, 1);
     st->released = calloc(n, sizeof(double));
-    if (!st->m || !st->theta || !st->omega || !st->half || !st->kill || !st->touched ||
-        !st->released) {
+    if (!st->m || !st->theta || (sim->sc.nellipsoids > 0 && !st->omega) || !st->kill ||
+        !st->touched || !st->released) {
         lps_free(st);
         return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS state of %lld bonds",
                        (long long)b->count);
@@ -280,19 +328,21 @@ static pd_status lps_init(pd_sim *sim, void **state)
                            (long long)b->count);
         }
     }
-    bond_weights(sim->p, b, &sim->sc, st->omega, st->m);
-    /* the half bond of each directed bond: row i meets its bonds to j < i
-     * in ascending i for each j, so a cursor per row finds them */
-    const pd_half_bonds *h = &sim->half;
+    st->nthreads = omp_get_max_threads();
     for (int64_t i = 0; i < sim->n; i++)
-        h->cursor[i] = h->offset[i];
-    for (int64_t i = 0; i < sim->n; i++) {
-        int64_t own = h->offset[i];
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            const int32_t j = b->neighbor[k];
-            st->half[k] = j < i ? h->cursor[j]++ : own++;
-        }
+        if (b->offset[i + 1] - b->offset[i] > st->family)
+            st->family = b->offset[i + 1] - b->offset[i];
+    st->scratch = malloc((size_t)st->nthreads * LPS_ROWS * (size_t)(st->family > 0 ? st->family : 1) *
+                         sizeof(double));
+    if (st->scratch == NULL) {
+        lps_free(st);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS scratch");
     }
+    bond_weights(sim->p, b, &sim->sc, st->omega, st->m);
+    /* the directed bits from the half bonds, so that both copies of a bond
+     * agree (the file's bits may not) */
+    sim->intact_stale = 1;
+    (void)pd_sim_intact(sim);
     pd_status es = st->model == PD_MODEL_EPS ? eps_init(sim, st) : PD_OK;
     if (es != PD_OK) {
         lps_free(st);
@@ -315,17 +365,17 @@ static inline double extension(const pd_sim *sim, int64_t i, int64_t k, double d
     return fabs(e) < PD_NEAR_ZERO ? 0.0 : e;
 }
 
-/* theta_i over the bonds intact in `bits` (half bonds), Algorithm 4. */
+/* theta_i over the bonds intact in `bits` (directed bonds), Algorithm 4. */
 static double theta_row(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i)
 {
     const pd_bonds *b = sim->b;
     const double *V = sim->p->volume;
     double sum = 0, d[3], r;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const double e = extension(sim, i, k, d, &r);
-        sum += st->omega[k] * b->length[k] * e * V[b->neighbor[k]] * b->vfactor[k];
+        sum += weight(st, b, k) * b->length[k] * e * V[b->neighbor[k]] * b->vfactor[k];
     }
     return st->m[i] != 0.0 ? (3.0 / st->m[i]) * sum : 0.0;
 }
@@ -341,11 +391,11 @@ static double ves_energy(const pd_sim *sim, const lps_state *st, const uint64_t 
     double sum = 0, d[3], r;
     const int eps = st->model == PD_MODEL_EPS; /* W of EPS: lambda = 1, e^b = e^p */
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const double ed = extension(sim, i, k, d, &r) - th * b->length[k] / 3.0;
         const double ev = ed - (eps ? st->hist[k] : st->hist[2 * k + 1]);
-        sum += st->omega[k] * ((1.0 - lam) * ed * ed + lam * ev * ev) * V[b->neighbor[k]] *
+        sum += weight(st, b, k) * ((1.0 - lam) * ed * ed + lam * ev * ev) * V[b->neighbor[k]] *
                b->vfactor[k];
     }
     return 0.5 * sim->sc.bulk_modulus * th * th +
@@ -361,10 +411,10 @@ static double energy_row(const pd_sim *sim, const lps_state *st, const uint64_t 
         return 0.0;
     double sum = 0, d[3], r;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const double e = extension(sim, i, k, d, &r);
-        sum += st->omega[k] * e * e * V[b->neighbor[k]] * b->vfactor[k];
+        sum += weight(st, b, k) * e * e * V[b->neighbor[k]] * b->vfactor[k];
     }
     const double th = theta_row(sim, st, bits, i);
     if (st->model != PD_MODEL_LPS)
@@ -382,7 +432,7 @@ static inline double ves_pair(const pd_sim *sim, lps_state *st, int64_t i, int64
 {
     const pd_bonds *b = sim->b;
     const int32_t j = b->neighbor[k];
-    const double *m = st->m, om = st->omega[k], len = b->length[k];
+    const double *m = st->m, om = weight(st, b, k), len = b->length[k];
     const double w = sim->p->volume[j] * b->vfactor[k], lam = sim->sc.ves_lambda;
     const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
     const double td = ((3.0 * K) * w * ((om * theta[i] / m[i]) + (om * theta[j] / m[j]))) * len;
@@ -408,7 +458,7 @@ static inline double eps_pair(const pd_sim *sim, const lps_state *st, int64_t i,
 {
     const pd_bonds *b = sim->b;
     const int32_t j = b->neighbor[k];
-    const double *m = st->m, om = st->omega[k], len = b->length[k];
+    const double *m = st->m, om = weight(st, b, k), len = b->length[k];
     const double w = sim->p->volume[j] * b->vfactor[k];
     const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
     const double td = ((3.0 * K) * w * ((om * theta[i] / m[i]) + (om * theta[j] / m[j]))) * len;
@@ -424,14 +474,14 @@ static inline double eps_pair(const pd_sim *sim, const lps_state *st, int64_t i,
 static void eps_yield_row(const pd_sim *sim, lps_state *st, int64_t i)
 {
     const pd_bonds *b = sim->b;
-    const uint64_t *bits = sim->half.intact;
+    const uint64_t *bits = sim->intact; /* fresh: lps_kernel */
     const double alpha = PD_LPS_SHEAR_FACTOR * sim->sc.shear_modulus / st->m[i];
     double norm = 0, d[3], r;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const double ed = extension(sim, i, k, d, &r) - st->theta[i] * b->length[k] / 3.0;
-        const double t = alpha * st->omega[k] * (ed - st->hist[k]);
+        const double t = alpha * weight(st, b, k) * (ed - st->hist[k]);
         norm += t * t * sim->p->volume[b->neighbor[k]] * b->vfactor[k];
     }
     st->ratio[i] = st->m[i] > 0 && 0.5 * norm > st->psi0[i] ? sqrt(2.0 * st->psi0[i] / norm) : 1.0;
@@ -443,13 +493,13 @@ static void eps_yield_row(const pd_sim *sim, lps_state *st, int64_t i)
 static void eps_flow_row(const pd_sim *sim, lps_state *st, int64_t i)
 {
     const pd_bonds *b = sim->b;
-    const uint64_t *bits = sim->half.intact;
+    const uint64_t *bits = sim->intact; /* fresh: lps_kernel */
     const double ri = st->ratio[i];
     if (ri == 1.0)
         return;
     double d[3], r;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const double ed = extension(sim, i, k, d, &r) - st->theta[i] * b->length[k] / 3.0;
         st->hist[k] = ed - ri * (ed - st->hist[k]);
@@ -461,7 +511,7 @@ static void eps_flow_row(const pd_sim *sim, lps_state *st, int64_t i)
 static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
 {
     const pd_bonds *b = sim->b;
-    const uint64_t *bits = sim->half.intact;
+    const uint64_t *bits = sim->intact; /* fresh: lps_kernel */
     const double *V = sim->p->volume, *m = st->m, *theta = st->theta;
     const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
     const double dil = (3.0 * K) - (5.0 * G), s00 = sim->sc.s00, alpha = sim->sc.alpha;
@@ -469,11 +519,11 @@ static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
     double fx = 0, fy = 0, fz = 0, s0_new = -INFINITY, d[3], r;
     int broke = 0;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(bits, st->half[k]))
+        if (!pd_bond_intact(bits, k))
             continue;
         const int32_t j = b->neighbor[k];
         const double e = extension(sim, i, k, d, &r);
-        const double om = st->omega[k], len = b->length[k];
+        const double om = weight(st, b, k), len = b->length[k];
         double fb;
         if (st->model == PD_MODEL_VES) {
             fb = ves_pair(sim, st, i, k, e, theta, !sim->setup);
@@ -493,7 +543,8 @@ static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
         if (failure) {
             const double s = e / len;
             if (s > fmin(s0i, sim->s0[j])) {
-                st->kill[k] = 1;
+#pragma omp atomic
+                st->kill[k >> 6] |= UINT64_C(1) << (k & 63);
                 broke = 1;
             }
             s0_new = fmax(s0_new, s00 - (alpha * s));
@@ -508,31 +559,202 @@ static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
     }
 }
 
+/*
+ * The fast rows of the kernel.  Each row is done in two loops: the first
+ * computes every bond's term into the thread's scratch with no sum across
+ * bonds (so GCC vectorizes it, gathers included, and each term is rounded
+ * exactly as the one-bond-at-a-time code rounds it: the same operations in
+ * the same order, no contraction), a broken bond's term set to +-0; the
+ * second adds the terms in the family's order.  Adding +-0 changes no sum
+ * that is not -0, and these sums never are (they start at +0, and a sum of
+ * two numbers rounds to -0 only when both are -0), so the result is
+ * bit for bit that of theta_row and force_row, with the divisions and
+ * square roots done several at a time and no branch per bond.
+ */
+
+/* omega of the cnt bonds of a row from k0 into w (or the stored ones). */
+PD_VECTOR_CLONES static const double *row_weights(const lps_state *st, const pd_bonds *b,
+                                                  int64_t k0, int64_t cnt, double *w)
+{
+    if (st->omega != NULL)
+        return st->omega + k0;
+    const double *len = b->length + k0;
+    if (st->influence == PD_INFLUENCE_INV_R)
+        for (int64_t q = 0; q < cnt; q++)
+            w[q] = 1.0 / len[q]; /* pd_lps_influence, 1/r */
+    else
+        for (int64_t q = 0; q < cnt; q++)
+            w[q] = pd_lps_influence(st->influence, len[q], b->horizon);
+    return w;
+}
+
+/* Dilatation terms tt[q] = omega |xi| e nu_ij V_j of the cnt bonds of row
+ * i from k0 (e as extension() has it), +0 where broken in `bits`. */
+PD_VECTOR_CLONES static void theta_terms(int64_t i, int64_t k0, int64_t cnt,
+                                         const uint64_t *restrict bits,
+                                         const int32_t *restrict nb, const double *restrict len,
+                                         const double *restrict nu, const double *restrict om,
+                                         const double *restrict V, const double *restrict y0,
+                                         const double *restrict y1, const double *restrict y2,
+                                         double *restrict tt)
+{
+    for (int64_t q = 0; q < cnt; q++) {
+        const int32_t j = nb[q];
+        const double dx = y0[j] - y0[i], dy = y1[j] - y1[i], dz = y2[j] - y2[i];
+        const double r = sqrt(dx * dx + dy * dy + dz * dz);
+        double e = r - len[q];
+        e = fabs(e) < PD_NEAR_ZERO ? 0.0 : e;
+        const double t = om[q] * len[q] * e * V[j] * nu[q];
+        tt[q] = (bits[(k0 + q) >> 6] >> ((k0 + q) & 63)) & 1 ? t : 0.0;
+    }
+}
+
+/* LPS pair-force terms of the cnt bonds of row i from k0 (Algorithm 2, as
+ * force_row): f?[q] = (y_j - y_i) t_ij / r, 0 where r = 0; with failure
+ * (s0 not NULL) sv[q] = s00 - alpha s, s = e/|xi|, and kq[q] = 1 where
+ * s > min(s0_i, s0_j) (the bond breaks), else 0.  A bond broken in `bits`
+ * has forces +-0, sv = -inf and kq = 0. */
+PD_VECTOR_CLONES static void force_terms(int64_t i, int64_t k0, int64_t cnt,
+                                         const uint64_t *restrict bits,
+                                         const int32_t *restrict nb, const double *restrict len,
+                                         const double *restrict nu, const double *restrict om,
+                                         const double *restrict V, const double *restrict y0,
+                                         const double *restrict y1, const double *restrict y2,
+                                         const double *restrict theta, const double *restrict m,
+                                         double dil, double G, const double *restrict s0,
+                                         double s00, double alpha, double *restrict fx,
+                                         double *restrict fy, double *restrict fz,
+                                         double *restrict sv, double *restrict kq)
+{
+    const double ti = theta[i], mi = m[i], s0i = s0 ? s0[i] : 0;
+    for (int64_t q = 0; q < cnt; q++) {
+        const int32_t j = nb[q];
+        const double dx = y0[j] - y0[i], dy = y1[j] - y1[i], dz = y2[j] - y2[i];
+        const double r = sqrt(dx * dx + dy * dy + dz * dz);
+        double e = r - len[q];
+        e = fabs(e) < PD_NEAR_ZERO ? 0.0 : e;
+        const double o = om[q];
+        double t = dil * V[j] * nu[q] * ((o * ti / mi) + (o * theta[j] / m[j])) * len[q];
+        t += PD_LPS_SHEAR_FACTOR * (G * V[j] * nu[q]) * ((o / mi) + (o / m[j])) * e;
+        const int mu = (bits[(k0 + q) >> 6] >> ((k0 + q) & 63)) & 1;
+        const double rs = r > 0.0 ? r : 1.0;
+        const double tr = t / rs, s = e / len[q];
+        const double fb = (r > 0.0) & mu ? tr : 0.0;
+        fx[q] = dx * fb;
+        fy[q] = dy * fb;
+        fz[q] = dz * fb;
+        sv[q] = s; /* for the failure loop below */
+    }
+    if (s0 == NULL)
+        return;
+    for (int64_t q = 0; q < cnt; q++) {
+        const int mu = (bits[(k0 + q) >> 6] >> ((k0 + q) & 63)) & 1;
+        const double s = sv[q], s0j = s0[nb[q]], smin = s0i < s0j ? s0i : s0j;
+        kq[q] = mu & (s > smin) ? 1.0 : 0.0; /* s0 is never NaN: min is fmin */
+        sv[q] = mu ? s00 - (alpha * s) : -INFINITY;
+    }
+}
+
+/* theta_row with the terms of theta_terms; buf: a thread's scratch. */
+static double theta_fast(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i,
+                         double *buf)
+{
+    const pd_bonds *b = sim->b;
+    const int64_t k0 = b->offset[i], cnt = b->offset[i + 1] - k0;
+    const double *om = row_weights(st, b, k0, cnt, buf);
+    double *tt = buf + st->family;
+    theta_terms(i, k0, cnt, bits, b->neighbor + k0, b->length + k0, b->vfactor + k0, om,
+                sim->p->volume, sim->y[0], sim->y[1], sim->y[2], tt);
+    double sum = 0;
+    for (int64_t q = 0; q < cnt; q++)
+        sum += tt[q];
+    return st->m[i] != 0.0 ? (3.0 / st->m[i]) * sum : 0.0;
+}
+
+/* force_row of LPS with the terms of force_terms; buf: a thread's scratch. */
+static void force_fast(pd_sim *sim, lps_state *st, int64_t i, int failure, double *buf)
+{
+    const pd_bonds *b = sim->b;
+    const int64_t k0 = b->offset[i], cnt = b->offset[i + 1] - k0, F = st->family;
+    const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
+    const double dil = (3.0 * K) - (5.0 * G);
+    const double *om = row_weights(st, b, k0, cnt, buf);
+    double *tx = buf + F, *ty = buf + 2 * F, *tz = buf + 3 * F, *sv = buf + 4 * F,
+           *kq = buf + 5 * F;
+    force_terms(i, k0, cnt, sim->intact /* fresh: lps_kernel */, b->neighbor + k0,
+                b->length + k0, b->vfactor + k0, om, sim->p->volume, sim->y[0], sim->y[1],
+                sim->y[2], st->theta, st->m, dil, G, failure ? sim->s0 : NULL, sim->sc.s00,
+                sim->sc.alpha, tx, ty, tz, sv, kq);
+    double fx = 0, fy = 0, fz = 0, s0_new = -INFINITY;
+    for (int64_t q = 0; q < cnt; q++) {
+        fx += tx[q];
+        fy += ty[q];
+        fz += tz[q];
+    }
+    sim->f[0][i] += fx;
+    sim->f[1][i] += fy;
+    sim->f[2][i] += fz;
+    if (!failure)
+        return;
+    int broke = 0;
+    for (int64_t q = 0; q < cnt; q++) {
+        s0_new = sv[q] > s0_new ? sv[q] : s0_new; /* fmax: sv is never NaN */
+        if (kq[q] != 0.0) {
+            const int64_t k = k0 + q;
+#pragma omp atomic
+            st->kill[k >> 6] |= UINT64_C(1) << (k & 63);
+            broke = 1;
+        }
+    }
+    sim->s0_new[i] = s0_new == -INFINITY ? DBL_MAX : s0_new; /* no intact bond: +inf */
+    st->touched[i] = (uint8_t)broke;
+}
+
+/* The index of j in the ascending list a[lo..hi), or hi. */
+static int64_t find32(const int32_t *a, int64_t lo, int64_t hi, int32_t j)
+{
+    const int64_t end = hi;
+    while (lo < hi) {
+        const int64_t mid = lo + (hi - lo) / 2;
+        if (a[mid] < j)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < end && a[lo] == j ? lo : end;
+}
+
 /* Break the bonds the force pass marked, booking the drop of W* of every
- * particle that loses a bond; returns the energy released, J. */
+ * particle that loses a bond; returns the energy released, J.  A bond
+ * breaks as its end i < j marked it (both ends do, the test being
+ * symmetric): its directed copy j-i is found in j's family and its half
+ * bond in i's half row (ascending). */
 static double break_marked(pd_sim *sim, lps_state *st)
 {
     const pd_bonds *b = sim->b;
-    uint64_t *bits = sim->half.intact;
+    const pd_half_bonds *h = &sim->half;
+    uint64_t *bits = sim->intact;
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++)
         st->released[i] = st->touched[i] ? energy_row(sim, st, bits, i) : 0.0;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(dynamic, 256)
     for (int64_t i = 0; i < sim->n; i++) {
         if (!st->touched[i])
             continue;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            if (!st->kill[k])
+            const int32_t j = b->neighbor[k];
+            if (j < i || !pd_bond_intact(st->kill, k))
                 continue;
-            st->kill[k] = 0;
-            if (b->neighbor[k] > i) { /* each half bond once (both ends marked it) */
-                const int64_t q = st->half[k];
-                const uint64_t keep = ~(UINT64_C(1) << (q & 63));
-#pragma omp atomic
-                bits[q >> 6] &= keep;
-            }
+            pd_bond_break(bits, k);
+            for (int64_t r = b->offset[j]; r < b->offset[j + 1]; r++)
+                if (b->neighbor[r] == i)
+                    pd_bond_break(bits, r);
+            const int64_t q = find32(h->neighbor, h->offset[i], h->offset[i + 1], j);
+            if (q < h->offset[i + 1])
+                pd_bond_break(h->intact, q);
         }
     }
+    memset(st->kill, 0, (size_t)pd_bits_words(b->count) * sizeof(uint64_t));
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++)
         if (st->touched[i]) {
@@ -544,20 +766,27 @@ static double break_marked(pd_sim *sim, lps_state *st)
 
 static void lps_kernel(pd_sim *sim, lps_state *st, int failure)
 {
-    const uint64_t *bits = sim->half.intact;
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++)
-        st->theta[i] = theta_row(sim, st, bits, i);
-    if (st->model == PD_MODEL_EPS) {
-#pragma omp parallel for schedule(dynamic, 256)
-        for (int64_t i = 0; i < sim->n; i++)
-            eps_yield_row(sim, st, i);
-    }
+    const uint64_t *bits = pd_sim_intact(sim); /* sim->intact, up to date */
     int broke = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(| : broke)
-    for (int64_t i = 0; i < sim->n; i++) {
-        force_row(sim, st, i, failure);
-        broke |= failure && st->touched[i];
+#pragma omp parallel num_threads(st->nthreads)
+    {
+        double *buf = st->scratch + (size_t)omp_get_thread_num() * LPS_ROWS * (size_t)st->family;
+#pragma omp for schedule(static)
+        for (int64_t i = 0; i < sim->n; i++)
+            st->theta[i] = theta_fast(sim, st, bits, i, buf);
+        if (st->model == PD_MODEL_EPS) {
+#pragma omp for schedule(dynamic, 256)
+            for (int64_t i = 0; i < sim->n; i++)
+                eps_yield_row(sim, st, i);
+        }
+#pragma omp for schedule(dynamic, 256) reduction(| : broke)
+        for (int64_t i = 0; i < sim->n; i++) {
+            if (st->model == PD_MODEL_LPS)
+                force_fast(sim, st, i, failure, buf);
+            else
+                force_row(sim, st, i, failure);
+            broke |= failure && st->touched[i];
+        }
     }
     if (st->model == PD_MODEL_EPS && !sim->setup) {
 #pragma omp parallel for schedule(dynamic, 256)
@@ -583,17 +812,17 @@ static pd_status lps_failure_force(pd_sim *sim, void *state)
     lps_kernel(sim, state, 1);
     double *t = sim->s0;
     sim->s0 = sim->s0_new;
-    sim->s0_new = t;
-    sim->intact_stale = 1;
+    sim->s0_new = t; /* sim->intact stays fresh: break_marked keeps it */
     return PD_OK;
 }
 
 static void lps_energy(const pd_sim *sim, void *state, double *e)
 {
     const lps_state *st = state;
+    const uint64_t *bits = pd_sim_intact(sim);
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++)
-        e[i] += energy_row(sim, st, sim->half.intact, i);
+        e[i] += energy_row(sim, st, bits, i);
 }
 
 /* The static virial of each particle's intact bonds (pd_sim_stress):
@@ -604,7 +833,7 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
 {
     const lps_state *st = state;
     const pd_bonds *b = sim->b;
-    const uint64_t *bits = sim->half.intact;
+    const uint64_t *bits = pd_sim_intact(sim);
     const double *V = sim->p->volume, *m = st->m;
     const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
     const double dil = (3.0 * K) - (5.0 * G);
@@ -619,13 +848,13 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
     for (int64_t i = 0; i < sim->n; i++) {
         double sum[9] = {0}, d[3], r;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            if (!pd_bond_intact(bits, st->half[k]))
+            if (!pd_bond_intact(bits, k))
                 continue;
             const int32_t j = b->neighbor[k];
             const double e = extension(sim, i, k, d, &r);
             if (!(r > 0.0))
                 continue;
-            const double om = st->omega[k], w = V[j] * b->vfactor[k];
+            const double om = weight(st, b, k), w = V[j] * b->vfactor[k];
             double t = dil * w * (om * theta[i] / m[i] + om * theta[j] / m[j]) * b->length[k] +
                        PD_LPS_SHEAR_FACTOR * G * w * (om / m[i] + om / m[j]) * e;
             if (st->model == PD_MODEL_EPS) /* with the stored plastic extensions */
@@ -691,9 +920,10 @@ pd_status pd_sim_dilatation(const pd_sim *sim, double *theta)
 {
     const lps_state *st = lps_of(sim);
     if (st != NULL) {
+        const uint64_t *bits = pd_sim_intact(sim);
 #pragma omp parallel for schedule(static)
         for (int64_t i = 0; i < sim->n; i++)
-            theta[i] = theta_row(sim, st, sim->half.intact, i);
+            theta[i] = theta_row(sim, st, bits, i);
         return PD_OK;
     }
     return pd_fail(PD_ERR_INVALID, "the run has no LPS model, so no dilatation");
@@ -717,18 +947,16 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
     const int64_t n = b->n;
     double *m = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
     double *S = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
-    double *omega = malloc((size_t)(b->count > 0 ? b->count : 1) * sizeof(double));
-    if (m == NULL || S == NULL || omega == NULL) {
+    if (m == NULL || S == NULL) {
         free(m);
         free(S);
-        free(omega);
         return NAN;
     }
-    bond_weights(p, b, s, omega, m);
+    bond_weights(p, b, s, NULL, m);
     for (int64_t i = 0; i < n; i++) {
         S[i] = 0;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-            S[i] += omega[k] * b->length[k] * b->vfactor[k] * p->volume[b->neighbor[k]];
+            S[i] += bond_omega(p, b, s, i, k) * b->length[k] * b->vfactor[k] * p->volume[b->neighbor[k]];
     }
     /* VES (see the top): theta_i enters t_ij with 3K omega/m_i - 5G omega
      * (1/m_i + 1/m_j), theta_j with 3K omega/m_j; with m_i ~ m_j both are
@@ -743,7 +971,7 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
         double sum = 0;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
             const int32_t j = b->neighbor[k];
-            const double om = omega[k];
+            const double om = bond_omega(p, b, s, i, k);
             const double C = om * b->vfactor[k] *
                              (PD_LPS_SHEAR_FACTOR * G * (1.0 / m[i] + 1.0 / m[j]) +
                               3.0 * dil * b->length[k] * (S[i] / (m[i] * m[i]) + S[j] / (m[j] * m[j])));
@@ -754,6 +982,5 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
     }
     free(m);
     free(S);
-    free(omega);
     return best;
 }
