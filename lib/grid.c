@@ -90,6 +90,7 @@ struct pd_grid {
     int reach;           /* largest |d| component of the stencil           */
     int (*off)[3];       /* nk offsets, (inner, mid, outer)                */
     double *len, *inv_len, *w, *dc;
+    double *nu, *omega;  /* per offset: nu, and LPS's omega(|xi|)         */
     int16_t *lookup;     /* (2 reach + 1)^3: k for d, -1 - k for -d, or
                             INT16_MIN: not a stencil offset                */
     int axis[3];         /* inner, mid, outer: 0, 1, 2 for x, y, z         */
@@ -121,6 +122,8 @@ void pd_grid_free(pd_grid *G)
     free(G->inv_len);
     free(G->w);
     free(G->dc);
+    free(G->nu);
+    free(G->omega);
     free(G->lookup);
     for (int d = 0; d < 3; d++) {
         free(G->lc[d]);
@@ -321,7 +324,8 @@ static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
         G->inv_len = malloc((size_t)nk * sizeof(double));
         G->w = malloc((size_t)nk * sizeof(double));
         G->dc = malloc((size_t)nk * sizeof(double));
-        if (!G->off || !G->len || !G->inv_len || !G->w || !G->dc) {
+        G->nu = malloc((size_t)nk * sizeof(double));
+        if (!G->off || !G->len || !G->inv_len || !G->w || !G->dc || !G->nu) {
             free(nu);
             free(len);
             return -1;
@@ -525,9 +529,12 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
     const pd_particles *p = sim->p;
     const pd_bonds *b = sim->b;
     const pd_scene *sc = &sim->sc;
-    /* PMB with one c and s00 for every bond, equal volumes and radii */
-    if (sc->bond_list || PD_MODEL_STATE_BASED(sc->model) || pd_scene_has_laws(sc) ||
-        sim->half.kfail || p->n < 2 || b->count == 0)
+    /* PMB with one c and s00 for every bond, or LPS with an influence
+     * function of |xi| alone (no ellipsoids); equal volumes and radii */
+    const int lps = sc->model == PD_MODEL_LPS;
+    if (sc->bond_list || (PD_MODEL_STATE_BASED(sc->model) && !lps) ||
+        (lps && sc->nellipsoids > 0) || pd_scene_has_laws(sc) || sim->half.kfail || p->n < 2 ||
+        b->count == 0)
         return PD_OK;
     for (int64_t i = 1; i < p->n; i++)
         if (p->volume[i] != p->volume[0] || p->radius[i] != p->radius[0])
@@ -549,7 +556,9 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
         int identity = 1;
         for (int64_t g = 0; g < n && identity; g++)
             identity = order[g] == g;
-        if (!identity) {
+        if (!identity && lps) /* LPS's arrays are in the file's order */
+            ok = 0;
+        else if (!identity) {
             G->perm = order;
             order = NULL;
             if ((inv = malloc((size_t)n * sizeof(int64_t))) == NULL)
@@ -574,8 +583,13 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
     }
     if (ok > 0) {
         const double V = p->volume[0];
-        for (int k = 0; k < G->nk; k++)
+        G->omega = malloc((size_t)G->nk * sizeof(double));
+        ok = G->omega ? ok : -1;
+        for (int k = 0; k < G->nk && ok > 0; k++) {
+            G->omega[k] = pd_lps_influence(sc->influence, G->len[k], b->horizon);
+            G->nu[k] = G->w[k];
             G->w[k] = sc->c * V * G->w[k]; /* c V nu, as pd_half_build */
+        }
         G->kc = PD_CONTACT_SCALE * sc->c / b->horizon * V;
         size_t words = (size_t)n * G->words;
         G->mask = malloc(words * sizeof(uint64_t));
@@ -585,6 +599,11 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
         G->released = calloc((size_t)G->nblocks, sizeof(double));
         if (!G->mask || (sc->has_contact && !G->cmask) || !G->breaks || !G->released)
             ok = -1;
+        if (lps && ok > 0) { /* a = theta/m and b = 1/m of pd_grid_lps */
+            G->y[0] = malloc((size_t)n * sizeof(double));
+            G->y[1] = malloc((size_t)n * sizeof(double));
+            ok = G->y[0] && G->y[1] ? ok : -1;
+        }
         if (G->perm && ok > 0) {
             for (int d = 0; d < 3; d++) {
                 G->y[d] = malloc((size_t)n * sizeof(double));
@@ -610,12 +629,7 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
         return s;
     }
     /* the offsets hold what the half bonds' lengths and weights held */
-    pd_half_bonds *h = &sim->half;
-    if (h->w_ji != h->w_ij)
-        free(h->w_ji);
-    free(h->w_ij);
-    free(h->length);
-    h->w_ij = h->w_ji = h->length = NULL;
+    pd_half_drop_weights(&sim->half);
     *out = G;
     return PD_OK;
 }
@@ -680,6 +694,31 @@ static int record_break(grid_breaks *bl, int64_t g, int32_t k, int64_t j)
     return 0;
 }
 
+/* The contact forces of the pairs of a segment's chunk [c0, c0 + m) that
+ * are closer than d_k (seed 000 eqs. 13-15), both ends. */
+static void seg_contact(pd_grid *G, const grid_seg *sg, const grid_arrays *A, int64_t c0,
+                        int64_t m, int W)
+{
+    const int k = sg->k;
+    const uint64_t bit = UINT64_C(1) << (k & 63);
+    const double dc = G->dc[k], kc = G->kc;
+    const double *y0 = A->y0, *y1 = A->y1, *y2 = A->y2;
+    for (int64_t q = 0; q < m; q++) {
+        const int64_t g = c0 + q, j = g + sg->shift;
+        const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
+        const double r = sqrt(dx * dx + dy * dy + dz * dz);
+        if (!(r < dc) || !(r > 0.0) || !(G->cmask[g * W + (k >> 6)] & bit))
+            continue;
+        const double fs = kc * (r - dc) / r;
+        A->f0[g] += fs * dx;
+        A->f1[g] += fs * dy;
+        A->f2[g] += fs * dz;
+        A->f0[j] -= fs * dx;
+        A->f1[j] -= fs * dy;
+        A->f2[j] -= fs * dz;
+    }
+}
+
 /* The bonds (and contacts) of one segment.  `fused`: one pass that updates
  * both ends as it goes (the shift is at least GRID_SAFE, so the two ends of
  * the lanes of one vector never overlap); otherwise the forces go to
@@ -691,12 +730,12 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
     const int k = sg->k, W = one_word ? 1 : G->words, word = k >> 6;
     const uint64_t bit = UINT64_C(1) << (k & 63);
     const int64_t shift = sg->shift;
-    const double L = G->len[k], iL = G->inv_len[k], w = G->w[k], dc = G->dc[k], kc = G->kc;
+    const double L = G->len[k], iL = G->inv_len[k], w = G->w[k], dc = G->dc[k];
     const double s00 = A->s00, alpha = A->alpha;
     const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
     const double *restrict s0 = A->s0;
     double *f0 = A->f0, *f1 = A->f1, *f2 = A->f2, *s0n = A->s0n;
-    const uint64_t *restrict mask = G->mask + word, *restrict cmask = G->cmask + word;
+    const uint64_t *restrict mask = G->mask + word;
     double brk[GRID_CHUNK], gx[GRID_CHUNK], gy[GRID_CHUNK], gz[GRID_CHUNK], t[GRID_CHUNK];
     const int fused = shift >= GRID_SAFE;
     for (int64_t c0 = sg->lo; c0 < sg->hi; c0 += GRID_CHUNK) {
@@ -775,20 +814,7 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
          * and more), so the bond pass only counts them, and a second pass
          * over the chunk adds their forces when there are any */
         if (contact && near > 0)
-            for (int64_t q = 0; q < m; q++) {
-                const int64_t g = c0 + q, j = g + shift;
-                const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
-                const double r = sqrt(dx * dx + dy * dy + dz * dz);
-                if (!(r < dc) || !(r > 0.0) || !(cmask[g * W] & bit))
-                    continue;
-                const double fs = kc * (r - dc) / r;
-                f0[g] += fs * dx;
-                f1[g] += fs * dy;
-                f2[g] += fs * dz;
-                f0[j] -= fs * dx;
-                f1[j] -= fs * dy;
-                f2[j] -= fs * dz;
-            }
+            seg_contact(G, sg, A, c0, m, W);
         if (failure && nbreak > 0)
             for (int64_t q = 0; q < m; q++)
                 if (brk[q] > 0) {
@@ -979,4 +1005,186 @@ void pd_grid_pmb_energy(const pd_sim *sim, double *e)
                 }
             }
     }
+}
+
+/* ------------------------------------------------------------------- LPS */
+
+/* LPS on the stencil (lib/lps.c; omega a function of |xi|, so per offset;
+ * the particles in lattice order, so lib/lps.c's arrays need no copies).
+ * The arithmetic of each bond is lps.c's theta_row and force_row, product
+ * for product; each bond is computed once and added to both ends (the pair
+ * force t_ij of Algorithm 2 is symmetric: equal volumes, nu_ij = nu_ji). */
+
+/* omega |xi| e nu V of bond g-j (Algorithm 4's term), 0 when broken. */
+static inline __attribute__((always_inline)) double
+theta_term(const pd_grid *G, const grid_arrays *A, int k, int64_t g, int64_t j, double mu,
+           double V)
+{
+    const double dx = A->y0[j] - A->y0[g], dy = A->y1[j] - A->y1[g], dz = A->y2[j] - A->y2[g];
+    const double r = sqrt(dx * dx + dy * dy + dz * dz);
+    double e = r - G->len[k];
+    e = fabs(e) < PD_NEAR_ZERO ? 0.0 : e;
+    return mu * (G->omega[k] * G->len[k] * e * V * G->nu[k]);
+}
+
+PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, const grid_arrays *A,
+                                             double *sum, double V)
+{
+    for (int64_t si = G->block_seg[blk]; si < G->block_seg[blk + 1]; si++) {
+        const grid_seg *sg = &G->seg[si];
+        const int k = sg->k, W = G->words;
+        const uint64_t bit = UINT64_C(1) << (k & 63);
+        const uint64_t *mask = G->mask + (k >> 6);
+        const int64_t shift = sg->shift;
+        if (shift >= GRID_SAFE) {
+#pragma omp simd safelen(GRID_SAFE)
+            for (int64_t g = sg->lo; g < sg->hi; g++) {
+                const double c = theta_term(G, A, k, g, g + shift, (mask[g * W] & bit) ? 1.0 : 0.0, V);
+                sum[g] += c;
+                sum[g + shift] += c;
+            }
+        } else
+            for (int64_t g = sg->lo; g < sg->hi; g++) {
+                const double c = theta_term(G, A, k, g, g + shift, (mask[g * W] & bit) ? 1.0 : 0.0, V);
+                sum[g] += c;
+                sum[g + shift] += c;
+            }
+    }
+}
+
+/* The pair force of bond g-j (Algorithm 2), its force on g and -it on j,
+ * and with failure the test and the new s0 of both ends (as seg_bonds).
+ * With a = theta/m and b = 1/m of each particle (computed once a step) and
+ * per offset c1 = (3K - 5G) V nu omega |xi| and c2 = 15 G V nu omega,
+ *   t = c1 (a_g + a_j) + c2 (b_g + b_j) e,
+ * force_row's t with its products regrouped (equal to rounding). */
+#define GRID_LPS_BODY                                                                          \
+    do {                                                                                       \
+        const int64_t g = c0 + q, j = g + shift;                                               \
+        const double mu = (mask[g * W] & bit) ? 1.0 : 0.0;                                     \
+        const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];               \
+        const double r = sqrt(dx * dx + dy * dy + dz * dz);                                    \
+        double e = r - len;                                                                    \
+        e = fabs(e) < PD_NEAR_ZERO ? 0.0 : e;                                                  \
+        const double t = c1 * (ta[g] + ta[j]) + c2 * (tb[g] + tb[j]) * e;                     \
+        const double fb = r > 0.0 ? mu * t / r : 0.0;                                          \
+        f0[g] += dx * fb;                                                                      \
+        f1[g] += dy * fb;                                                                      \
+        f2[g] += dz * fb;                                                                      \
+        f0[j] -= dx * fb;                                                                      \
+        f1[j] -= dy * fb;                                                                      \
+        f2[j] -= dz * fb;                                                                      \
+        near += r < dc ? 1.0 : 0.0;                                                            \
+        if (failure) {                                                                         \
+            const double s = e * il;                                                           \
+            const double thr = s0[g] < s0[j] ? s0[g] : s0[j];                                  \
+            brk[q] = s > thr ? mu : 0.0;                                                       \
+            nbreak += brk[q];                                                                  \
+            const double tt = mu > 0 ? s00 - (alpha * s) : -INFINITY;                          \
+            s0n[g] = tt > s0n[g] ? tt : s0n[g];                                                \
+            s0n[j] = tt > s0n[j] ? tt : s0n[j];                                                \
+        }                                                                                      \
+    } while (0)
+
+#define GRID_LPS_BLOCK(name, with_failure)                                                     \
+    PD_VECTOR_CLONES static int name(pd_grid *G, int64_t blk, const grid_arrays *A,            \
+                                     const double *restrict ta, const double *restrict tb,     \
+                                     double V, double dil, double shear)                       \
+    {                                                                                          \
+        const int W = G->words, failure = with_failure;                                        \
+        const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;         \
+        const double *restrict s0 = A->s0;                                                     \
+        double *f0 = A->f0, *f1 = A->f1, *f2 = A->f2, *s0n = A->s0n;                           \
+        const double s00 = A->s00, alpha = A->alpha;                                           \
+        double brk[GRID_CHUNK];                                                                \
+        for (int64_t si = G->block_seg[blk]; si < G->block_seg[blk + 1]; si++) {               \
+            const grid_seg *sg = &G->seg[si];                                                  \
+            const int k = sg->k;                                                               \
+            const uint64_t bit = UINT64_C(1) << (k & 63);                                      \
+            const uint64_t *restrict mask = G->mask + (k >> 6);                                \
+            const int64_t shift = sg->shift;                                                   \
+            const double len = G->len[k], il = G->inv_len[k], dc = G->dc[k];                   \
+            const double c1 = dil * V * G->nu[k] * G->omega[k] * len,                          \
+                         c2 = PD_LPS_SHEAR_FACTOR * shear * V * G->nu[k] * G->omega[k];        \
+            for (int64_t c0 = sg->lo; c0 < sg->hi; c0 += GRID_CHUNK) {                         \
+                const int64_t n = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;         \
+                double nbreak = 0, near = 0;                                                   \
+                if (shift >= GRID_SAFE) {                                                      \
+                    _Pragma("omp simd reduction(+ : nbreak, near) safelen(16)")               \
+                    for (int64_t q = 0; q < n; q++)                                            \
+                        GRID_LPS_BODY;                                                         \
+                } else                                                                         \
+                    for (int64_t q = 0; q < n; q++)                                            \
+                        GRID_LPS_BODY;                                                         \
+                if (G->cmask && near > 0)                                                      \
+                    seg_contact(G, sg, A, c0, n, W);                                           \
+                if (failure && nbreak > 0)                                                     \
+                    for (int64_t q = 0; q < n; q++)                                            \
+                        if (brk[q] > 0) {                                                      \
+                            G->mask[(c0 + q) * W + (k >> 6)] &= ~bit;                          \
+                            if (record_break(&G->breaks[blk], c0 + q, k, c0 + q + shift))      \
+                                return -1;                                                     \
+                        }                                                                      \
+            }                                                                                  \
+        }                                                                                      \
+        return 0;                                                                              \
+    }
+GRID_LPS_BLOCK(lps_force_block_0, 0)
+GRID_LPS_BLOCK(lps_force_block_1, 1)
+
+pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, int failure,
+                      void (*mark)(void *ctx, int64_t i, int64_t j), void *ctx)
+{
+    pd_grid *G = sim->grid;
+    const int64_t n = G->n;
+    if (G->epoch != sim->half.epoch) {
+        grid_sync(sim, G);
+        if (G->status != PD_OK)
+            return G->status;
+    }
+    const double V = sim->p->volume[0];
+    const double dil = (3.0 * sim->sc.bulk_modulus) - (5.0 * sim->sc.shear_modulus);
+    grid_arrays A = {.y0 = sim->y[0], .y1 = sim->y[1], .y2 = sim->y[2], .f0 = sim->f[0],
+                     .f1 = sim->f[1], .f2 = sim->f[2], .s0 = sim->s0, .s0n = sim->s0_new,
+                     .s00 = sim->sc.s00, .alpha = sim->sc.alpha};
+    /* theta (Algorithm 4): the sums over the bonds, then 3/m_i */
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++)
+        theta[i] = 0.0;
+    for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
+            lps_theta_block(G, blk, &A, theta, V);
+    }
+    double *ta = G->y[0], *tb = G->y[1]; /* scratch of the lattice order */
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++) {
+        theta[i] = m[i] != 0.0 ? (3.0 / m[i]) * theta[i] : 0.0;
+        ta[i] = m[i] != 0.0 ? theta[i] / m[i] : 0.0;
+        tb[i] = m[i] != 0.0 ? 1.0 / m[i] : 0.0;
+        if (failure)
+            sim->s0_new[i] = -INFINITY;
+    }
+    /* the forces (Algorithm 2) and the breaking test */
+    int bad = 0;
+    for (int64_t blk = 0; blk < G->nblocks; blk++)
+        G->breaks[blk].n = 0;
+    for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel for schedule(dynamic, 1) reduction(| : bad)
+        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
+            bad |= (failure ? lps_force_block_1 : lps_force_block_0)(
+                       G, blk, &A, ta, tb, V, dil, sim->sc.shear_modulus) != 0;
+    }
+    if (bad)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the broken bonds of a step");
+    if (!failure)
+        return PD_OK;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
+        if (sim->s0_new[i] == -INFINITY)
+            sim->s0_new[i] = DBL_MAX;
+    for (int64_t blk = 0; blk < G->nblocks; blk++)
+        for (int64_t e = 0; e < G->breaks[blk].n; e++)
+            mark(ctx, G->breaks[blk].g[e], G->breaks[blk].j[e]);
+    return PD_OK;
 }

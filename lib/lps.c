@@ -764,9 +764,35 @@ static double break_marked(pd_sim *sim, lps_state *st)
     return pd_sum_fixed(st->released, sim->n);
 }
 
-static void lps_kernel(pd_sim *sim, lps_state *st, int failure)
+/* A bond i-j (i < j) the lattice stencil broke: marked as force_row
+ * marks one, for break_marked. */
+typedef struct {
+    pd_sim *sim;
+    lps_state *st;
+    int64_t count;
+} stencil_marks;
+
+static void mark_break(void *ctx, int64_t i, int64_t j)
+{
+    stencil_marks *c = ctx;
+    const pd_bonds *b = c->sim->b;
+    const int64_t k = find32(b->neighbor, b->offset[i], b->offset[i + 1], (int32_t)j);
+    if (k < b->offset[i + 1])
+        c->st->kill[k >> 6] |= UINT64_C(1) << (k & 63);
+    c->st->touched[i] = c->st->touched[j] = 1;
+    c->count++;
+}
+
+static pd_status lps_kernel(pd_sim *sim, lps_state *st, int failure)
 {
     const uint64_t *bits = pd_sim_intact(sim); /* sim->intact, up to date */
+    if (sim->grid && st->model == PD_MODEL_LPS) { /* the lattice stencil (lib/grid.c) */
+        stencil_marks c = {sim, st, 0};
+        pd_status s = pd_grid_lps(sim, st->m, st->theta, failure, mark_break, &c);
+        if (s == PD_OK && c.count > 0)
+            sim->released += break_marked(sim, st);
+        return s;
+    }
     int broke = 0;
 #pragma omp parallel num_threads(st->nthreads)
     {
@@ -795,21 +821,21 @@ static void lps_kernel(pd_sim *sim, lps_state *st, int failure)
     }
     if (broke)
         sim->released += break_marked(sim, st);
+    return PD_OK;
 }
 
 static pd_status lps_force(pd_sim *sim, void *state)
 {
-    lps_kernel(sim, state, 0);
-    return PD_OK;
+    return lps_kernel(sim, state, 0);
 }
 
 static pd_status lps_failure_force(pd_sim *sim, void *state)
 {
-    if (sim->setup) { /* step 0: forces only; s0 stays +inf */
-        lps_kernel(sim, state, 0);
-        return PD_OK;
-    }
-    lps_kernel(sim, state, 1);
+    if (sim->setup) /* step 0: forces only; s0 stays +inf */
+        return lps_kernel(sim, state, 0);
+    pd_status st = lps_kernel(sim, state, 1);
+    if (st != PD_OK)
+        return st;
     double *t = sim->s0;
     sim->s0 = sim->s0_new;
     sim->s0_new = t; /* sim->intact stays fresh: break_marked keeps it */

@@ -143,6 +143,15 @@ void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *inta
     }
 }
 
+void pd_half_drop_weights(pd_half_bonds *h)
+{
+    if (h->w_ji != h->w_ij)
+        free(h->w_ji);
+    free(h->w_ij);
+    free(h->length);
+    h->w_ij = h->w_ji = h->length = NULL;
+}
+
 int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j)
 {
     int64_t q = lower_bound(h->neighbor, h->offset[i], h->offset[i + 1], (int32_t)j);

@@ -96,6 +96,8 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
         hs = pd_half_laws(p, b, s, &sim->half);
     if (hs == PD_OK)
         hs = pd_grid_new(sim, &sim->grid);
+    if (hs == PD_OK && PD_MODEL_STATE_BASED(s->model)) /* lib/lps.c keeps its own */
+        pd_half_drop_weights(&sim->half);
     if (hs != PD_OK) {
         pd_sim_free(sim);
         return hs;

@@ -147,6 +147,9 @@ double pd_bond_stiffness_laws(const pd_particles *p, const pd_bonds *b, const pd
 
 /* Break every bond of particle i (both halves). */
 void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i);
+/* Free the lengths and weights of the half bonds, for the kernels that
+ * take them from elsewhere (the lattice stencil's offsets, LPS's own). */
+void pd_half_drop_weights(pd_half_bonds *h);
 /* The half bond i-j (i < j): its index, or -1 when there is none. */
 int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j);
 
@@ -163,6 +166,13 @@ pd_status pd_grid_pmb(pd_sim *sim, int failure);
 int pd_grid_offsets(const pd_grid *g);
 int pd_grid_contact(const pd_grid *g);
 int pd_grid_pair(const pd_grid *g, int64_t i, int64_t j);
+/* LPS on the stencil (lib/lps.c without ellipsoids, particles in lattice
+ * order): theta of Algorithm 4 into theta (m: the weighted volumes), the
+ * forces of Algorithm 2 and with failure the test and s0_new; each broken
+ * bond i-j (i < j) goes to mark(ctx, i, j), its stencil bit already
+ * cleared. */
+pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, int failure,
+                      void (*mark)(void *ctx, int64_t i, int64_t j), void *ctx);
 /* The bonds' elastic energy, J, added to e[i]. */
 void pd_grid_pmb_energy(const pd_sim *sim, double *e);
 /* The contact energy of the stencil pairs, J, added to e[i]. */

@@ -58,9 +58,42 @@ for name in a['frames']:
     [[ "$stderr" != *stencil* ]]
     run -0 --separate-stderr pd-run "${RUN_OPTS[@]}" --fibre 1,0,0,2e22,1e22 --steps 1 model.h5 -o e.h5
     [[ "$stderr" != *stencil* ]]
+    # LPS takes it too, but not with ellipsoids (omega then depends on the
+    # direction), nor VES and EPS (their histories are per directed bond)
     run -0 --separate-stderr pd-run --model lps --bulk-modulus "$BULK" --shear-modulus 8e9 \
         --steps 1 model.h5 -o f.h5
+    [[ "$stderr" == *"lattice stencil of 61 offsets"* ]]
+    run -0 --separate-stderr pd-run --model lps --bulk-modulus "$BULK" --shear-modulus 8e9 \
+        --ellipsoid 1,0,0,1,1,0 --steps 1 model.h5 -o g.h5
     [[ "$stderr" != *stencil* ]]
+    for m in "ves --ves-lambda 0.5 --ves-tau 1e-6" "eps --yield-stress 1e8"; do
+        # shellcheck disable=SC2086 # the model's options
+        run -0 --separate-stderr pd-run --model $m --bulk-modulus "$BULK" --shear-modulus 8e9 \
+            --steps 1 model.h5 -o h.h5
+        [[ "$stderr" != *stencil* ]]
+    done
+    # LPS in another particle order keeps the list (its arrays are in the
+    # file's order)
+    pd-bonds -q --no-sort --horizon "$HORIZON" lattice.h5 -o unsorted.h5
+    run -0 --separate-stderr pd-run --model lps --bulk-modulus "$BULK" --shear-modulus 8e9 \
+        --steps 1 unsorted.h5 -o i.h5
+    [[ "$stderr" != *stencil* ]]
+}
+
+@test "LPS on the stencil gives the bond list's run to rounding: failure, contact, indenter" {
+    make_block
+    opts=(--model lps --bulk-modulus "$BULK" --shear-modulus 8e9 --failure 0.0005,0.25 --contact
+          --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --every 20 -q --threads 2)
+    pd-run "${opts[@]}" --steps 80 model.h5 -o grid.h5
+    pd-run "${opts[@]}" --steps 80 --bond-list model.h5 -o list.h5
+    run -0 agree grid.h5 list.h5
+    [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\  ]]
+    # 1 and 2 threads, bit for bit; and a restart
+    pd-run "${opts[@]}" --steps 80 --threads 1 model.h5 -o t1.h5
+    run -0 h5_same grid.h5 t1.h5 'history|threads'
+    pd-run "${opts[@]}" --steps 40 model.h5 -o half.h5
+    pd-run -q --restart half.h5 --steps 40 --threads 2 -o rest.h5
+    run -0 h5_same grid.h5 rest.h5 'history|threads|^/scene'
 }
 
 @test "the stencil gives the bond list's run to rounding: failure, contact, indenter" {
