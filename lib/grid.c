@@ -1,13 +1,15 @@
 /*
- * grid.c -- the PMB bonds of a body on a lattice, walked as a stencil.
+ * grid.c -- the bonds of a body on a lattice, walked as a stencil (PMB, and
+ * LPS without ellipsoids).
  *
  * A body made by pd-lattice sits on a simple cubic (or, for a plate,
  * square) lattice of spacing h, and pd-bonds gives every particle a bond to
  * each particle at a lattice offset d with |d| h <= delta.  Such a bond is
  * named by its first particle and its offset: no neighbour index, length or
  * weight needs to be stored per bond, only one bit of state.  When pd-run
- * finds a PMB scene on such a body (pd_grid_new checks every condition
- * below; any other scene keeps the bond list of lib/pmb.c), it walks the
+ * finds a PMB scene, or an LPS one whose influence depends on |xi| alone,
+ * on such a body (pd_grid_new checks every condition below; any other
+ * scene keeps the bond lists of lib/pmb.c and lib/lps.c), it walks the
  * bonds as a stencil:
  *
  *   - Lattice coordinates.  Particle i sits at lo + h c_i with integer c_i
@@ -919,21 +921,30 @@ pd_status pd_grid_pmb(pd_sim *sim, int failure)
         for (int64_t i = 0; i < n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
             if (sim->s0_new[i] == -INFINITY)
                 sim->s0_new[i] = DBL_MAX;
-        /* the broken bonds into the half bonds, and their energy, in block
-         * order: the same at any thread count */
-        for (int64_t blk = 0; blk < G->nblocks; blk++) {
-            const grid_breaks *bl = &G->breaks[blk];
-            double rel = 0;
-            for (int64_t e = 0; e < bl->n; e++) {
-                int64_t i = perm ? perm[bl->g[e]] : bl->g[e], j = perm ? perm[bl->j[e]] : bl->j[e];
-                int64_t q = pd_half_find(&sim->half, i < j ? i : j, i < j ? j : i);
-                if (q < 0)
-                    continue; /* cannot be: the masks came from the half bonds */
-                pd_bond_break(sim->half.intact, q);
-                rel += bond_energy(sim, G, i, j, bl->k[e]);
+        /* the broken bonds into the half bonds, and their energy: per block,
+         * summed in block order (the same at any thread count).  In lattice
+         * order a block's bonds are half bonds of its own rows, whose bits
+         * other blocks than its neighbours never share: even blocks, then
+         * odd ones, in parallel; through a permutation, one by one. */
+        for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel for schedule(dynamic, 1) if (!perm)
+            for (int64_t blk = phase; blk < G->nblocks; blk += 2) {
+                const grid_breaks *bl = &G->breaks[blk];
+                double rel = 0;
+                for (int64_t e = 0; e < bl->n; e++) {
+                    int64_t i = perm ? perm[bl->g[e]] : bl->g[e];
+                    int64_t j = perm ? perm[bl->j[e]] : bl->j[e];
+                    int64_t q = pd_half_find(&sim->half, i < j ? i : j, i < j ? j : i);
+                    if (q < 0)
+                        continue; /* cannot be: the masks came from the half bonds */
+                    pd_bond_break(sim->half.intact, q);
+                    rel += bond_energy(sim, G, i, j, bl->k[e]);
+                }
+                G->released[blk] = rel;
             }
-            sim->released += rel;
         }
+        for (int64_t blk = 0; blk < G->nblocks; blk++)
+            sim->released += G->released[blk];
     }
     tf += pd_wtime() - t0;
     sim->timers[PD_T_FAILURE] += tf;
