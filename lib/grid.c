@@ -1026,40 +1026,40 @@ void pd_grid_pmb_energy(const pd_sim *sim, double *e)
  * for product; each bond is computed once and added to both ends (the pair
  * force t_ij of Algorithm 2 is symmetric: equal volumes, nu_ij = nu_ji). */
 
-/* omega |xi| e nu V of bond g-j (Algorithm 4's term), 0 when broken. */
-static inline __attribute__((always_inline)) double
-theta_term(const pd_grid *G, const grid_arrays *A, int k, int64_t g, int64_t j, double mu,
-           double V)
-{
-    const double dx = A->y0[j] - A->y0[g], dy = A->y1[j] - A->y1[g], dz = A->y2[j] - A->y2[g];
-    const double r = sqrt(dx * dx + dy * dy + dz * dz);
-    double e = r - G->len[k];
-    e = fabs(e) < PD_NEAR_ZERO ? 0.0 : e;
-    return mu * (G->omega[k] * G->len[k] * e * V * G->nu[k]);
-}
+/* Algorithm 4's term omega |xi| e nu V of bond g-j (0 when broken), added
+ * to the sums of both ends. */
+#define GRID_THETA_BODY                                                                        \
+    do {                                                                                       \
+        const int64_t j = g + shift;                                                           \
+        const double mu = (mask[g * W] & bit) ? 1.0 : 0.0;                                     \
+        const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];               \
+        const double r = sqrt(dx * dx + dy * dy + dz * dz);                                    \
+        double e = r - len;                                                                    \
+        e = fabs(e) < PD_NEAR_ZERO ? 0.0 : e;                                                  \
+        const double c = mu * (oml * e * V * nu);                                              \
+        sum[g] += c;                                                                           \
+        sum[j] += c;                                                                           \
+    } while (0)
 
 PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, const grid_arrays *A,
                                              double *sum, double V)
 {
+    const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
+    const int W = G->words;
     for (int64_t si = G->block_seg[blk]; si < G->block_seg[blk + 1]; si++) {
         const grid_seg *sg = &G->seg[si];
-        const int k = sg->k, W = G->words;
+        const int k = sg->k;
         const uint64_t bit = UINT64_C(1) << (k & 63);
-        const uint64_t *mask = G->mask + (k >> 6);
+        const uint64_t *restrict mask = G->mask + (k >> 6);
         const int64_t shift = sg->shift;
+        const double len = G->len[k], oml = G->omega[k] * len, nu = G->nu[k];
         if (shift >= GRID_SAFE) {
 #pragma omp simd safelen(GRID_SAFE)
-            for (int64_t g = sg->lo; g < sg->hi; g++) {
-                const double c = theta_term(G, A, k, g, g + shift, (mask[g * W] & bit) ? 1.0 : 0.0, V);
-                sum[g] += c;
-                sum[g + shift] += c;
-            }
+            for (int64_t g = sg->lo; g < sg->hi; g++)
+                GRID_THETA_BODY;
         } else
-            for (int64_t g = sg->lo; g < sg->hi; g++) {
-                const double c = theta_term(G, A, k, g, g + shift, (mask[g * W] & bit) ? 1.0 : 0.0, V);
-                sum[g] += c;
-                sum[g + shift] += c;
-            }
+            for (int64_t g = sg->lo; g < sg->hi; g++)
+                GRID_THETA_BODY;
     }
 }
 
