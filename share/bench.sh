@@ -33,7 +33,7 @@
 #       BENCH_SIZES particles (default "25k 100k 400k 1.6M"; a larger disk
 #       with the same spacing and thickness, radius 37 mm times the square
 #       root of the factor; the seed disk itself stands for 100k), for
-#       BENCH_STEPS x 103110 / N steps (at least 30, at most BENCH_STEPS;
+#       BENCH_STEPS x 103110 / N steps (at least 100, at most BENCH_STEPS;
 #       one status line, at the end):
 #       time per bond (i < j) per step and peak memory per particle;
 #   (f) threads ("threads"): the full PMB scene on 1 thread against (a):
@@ -332,7 +332,7 @@ if ! skip scaling; then
             build_model "$m" "$(awk -v n="$n" -v s="$SEED_N" 'BEGIN { printf "%.6g", 0.037 * sqrt(n / s) }')"
         fi
         ns=$(awk -v n="$n" -v s="$SEED_N" -v st="$STEPS" 'BEGIN {
-            k = int(st * s / n + 0.5); if (k < 30) k = 30; if (k > st) k = st; print k }')
+            k = int(st * s / n + 0.5); if (k < 100) k = 100; if (k > st) k = st; print k }')
         # one status line (at the end): each costs an energy pass over the
         # bonds, and the default, every steps/10, would charge the short
         # runs of the large disks more of them per step
