@@ -721,6 +721,24 @@ static void seg_contact(pd_grid *G, const grid_seg *sg, const grid_arrays *A, in
     }
 }
 
+/* The bond of lane q of a segment's chunk (particle g = c0 + q, partner j
+ * = g + shift): its state mu (0 or 1), vector d = y_j - y_g, length r,
+ * stretch s (0 below eps_machine of extension, seed 000) and force per
+ * unit length fs (f_g += fs d; 0 when r = 0); near counts the pairs closer
+ * than d_k.  Both loops of seg_bonds share it. */
+#define GRID_PMB_BOND                                                                          \
+    const int64_t g = c0 + q, j = g + shift;                                                   \
+    const double mu = (mask[g * W] & bit) ? 1.0 : 0.0;                                         \
+    const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];                   \
+    const double r = sqrt(dx * dx + dy * dy + dz * dz);                                        \
+    double dr = r - L;                                                                         \
+    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;                                                   \
+    const double s = dr * iL;                                                                  \
+    const double fb = w * s * mu;                                                              \
+    if (contact)                                                                               \
+        near += r < dc ? 1.0 : 0.0;                                                            \
+    const double fs = r > 0.0 ? fb / r : 0.0
+
 /* The bonds (and contacts) of one segment.  `fused`: one pass that updates
  * both ends as it goes (the shift is at least GRID_SAFE, so the two ends of
  * the lanes of one vector never overlap); otherwise the forces go to
@@ -746,17 +764,7 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
         if (fused) {
 #pragma omp simd reduction(+ : nbreak, near) safelen(GRID_SAFE)
             for (int64_t q = 0; q < m; q++) {
-                const int64_t g = c0 + q, j = g + shift;
-                const double mu = (mask[g * W] & bit) ? 1.0 : 0.0;
-                const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
-                const double r = sqrt(dx * dx + dy * dy + dz * dz);
-                double dr = r - L;
-                dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-                const double s = dr * iL;
-                const double fb = w * s * mu;
-                if (contact)
-                    near += r < dc ? 1.0 : 0.0;
-                const double fs = r > 0.0 ? fb / r : 0.0;
+                GRID_PMB_BOND;
                 f0[g] += fs * dx;
                 f1[g] += fs * dy;
                 f2[g] += fs * dz;
@@ -775,17 +783,7 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
             }
         } else {
             for (int64_t q = 0; q < m; q++) {
-                const int64_t g = c0 + q, j = g + shift;
-                const double mu = (mask[g * W] & bit) ? 1.0 : 0.0;
-                const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
-                const double r = sqrt(dx * dx + dy * dy + dz * dz);
-                double dr = r - L;
-                dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-                const double s = dr * iL;
-                const double fb = w * s * mu;
-                if (contact)
-                    near += r < dc ? 1.0 : 0.0;
-                const double fs = r > 0.0 ? fb / r : 0.0;
+                GRID_PMB_BOND;
                 gx[q] = fs * dx;
                 gy[q] = fs * dy;
                 gz[q] = fs * dz;
