@@ -950,70 +950,61 @@ pd_status pd_grid_pmb(pd_sim *sim, int failure)
     return PD_OK;
 }
 
-/* The contact energy of the stencil pairs, half of each pair to each end:
- * e_i += 1/4 (c_S/delta) (d_k - r)^2 V_i V_j (lib/contact.c's). */
-void pd_grid_contact_energy(const pd_sim *sim, double *e)
+/* The energy of the stencil pairs, half of each pair to each end: with
+ * `contact`, e_i += 1/4 (c_S/delta) (d_k - r)^2 V_i V_j over the contact
+ * pairs closer than d_k (lib/contact.c's), else e_i += 1/4 c s^2 |xi| nu
+ * V_i V_j over the intact bonds (lib/pmb.c's pmb_energy).  Even blocks,
+ * then odd ones, so that no two threads add to one particle. */
+static void pair_energy(const pd_sim *sim, double *e, const int contact)
 {
     const pd_grid *G = sim->grid;
-    if (G == NULL || G->cmask == NULL)
-        return;
     const double V = sim->p->volume[0];
     const int W = G->words;
+    const uint64_t *bits = contact ? G->cmask : G->mask;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel for schedule(dynamic, 1)
         for (int64_t blk = phase; blk < G->nblocks; blk += 2)
-            for (int64_t s = G->block_seg[blk]; s < G->block_seg[blk + 1]; s++) {
-                const grid_seg *sg = &G->seg[s];
+            for (int64_t si = G->block_seg[blk]; si < G->block_seg[blk + 1]; si++) {
+                const grid_seg *sg = &G->seg[si];
                 const int k = sg->k;
                 const uint64_t bit = UINT64_C(1) << (k & 63);
+                const double L = G->len[k], iL = G->inv_len[k], dc = G->dc[k];
+                const double c = contact ? 0.25 * G->kc * V : 0.25 * G->w[k] * L * V;
                 for (int64_t g = sg->lo; g < sg->hi; g++) {
-                    if (!(G->cmask[g * W + (k >> 6)] & bit))
+                    if (!(bits[g * W + (k >> 6)] & bit))
                         continue;
-                    int64_t i = G->perm ? G->perm[g] : g;
-                    int64_t j = G->perm ? G->perm[g + sg->shift] : g + sg->shift;
-                    double dx = sim->y[0][j] - sim->y[0][i], dy = sim->y[1][j] - sim->y[1][i],
-                           dz = sim->y[2][j] - sim->y[2][i];
-                    double r = sqrt(dx * dx + dy * dy + dz * dz);
-                    if (r < G->dc[k]) {
-                        double x = 0.25 * G->kc * (G->dc[k] - r) * (G->dc[k] - r) * V;
-                        e[i] += x;
-                        e[j] += x;
+                    const int64_t i = G->perm ? G->perm[g] : g;
+                    const int64_t j = G->perm ? G->perm[g + sg->shift] : g + sg->shift;
+                    const double dx = sim->y[0][j] - sim->y[0][i],
+                                 dy = sim->y[1][j] - sim->y[1][i],
+                                 dz = sim->y[2][j] - sim->y[2][i];
+                    const double r = sqrt(dx * dx + dy * dy + dz * dz);
+                    double x;
+                    if (contact) {
+                        if (!(r < dc))
+                            continue;
+                        x = c * (dc - r) * (dc - r);
+                    } else {
+                        double dr = r - L;
+                        dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+                        x = c * ((dr * iL) * (dr * iL));
                     }
+                    e[i] += x;
+                    e[j] += x;
                 }
             }
     }
 }
 
-/* The bonds' elastic energy, half of each bond to each end: e_i += 1/4 c
- * s^2 |xi| nu V_i V_j (lib/pmb.c's pmb_energy, each bond once). */
+void pd_grid_contact_energy(const pd_sim *sim, double *e)
+{
+    if (sim->grid && sim->grid->cmask)
+        pair_energy(sim, e, 1);
+}
+
 void pd_grid_pmb_energy(const pd_sim *sim, double *e)
 {
-    const pd_grid *G = sim->grid;
-    const double V = sim->p->volume[0];
-    const int W = G->words;
-    for (int phase = 0; phase < 2; phase++) {
-#pragma omp parallel for schedule(dynamic, 1)
-        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
-            for (int64_t s = G->block_seg[blk]; s < G->block_seg[blk + 1]; s++) {
-                const grid_seg *sg = &G->seg[s];
-                const int k = sg->k;
-                const uint64_t bit = UINT64_C(1) << (k & 63);
-                const double L = G->len[k], iL = G->inv_len[k], c = 0.25 * G->w[k] * L * V;
-                for (int64_t g = sg->lo; g < sg->hi; g++) {
-                    if (!(G->mask[g * W + (k >> 6)] & bit))
-                        continue;
-                    int64_t i = G->perm ? G->perm[g] : g;
-                    int64_t j = G->perm ? G->perm[g + sg->shift] : g + sg->shift;
-                    double dx = sim->y[0][j] - sim->y[0][i], dy = sim->y[1][j] - sim->y[1][i],
-                           dz = sim->y[2][j] - sim->y[2][i];
-                    double dr = sqrt(dx * dx + dy * dy + dz * dz) - L;
-                    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-                    const double s2 = (dr * iL) * (dr * iL);
-                    e[i] += c * s2;
-                    e[j] += c * s2;
-                }
-            }
-    }
+    pair_energy(sim, e, 0);
 }
 
 /* ------------------------------------------------------------------- LPS */
