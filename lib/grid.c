@@ -978,7 +978,10 @@ static void pair_energy(const pd_sim *sim, double *e, const int contact)
                     const double dx = sim->y[0][j] - sim->y[0][i],
                                  dy = sim->y[1][j] - sim->y[1][i],
                                  dz = sim->y[2][j] - sim->y[2][i];
-                    const double r = sqrt(dx * dx + dy * dy + dz * dz);
+                    const double r2 = dx * dx + dy * dy + dz * dz;
+                    if (contact && !(r2 < dc * dc)) /* the most, no square root */
+                        continue;
+                    const double r = sqrt(r2);
                     double x;
                     if (contact) {
                         if (!(r < dc))
