@@ -188,3 +188,28 @@ with h5py.File(sys.argv[1]) as f:
     pd-run -q "${opts[@]}" --bond-list model.h5 -o list.h5
     run -0 agree grid.h5 list.h5
 }
+
+@test "two bodies meeting: their contact goes through the list, found as the bond list finds it" {
+    # two blocks 4 spacings apart (farther than the horizon: no stencil
+    # pair joins them); the right one is driven into the left one, so
+    # their contact pairs are the contact list's, not the stencil's
+    pd-lattice -q --spacing "$SPACING" --density "$DENSITY" --box 0,0.005,0,0.005,0,0.005 \
+        --box 0.009,0.014,0,0.005,0,0.005 --set push=box,0.0085,0.0145,0,0.005,0,0.005 -o two.h5
+    pd-bonds -q --horizon "$HORIZON" two.h5 -o model.h5
+    opts=(--bulk-modulus "$BULK" --contact --velocity-bc push,x,-20 --steps 800 --every 100 -q)
+    pd-run "${opts[@]}" model.h5 -o grid.h5
+    pd-run "${opts[@]}" --bond-list model.h5 -o list.h5
+    run -0 agree grid.h5 list.h5
+    # some frame has pairs from the two blocks in contact
+    py "
+with h5py.File(sys.argv[1]) as f:
+    x = f['particles/position'][:]
+    r2 = ((x[:, None, :] - x[None, :, :]) ** 2).sum(-1)
+    hits = 0
+    for g in f['frames'].values():
+        y = x + g['displacement'][:]
+        d2 = ((y[:, None, :] - y[None, :, :]) ** 2).sum(-1)
+        near = (d2 < (1.35 * $SPACING) ** 2) & (r2 > $HORIZON ** 2)
+        hits += near.sum() > 0 and g.attrs['contact_energy'] > 0
+    assert hits > 0, 'the blocks never met'" grid.h5
+}
