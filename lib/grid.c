@@ -590,7 +590,7 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
         for (int k = 0; k < G->nk && ok > 0; k++) {
             G->omega[k] = pd_lps_influence(sc->influence, G->len[k], b->horizon);
             G->nu[k] = G->w[k];
-            G->w[k] = sc->c * V * G->w[k]; /* c V nu, as pd_half_build */
+            G->w[k] = sc->c * V * G->w[k]; /* c V nu, as pd_half_weights */
         }
         G->kc = PD_CONTACT_SCALE * sc->c / b->horizon * V;
         size_t words = (size_t)n * G->words;
@@ -630,8 +630,6 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
         pd_grid_free(G);
         return s;
     }
-    /* the offsets hold what the half bonds' lengths and weights held */
-    pd_half_drop_weights(&sim->half);
     *out = G;
     return PD_OK;
 }

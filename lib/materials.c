@@ -24,7 +24,7 @@
  *
  * The run keeps c in the half bonds' weights w = c V nu (lib/pmb.c), so a
  * bond's own c costs the force kernel nothing: pd_half_laws scales the
- * weights of pd_half_build by c_bond / c, so that a bond whose c is the
+ * weights of pd_half_weights by c_bond / c, so that a bond whose c is the
  * scene's keeps its weight bit for bit.  Its own s00 enters the
  * failure test of seed 000 eqs. 8-9 as a factor k = s00_bond / s00 (s00 the
  * scene's): the bond breaks when
@@ -147,7 +147,7 @@ int64_t pd_material_paint(pd_particles *p, const pd_region *r, int32_t id)
 pd_status pd_half_laws(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
                        pd_half_bonds *h)
 {
-    (void)b; /* the weights of pd_half_build hold V nu already */
+    (void)b; /* the weights of pd_half_weights hold V nu already */
     if (!(s->c > 0))
         return pd_fail(PD_ERR_INVALID, "the scene's micromodulus must be positive");
     size_t m = (size_t)(h->count > 0 ? h->count : 1);
@@ -156,7 +156,7 @@ pd_status pd_half_laws(const pd_particles *p, const pd_bonds *b, const pd_scene 
         return pd_fail(PD_ERR_NOMEM, "out of memory for the bond laws");
     const int shared = h->w_ji == h->w_ij;
     int bad = 0;
-    /* w = c V nu of pd_half_build times c_bond / c: a bond whose c is the
+    /* w = c V nu of pd_half_weights times c_bond / c: a bond whose c is the
      * scene's keeps its weight bit for bit */
 #pragma omp parallel for schedule(static) reduction(| : bad)
     for (int64_t i = 0; i < h->n; i++)

@@ -61,7 +61,7 @@ void pd_half_free(pd_half_bonds *h)
     free(h->kfail);
 }
 
-pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h)
+pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
 {
     int64_t n = b->n, count = 0;
     h->n = n;
@@ -83,24 +83,42 @@ pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_h
     h->count = count;
     size_t m = (size_t)(count > 0 ? count : 1);
     h->neighbor = malloc(m * sizeof(int32_t));
-    h->length = malloc(m * sizeof(double));
-    h->w_ij = malloc(m * sizeof(double));
-    h->w_ji = malloc(m * sizeof(double));
     h->intact = calloc((size_t)pd_bits_words(count) + 1, sizeof(uint64_t));
-    if (!h->neighbor || !h->length || !h->w_ij || !h->w_ji || !h->intact)
+    if (!h->neighbor || !h->intact)
         return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)count);
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++) {
         int64_t k = b->offset[i + 1] - (h->offset[i + 1] - h->offset[i]);
-        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++, k++) {
-            int32_t j = b->neighbor[k];
-            h->neighbor[q] = j;
-            h->length[q] = b->length[k];
-            /* (c V_j) nu in the order LAMMPS peri/pmb multiplies them */
-            h->w_ij[q] = c * p->volume[j] * b->vfactor[k];
-        }
+        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++, k++)
+            h->neighbor[q] = b->neighbor[k];
     }
     pd_half_set_state(h, b, b->intact);
+    h->block = span;
+    h->nblocks = (n + span - 1) / span;
+    h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
+    if (h->released == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");
+    return PD_OK;
+}
+
+pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h)
+{
+    const int64_t n = h->n;
+    size_t m = (size_t)(h->count > 0 ? h->count : 1);
+    h->length = malloc(m * sizeof(double));
+    h->w_ij = malloc(m * sizeof(double));
+    h->w_ji = malloc(m * sizeof(double));
+    if (!h->length || !h->w_ij || !h->w_ji)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)h->count);
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++) {
+        int64_t k = b->offset[i + 1] - (h->offset[i + 1] - h->offset[i]);
+        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++, k++) {
+            h->length[q] = b->length[k];
+            /* (c V_j) nu in the order LAMMPS peri/pmb multiplies them */
+            h->w_ij[q] = c * p->volume[h->neighbor[q]] * b->vfactor[k];
+        }
+    }
     /* the mirror j-i of each bond: rows i meet the entries below the
      * diagonal of row j in ascending order, so a cursor per row finds it */
     for (int64_t j = 0; j < n; j++)
@@ -118,11 +136,6 @@ pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_h
         free(h->w_ji);
         h->w_ji = h->w_ij;
     }
-    h->block = span;
-    h->nblocks = (n + span - 1) / span;
-    h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
-    if (h->released == NULL)
-        return pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");
     return PD_OK;
 }
 
@@ -141,15 +154,6 @@ void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *inta
                 q++;
             }
     }
-}
-
-void pd_half_drop_weights(pd_half_bonds *h)
-{
-    if (h->w_ji != h->w_ij)
-        free(h->w_ji);
-    free(h->w_ij);
-    free(h->length);
-    h->w_ij = h->w_ji = h->length = NULL;
 }
 
 int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j)

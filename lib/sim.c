@@ -89,15 +89,17 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
     for (int d = 0; d < 3; d++)
         memcpy(sim->y[d], p->x[d], n * sizeof(double));
     memcpy(sim->intact, b->intact, (size_t)words * sizeof(uint64_t));
-    pd_status hs = pd_half_build(p, b, s->c, &sim->half);
+    pd_status hs = pd_half_build(b, &sim->half);
     if (hs == PD_OK && pd_scene_has_laws(s))
         hs = pd_bond_laws_check(p, s);
-    if (hs == PD_OK && pd_scene_has_laws(s))
-        hs = pd_half_laws(p, b, s, &sim->half);
     if (hs == PD_OK)
         hs = pd_grid_new(sim, &sim->grid);
-    if (hs == PD_OK && PD_MODEL_STATE_BASED(s->model)) /* lib/lps.c keeps its own */
-        pd_half_drop_weights(&sim->half);
+    /* the bond list of PMB, where the lattice stencil does not serve (LPS
+     * keeps its own weights) */
+    if (hs == PD_OK && !sim->grid && !PD_MODEL_STATE_BASED(s->model))
+        hs = pd_half_weights(p, b, s->c, &sim->half);
+    if (hs == PD_OK && !sim->grid && pd_scene_has_laws(s))
+        hs = pd_half_laws(p, b, s, &sim->half);
     if (hs != PD_OK) {
         pd_sim_free(sim);
         return hs;

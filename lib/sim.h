@@ -67,7 +67,11 @@ typedef struct {
                           kernels (a restart, a lost particle)           */
 } pd_half_bonds;
 
-pd_status pd_half_build(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h);
+/* The half bonds of b: rows, partners and state (what every kernel needs);
+ * pd_half_weights adds the lengths and the weights c V nu that the bond
+ * list of PMB walks (not needed by the lattice stencil nor by LPS). */
+pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h);
+pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h);
 void pd_half_free(pd_half_bonds *h);
 /* The half bonds' bits from directed state bits (the file's), and back. */
 void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact);
@@ -147,9 +151,6 @@ double pd_bond_stiffness_laws(const pd_particles *p, const pd_bonds *b, const pd
 
 /* Break every bond of particle i (both halves). */
 void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i);
-/* Free the lengths and weights of the half bonds, for the kernels that
- * take them from elsewhere (the lattice stencil's offsets, LPS's own). */
-void pd_half_drop_weights(pd_half_bonds *h);
 /* The half bond i-j (i < j): its index, or -1 when there is none. */
 int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j);
 
