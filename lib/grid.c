@@ -75,11 +75,6 @@ typedef struct {
 } grid_seg;
 
 typedef struct {
-    int64_t lo, hi;   /* particles of a run, grid order                   */
-    int64_t s0, s1;   /* its segments                                     */
-} grid_span;
-
-typedef struct {
     int64_t n, cap;
     int64_t *g;     /* grid index of the first end                        */
     int32_t *k;     /* offset                                             */
@@ -102,11 +97,8 @@ struct pd_grid {
     uint64_t *cmask;     /* words per particle: contact pair (NULL: none)  */
     grid_seg *seg;
     int64_t nseg;
-    grid_span *run;      /* the runs: particles [lo, hi), segments [s0, s1) */
-    int64_t nrun;
     int64_t nblocks;
     int64_t *block_seg;  /* nblocks + 1                                    */
-    int64_t *block_run;  /* nblocks + 1                                    */
     grid_breaks *breaks; /* per block                                      */
     double *released;    /* per block                                      */
     double kc;           /* (c_S / delta) V: contact force per overlap     */
@@ -136,9 +128,7 @@ void pd_grid_free(pd_grid *G)
     free(G->mask);
     free(G->cmask);
     free(G->seg);
-    free(G->run);
     free(G->block_seg);
-    free(G->block_run);
     if (G->breaks)
         for (int64_t b = 0; b < G->nblocks; b++) {
             free(G->breaks[b].g);
@@ -420,17 +410,11 @@ static int build_segments(pd_grid *G, const int64_t *inv)
     thick = thick > 0 ? thick : 1;
     G->nblocks = (nout + thick - 1) / thick;
     G->block_seg = calloc((size_t)G->nblocks + 1, sizeof(int64_t));
-    G->block_run = calloc((size_t)G->nblocks + 1, sizeof(int64_t));
-    G->run = malloc((size_t)(nrun > 0 ? nrun : 1) * sizeof *G->run);
-    G->nrun = nrun;
     int64_t cap = nrun * G->nk + 16, nseg = 0;
     G->seg = malloc((size_t)cap * sizeof *G->seg);
-    int ok = G->block_seg && G->block_run && G->run && G->seg;
+    int ok = G->block_seg && G->seg;
     for (int64_t A = 0; A < nrun && ok; A++) {
         const int64_t blk = (gc[2][run[A].start] - lo[2]) / thick;
-        G->run[A].lo = run[A].start;
-        G->run[A].hi = run[A].start + (run[A].a1 - run[A].a0);
-        G->run[A].s0 = nseg;
         for (int k = 0; k < G->nk && ok; k++) {
             const int *d = G->off[k];
             int64_t m = gc[1][run[A].start] + d[1] - lo[1], o = gc[2][run[A].start] + d[2] - lo[2];
@@ -458,17 +442,12 @@ static int build_segments(pd_grid *G, const int64_t *inv)
                 s->k = k;
             }
         }
-        G->run[A].s1 = nseg;
         G->block_seg[blk + 1] = nseg;
-        G->block_run[blk + 1] = A + 1;
     }
     G->nseg = nseg;
-    for (int64_t blk = 1; blk <= G->nblocks && ok; blk++) { /* blocks without runs */
+    for (int64_t blk = 1; blk <= G->nblocks && ok; blk++) /* blocks without runs */
         if (G->block_seg[blk] < G->block_seg[blk - 1])
             G->block_seg[blk] = G->block_seg[blk - 1];
-        if (G->block_run[blk] < G->block_run[blk - 1])
-            G->block_run[blk] = G->block_run[blk - 1];
-    }
     for (int a = 0; a < 3; a++)
         free(gc[a]);
     free(run);

@@ -749,8 +749,8 @@ static double break_marked(pd_sim *sim, lps_state *st)
             for (int64_t r = b->offset[j]; r < b->offset[j + 1]; r++)
                 if (b->neighbor[r] == i)
                     pd_bond_break(bits, r);
-            const int64_t q = find32(h->neighbor, h->offset[i], h->offset[i + 1], j);
-            if (q < h->offset[i + 1])
+            const int64_t q = pd_half_find(h, i, j);
+            if (q >= 0)
                 pd_bond_break(h->intact, q);
         }
     }

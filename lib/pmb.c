@@ -167,9 +167,8 @@ void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i)
     h->epoch++;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
         int32_t j = b->neighbor[k];
-        int64_t row = j < i ? j : i, other = j < i ? i : j;
-        int64_t q = lower_bound(h->neighbor, h->offset[row], h->offset[row + 1], (int32_t)other);
-        if (q < h->offset[row + 1] && h->neighbor[q] == other)
+        int64_t q = pd_half_find(h, j < i ? j : i, j < i ? i : j);
+        if (q >= 0)
             pd_bond_break(h->intact, q);
     }
 }
