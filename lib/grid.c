@@ -194,32 +194,41 @@ static int cmp_order(const void *a, const void *b)
     return (x->g > y->g) - (x->g < y->g);
 }
 
+/* The lattice order of n particles from their coordinates: the old index
+ * of each new position (malloc'd), or NULL when out of memory. */
+static int64_t *sort_lattice(int64_t n, int32_t *const lc[3])
+{
+    order_item *it = malloc((size_t)(n > 0 ? n : 1) * sizeof *it);
+    int64_t *o = malloc((size_t)(n > 0 ? n : 1) * sizeof *o);
+    if (it && o) {
+        for (int64_t i = 0; i < n; i++) {
+            it[i].g = i;
+            for (int d = 0; d < 3; d++)
+                it[i].c[d] = lc[d][i];
+        }
+        qsort(it, (size_t)n, sizeof *it, cmp_order);
+        for (int64_t g = 0; g < n; g++)
+            o[g] = it[g].g;
+    } else {
+        free(o);
+        o = NULL;
+    }
+    free(it);
+    return o;
+}
+
 pd_status pd_lattice_order(const pd_particles *p, int64_t **order)
 {
     *order = NULL;
     int axis[3];
     int32_t *lc[3] = {NULL, NULL, NULL};
-    order_item *it = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof *it);
-    int64_t *o = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof *o);
     for (int d = 0; d < 3; d++)
         lc[d] = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof(int32_t));
     pd_status s = PD_OK;
-    if (!it || !o || !lc[0] || !lc[1] || !lc[2])
+    if (!lc[0] || !lc[1] || !lc[2])
         s = pd_fail(PD_ERR_NOMEM, "out of memory ordering the lattice");
-    else if (pd_lattice_coords(p, axis, lc)) {
-        for (int64_t i = 0; i < p->n; i++) {
-            it[i].g = i;
-            for (int d = 0; d < 3; d++)
-                it[i].c[d] = lc[d][i];
-        }
-        qsort(it, (size_t)p->n, sizeof *it, cmp_order);
-        for (int64_t g = 0; g < p->n; g++)
-            o[g] = it[g].g;
-        *order = o;
-        o = NULL;
-    }
-    free(it);
-    free(o);
+    else if (pd_lattice_coords(p, axis, lc) && (*order = sort_lattice(p->n, lc)) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory ordering the lattice");
     for (int d = 0; d < 3; d++)
         free(lc[d]);
     return s;
@@ -531,7 +540,7 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
     int ok = G->lc[0] && G->lc[1] && G->lc[2] ? 1 : -1;
     if (ok > 0)
         ok = pd_lattice_coords(p, G->axis, G->lc);
-    if (ok > 0 && pd_lattice_order(p, &order) != PD_OK)
+    if (ok > 0 && (order = sort_lattice(n, G->lc)) == NULL)
         ok = -1;
     if (ok > 0 && order) {
         int identity = 1;
