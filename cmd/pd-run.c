@@ -1245,8 +1245,9 @@ int main(int argc, char **argv)
                 (long long)p->n, (long long)(b->count / 2), pd_sim_effects(sim), sc->dt,
                 sc->dt_stable, (long long)nsteps, restart ? " more" : "");
     if (!o.quiet && pd_sim_stencil(sim) > 0)
-        fprintf(stderr, PROG ": bonds walked as a lattice stencil of %d offsets%s\n",
-                pd_sim_stencil(sim), sc->has_contact ? ", with the contact of its pairs" : "");
+        fprintf(stderr, PROG ": bonds walked as a lattice stencil of %d offsets%s%s\n",
+                pd_sim_stencil(sim), pd_sim_stencil_tiles(sim) ? " in AVX-512 tiles" : "",
+                sc->has_contact ? ", with the contact of its pairs" : "");
     if (!o.quiet)
         log_constants(p, sc, &o);
     for (int k = 0; k < o.nbc && !o.quiet; k++) {

@@ -33,6 +33,17 @@
  *     segment is a loop over consecutive particles with consecutive
  *     partners: the loads and the force updates of both ends are
  *     contiguous, and the loop vectorizes without gathers or scatters.
+ *   - Tiles (PMB, AVX-512).  A run at least GRID_TILE long is walked 16
+ *     particles at a time: the tile keeps its own positions, forces and
+ *     new s0 in registers over all its segments, so that a bond loads and
+ *     stores only its partner's (a segment loop stores both ends, and the
+ *     stores bound it).  The segments of a run are in tile order (by inner
+ *     offset first), so that the partner windows of consecutive offsets do
+ *     not overlap: a load that overlaps a store still in flight would wait
+ *     for it.  Breaks and contacts are only flagged in the vector loop and
+ *     found by a scalar pass over the segment (bit for bit the same
+ *     arithmetic).  Other processors, and PD_NO_AVX512 set in the
+ *     environment, walk the segments alone.
  *   - Threads.  Outer planes are cut into blocks at least as thick as the
  *     stencil's reach, so a block's bonds write only to the block and the
  *     next one; even blocks run in parallel, then odd blocks (lib/pmb.c's
@@ -63,16 +74,33 @@
 
 #include "sim.h"
 
+/* The tile kernel of PMB is written for AVX-512 (x86-64, GCC or clang),
+ * taken when the processor has it; any other build or processor walks the
+ * segments alone. */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(PD_NO_CLONES)
+#define PD_GRID_AVX512 1
+#include <immintrin.h>
+#else
+#define PD_GRID_AVX512 0
+#endif
+
 #define GRID_TOL 1e-6    /* a site within 1e-6 h of the lattice is on it  */
 #define GRID_NU_TOL 1e-9 /* nu of one offset equal to this, relatively    */
 #define GRID_CHUNK 256   /* particles per vector pass of a segment        */
 #define GRID_SAFE 16     /* shifts below this take the two-pass loop      */
+#define GRID_TILE 16     /* particles of a tile (runs at least this long) */
 
 typedef struct {
     int64_t lo, hi; /* first particles g of the segment, grid order      */
     int64_t shift;  /* partner g + shift                                  */
     int32_t k;      /* half-stencil offset                                */
 } grid_seg;
+
+/* A run: particles [start, start + len) consecutive along the inner axis,
+ * whose segments are seg[seg0, next run's seg0). */
+typedef struct {
+    int64_t start, len, seg0;
+} grid_run;
 
 typedef struct {
     int64_t n, cap;
@@ -97,13 +125,17 @@ struct pd_grid {
     uint64_t *cmask;     /* words per particle: contact pair (NULL: none)  */
     grid_seg *seg;
     int64_t nseg;
+    grid_run *run;       /* nrun + 1 (the last: seg0 = nseg)               */
+    int64_t nrun;
     int64_t nblocks;
     int64_t *block_seg;  /* nblocks + 1                                    */
+    int64_t *block_run;  /* nblocks + 1                                    */
     grid_breaks *breaks; /* per block                                      */
     double *released;    /* per block                                      */
     double kc;           /* (c_S / delta) V: contact force per overlap     */
     double *y[3], *f[3], *s0, *s0n; /* grid-order copies (perm only)       */
     uint64_t epoch;      /* of the half bonds the masks were built from    */
+    int tile;            /* PMB walks runs as tiles (AVX-512)              */
     int status;          /* PD_OK, or the error a parallel pass met        */
 };
 
@@ -129,6 +161,8 @@ void pd_grid_free(pd_grid *G)
     free(G->cmask);
     free(G->seg);
     free(G->block_seg);
+    free(G->run);
+    free(G->block_run);
     if (G->breaks)
         for (int64_t b = 0; b < G->nblocks; b++) {
             free(G->breaks[b].g);
@@ -356,7 +390,27 @@ static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
 typedef struct {
     int64_t start;   /* grid index of the first particle */
     int32_t a0, a1;  /* inner coordinates [a0, a1)       */
-} grid_run;
+} row_run;
+
+/* The offsets in the order a tile walks them: by inner offset, then outer,
+ * then mid.  Consecutive offsets then differ in mid or outer, so their
+ * partner windows are a row or more apart: the partner stores of one
+ * offset never overlap the partner loads of the next (a load that
+ * overlaps a store still in flight waits for it). */
+static int *tile_order(const pd_grid *G)
+{
+    int *o = malloc((size_t)G->nk * sizeof *o);
+    if (o == NULL)
+        return NULL;
+    int n = 0;
+    for (int di = -G->reach; di <= G->reach; di++)
+        for (int dout = -G->reach; dout <= G->reach; dout++)
+            for (int dm = -G->reach; dm <= G->reach; dm++)
+                for (int k = 0; k < G->nk; k++)
+                    if (G->off[k][0] == di && G->off[k][2] == dout && G->off[k][1] == dm)
+                        o[n++] = k;
+    return o;
+}
 
 /* The runs and the segments; blocks of outer planes. */
 static int build_segments(pd_grid *G, const int64_t *inv)
@@ -373,13 +427,15 @@ static int build_segments(pd_grid *G, const int64_t *inv)
         return 0;
     /* coordinates by grid index */
     int32_t *gc[3] = {malloc((size_t)n * 4), malloc((size_t)n * 4), malloc((size_t)n * 4)};
-    grid_run *run = malloc((size_t)n * sizeof *run);
+    row_run *run = malloc((size_t)n * sizeof *run);
     int64_t *row_first = malloc((size_t)(nmid * nout + 1) * sizeof(int64_t));
-    if (!gc[0] || !gc[1] || !gc[2] || !run || !row_first) {
+    int *order = tile_order(G);
+    if (!gc[0] || !gc[1] || !gc[2] || !run || !row_first || !order) {
         for (int a = 0; a < 3; a++)
             free(gc[a]);
         free(run);
         free(row_first);
+        free(order);
         return -1;
     }
     for (int64_t i = 0; i < n; i++) {
@@ -419,12 +475,19 @@ static int build_segments(pd_grid *G, const int64_t *inv)
     thick = thick > 0 ? thick : 1;
     G->nblocks = (nout + thick - 1) / thick;
     G->block_seg = calloc((size_t)G->nblocks + 1, sizeof(int64_t));
+    G->block_run = calloc((size_t)G->nblocks + 1, sizeof(int64_t));
+    G->run = malloc((size_t)(nrun + 1) * sizeof *G->run);
+    G->nrun = nrun;
     int64_t cap = nrun * G->nk + 16, nseg = 0;
     G->seg = malloc((size_t)cap * sizeof *G->seg);
-    int ok = G->block_seg && G->seg;
+    int ok = G->block_seg && G->block_run && G->run && G->seg;
     for (int64_t A = 0; A < nrun && ok; A++) {
         const int64_t blk = (gc[2][run[A].start] - lo[2]) / thick;
-        for (int k = 0; k < G->nk && ok; k++) {
+        G->run[A].start = run[A].start;
+        G->run[A].len = run[A].a1 - run[A].a0;
+        G->run[A].seg0 = nseg;
+        for (int kk = 0; kk < G->nk && ok; kk++) {
+            const int k = order[kk];
             const int *d = G->off[k];
             int64_t m = gc[1][run[A].start] + d[1] - lo[1], o = gc[2][run[A].start] + d[2] - lo[2];
             if (m < 0 || m >= nmid || o < 0 || o >= nout)
@@ -452,15 +515,22 @@ static int build_segments(pd_grid *G, const int64_t *inv)
             }
         }
         G->block_seg[blk + 1] = nseg;
+        G->block_run[blk + 1] = A + 1;
     }
     G->nseg = nseg;
-    for (int64_t blk = 1; blk <= G->nblocks && ok; blk++) /* blocks without runs */
+    if (ok)
+        G->run[nrun] = (grid_run){.start = n, .len = 0, .seg0 = nseg};
+    for (int64_t blk = 1; blk <= G->nblocks && ok; blk++) { /* blocks without runs */
         if (G->block_seg[blk] < G->block_seg[blk - 1])
             G->block_seg[blk] = G->block_seg[blk - 1];
+        if (G->block_run[blk] < G->block_run[blk - 1])
+            G->block_run[blk] = G->block_run[blk - 1];
+    }
     for (int a = 0; a < 3; a++)
         free(gc[a]);
     free(run);
     free(row_first);
+    free(order);
     return ok ? 1 : -1;
 }
 
@@ -613,6 +683,9 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
         return ok < 0 ? pd_fail(PD_ERR_NOMEM, "out of memory for the lattice bonds") : PD_OK;
     }
     grid_sync(sim, G);
+#if PD_GRID_AVX512
+    G->tile = !lps && G->words == 1 && __builtin_cpu_supports("avx512f") && !getenv("PD_NO_AVX512");
+#endif
     if (G->status != PD_OK) {
         pd_status s = G->status;
         pd_grid_free(G);
@@ -625,6 +698,11 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
 int pd_grid_offsets(const pd_grid *G)
 {
     return G ? G->nk : 0;
+}
+
+int pd_grid_tiles(const pd_grid *G)
+{
+    return G && G->tile;
 }
 
 int pd_grid_contact(const pd_grid *G)
@@ -707,28 +785,36 @@ static void seg_contact(pd_grid *G, const grid_seg *sg, const grid_arrays *A, in
     }
 }
 
-/* The bond of lane q of a segment's chunk (particle g = c0 + q, partner j
- * = g + shift): its state mu (0 or 1), vector d = y_j - y_g, length r,
- * stretch s (0 below eps_machine of extension, seed 000) and force per
- * unit length fs (f_g += fs d; 0 when r = 0); near counts the pairs closer
- * than d_k.  Both loops of seg_bonds share it. */
-#define GRID_PMB_BOND                                                                          \
-    const int64_t g = c0 + q, j = g + shift;                                                   \
-    const double mu = (mask[g * W] & bit) ? 1.0 : 0.0;                                         \
-    const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];                   \
+/* The bond from the particle at (xg, yg, zg) to the one at (xj, yj, zj),
+ * with mask word mw: its state mu (0 or 1, bit `bit`), vector d = y_j -
+ * y_g, length r, stretch s (0 below eps_machine of extension, seed 000)
+ * and force per unit length fs (f_g += fs d; 0 when r = 0), for the offset
+ * of L, iL and w.  Every PMB loop of the stencil takes it, so that a bond
+ * recomputed in another loop comes out bit for bit the same. */
+#define GRID_PMB_PAIR(mw, xg, yg, zg, xj, yj, zj)                                              \
+    const double mu = ((mw) & bit) ? 1.0 : 0.0;                                                \
+    const double dx = (xj) - (xg), dy = (yj) - (yg), dz = (zj) - (zg);                         \
     const double r = sqrt(dx * dx + dy * dy + dz * dz);                                        \
     double dr = r - L;                                                                         \
     dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;                                                   \
     const double s = dr * iL;                                                                  \
     const double fb = w * s * mu;                                                              \
-    if (contact)                                                                               \
-        near += r < dc ? 1.0 : 0.0;                                                            \
     const double fs = r > 0.0 ? fb / r : 0.0
+
+/* The bond of lane q of a segment's chunk (particle g = c0 + q, partner j
+ * = g + shift); near counts the pairs closer than d_k.  Both loops of
+ * seg_bonds share it. */
+#define GRID_PMB_BOND                                                                          \
+    const int64_t g = c0 + q, j = g + shift;                                                   \
+    GRID_PMB_PAIR(mask[g * W], y0[g], y1[g], y2[g], y0[j], y1[j], y2[j]);                      \
+    if (contact)                                                                               \
+        near += r < dc ? 1.0 : 0.0
 
 /* The bonds (and contacts) of one segment.  `fused`: one pass that updates
  * both ends as it goes (the shift is at least GRID_SAFE, so the two ends of
  * the lanes of one vector never overlap); otherwise the forces go to
- * scratch first and the two ends are updated in two loops. */
+ * scratch first and the two ends are updated in two loops.  Runs shorter
+ * than a tile take it. */
 static inline __attribute__((always_inline)) int
 seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failure,
           const int contact, const int one_word, grid_breaks *bl)
@@ -812,6 +898,191 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
     return 0;
 }
 
+#if PD_GRID_AVX512
+/* The broken bonds of a tile's segment: its bonds recomputed one by one
+ * (bit for bit the vector loop's) and those with s > min(s0_g, s0_j)
+ * cleared and recorded.  Breaks are rare: the vector loop only counts
+ * them. */
+static int tile_breaks(pd_grid *G, const grid_seg *sg, const grid_arrays *A, int64_t lo,
+                       int64_t hi, int W, grid_breaks *bl)
+{
+    const int k = sg->k, word = k >> 6;
+    const uint64_t bit = UINT64_C(1) << (k & 63);
+    const double L = G->len[k], iL = G->inv_len[k], w = G->w[k];
+    for (int64_t g = lo; g < hi; g++) {
+        const int64_t j = g + sg->shift;
+        GRID_PMB_PAIR(G->mask[g * W + word], A->y0[g], A->y1[g], A->y2[g], A->y0[j], A->y1[j],
+                      A->y2[j]);
+        (void)fs;
+        const double thr = A->s0[g] < A->s0[j] ? A->s0[g] : A->s0[j];
+        if (mu > 0 && s > thr) {
+            G->mask[g * W + word] &= ~bit;
+            if (record_break(bl, g, k, j))
+                return -1;
+        }
+    }
+    return 0;
+}
+
+/* One half (8 lanes) of a tile against one segment: GRID_PMB_PAIR in
+ * AVX-512, operation for operation (no fused multiply-adds: tile_breaks
+ * must find the same stretches), for the lanes of `act`; the others load
+ * nothing and store nothing.  `all`: every lane is active (plain loads and
+ * stores).  Returns the lanes closer than d_k (contact) and, through brk,
+ * the lanes whose bond breaks. */
+#define TILE_HALF(h, all)                                                                      \
+    do {                                                                                       \
+        const __mmask8 act = (__mmask8)(acts >> (8 * (h)));                                    \
+        const __m512i mw = _mm512_loadu_si512((const void *)(M + 8 * (h)));                    \
+        const __mmask8 kmu = _mm512_mask_test_epi64_mask(act, mw, vbit);                       \
+        const __m512d xj = (all) ? _mm512_loadu_pd(Y0 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi0[h], act, Y0 + 8 * (h));            \
+        const __m512d yj = (all) ? _mm512_loadu_pd(Y1 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi1[h], act, Y1 + 8 * (h));            \
+        const __m512d zj = (all) ? _mm512_loadu_pd(Y2 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi2[h], act, Y2 + 8 * (h));            \
+        const __m512d dx = _mm512_sub_pd(xj, yi0[h]), dy = _mm512_sub_pd(yj, yi1[h]),          \
+                      dz = _mm512_sub_pd(zj, yi2[h]);                                          \
+        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(                                        \
+            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz))); \
+        __m512d dr = _mm512_sub_pd(r, vL);                                                     \
+        dr = _mm512_mask_mov_pd(dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), vnz, _CMP_LT_OQ),    \
+                                zero);                                                         \
+        const __m512d s = _mm512_mul_pd(dr, viL);                                              \
+        const __m512d fb = _mm512_maskz_mul_pd(kmu, _mm512_mul_pd(vw, s), one);                \
+        const __m512d fs =                                                                     \
+            _mm512_maskz_div_pd(_mm512_cmp_pd_mask(r, zero, _CMP_GT_OQ), fb, r);               \
+        const __m512d gx = _mm512_mul_pd(fs, dx), gy = _mm512_mul_pd(fs, dy),                  \
+                      gz = _mm512_mul_pd(fs, dz);                                              \
+        ax[h] = _mm512_add_pd(ax[h], gx);                                                      \
+        ay[h] = _mm512_add_pd(ay[h], gy);                                                      \
+        az[h] = _mm512_add_pd(az[h], gz);                                                      \
+        if (all) {                                                                             \
+            _mm512_storeu_pd(F0 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F0 + 8 * (h)), gx));  \
+            _mm512_storeu_pd(F1 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F1 + 8 * (h)), gy));  \
+            _mm512_storeu_pd(F2 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F2 + 8 * (h)), gz));  \
+        } else {                                                                               \
+            _mm512_mask_storeu_pd(F0 + 8 * (h), act,                                           \
+                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F0 + 8 * (h)), gx)); \
+            _mm512_mask_storeu_pd(F1 + 8 * (h), act,                                           \
+                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F1 + 8 * (h)), gy)); \
+            _mm512_mask_storeu_pd(F2 + 8 * (h), act,                                           \
+                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F2 + 8 * (h)), gz)); \
+        }                                                                                      \
+        if (contact)                                                                           \
+            near |= _mm512_mask_cmp_pd_mask(act, r, vdc, _CMP_LT_OQ);                          \
+        if (failure) {                                                                         \
+            const __m512d sj = (all) ? _mm512_loadu_pd(S0 + 8 * (h))                           \
+                                     : _mm512_mask_loadu_pd(si[h], act, S0 + 8 * (h));         \
+            const __m512d thr = _mm512_min_pd(si[h], sj);                                      \
+            brk |= _mm512_mask_cmp_pd_mask(kmu, s, thr, _CMP_GT_OQ);                           \
+            const __m512d tt =                                                                 \
+                _mm512_mask_sub_pd(ninf, kmu, vs00, _mm512_mul_pd(valpha, s));                 \
+            sm[h] = _mm512_max_pd(tt, sm[h]);                                                  \
+            const __m512d sn = (all) ? _mm512_loadu_pd(SN + 8 * (h))                           \
+                                     : _mm512_maskz_loadu_pd(act, SN + 8 * (h));               \
+            _mm512_mask_storeu_pd(SN + 8 * (h), act, _mm512_max_pd(tt, sn));                   \
+        }                                                                                      \
+    } while (0)
+
+/* The bonds (and contacts) of a run at least a tile long (one mask word
+ * per particle), a tile of 16 consecutive particles at a time (the last
+ * one moved back to end with the run; its lanes of the tile before are
+ * left out).  A tile walks the run's segments (in tile order) with its own
+ * positions, forces and new s0 in registers, so that a bond loads and
+ * stores only its partner's: half the memory traffic of seg_bonds. */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) int
+tile_run(pd_grid *G, const grid_run *R, const grid_arrays *A, const int failure,
+         const int contact, grid_breaks *bl)
+{
+    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+    const __m512d ninf = _mm512_set1_pd(-INFINITY), vnz = _mm512_set1_pd(PD_NEAR_ZERO);
+    const __m512d vs00 = _mm512_set1_pd(A->s00), valpha = _mm512_set1_pd(A->alpha);
+    for (int64_t t = 0; t < R->len; t += GRID_TILE) {
+        const int64_t g0 = R->start + (t + GRID_TILE <= R->len ? t : R->len - GRID_TILE);
+        const int64_t own = R->start + t; /* the lanes before are the last tile's */
+        __m512d yi0[2], yi1[2], yi2[2], si[2], ax[2], ay[2], az[2], sm[2];
+        for (int h = 0; h < 2; h++) {
+            yi0[h] = _mm512_loadu_pd(A->y0 + g0 + 8 * h);
+            yi1[h] = _mm512_loadu_pd(A->y1 + g0 + 8 * h);
+            yi2[h] = _mm512_loadu_pd(A->y2 + g0 + 8 * h);
+            si[h] = failure ? _mm512_loadu_pd(A->s0 + g0 + 8 * h) : zero;
+            ax[h] = ay[h] = az[h] = zero;
+            sm[h] = ninf;
+        }
+        for (int64_t q = R->seg0; q < R[1].seg0; q++) {
+            const grid_seg *sg = &G->seg[q];
+            const int64_t lo = sg->lo > own ? sg->lo : own;
+            const int64_t hi = sg->hi < g0 + GRID_TILE ? sg->hi : g0 + GRID_TILE;
+            if (lo >= hi)
+                continue;
+            const int k = sg->k;
+            const __m512i vbit = _mm512_set1_epi64((long long)(UINT64_C(1) << k));
+            const __m512d vL = _mm512_set1_pd(G->len[k]), viL = _mm512_set1_pd(G->inv_len[k]);
+            const __m512d vw = _mm512_set1_pd(G->w[k]), vdc = _mm512_set1_pd(G->dc[k]);
+            const int64_t j0 = g0 + sg->shift;
+            const uint64_t *M = G->mask + g0;
+            const double *Y0 = A->y0 + j0, *Y1 = A->y1 + j0, *Y2 = A->y2 + j0;
+            const double *S0 = failure ? A->s0 + j0 : NULL;
+            double *F0 = A->f0 + j0, *F1 = A->f1 + j0, *F2 = A->f2 + j0;
+            double *SN = failure ? A->s0n + j0 : NULL;
+            const uint32_t acts = (uint32_t)(((UINT64_C(1) << (hi - g0)) - 1) &
+                                             ~((UINT64_C(1) << (lo - g0)) - 1));
+            __mmask8 near = 0, brk = 0;
+            if (acts == 0xffff) {
+                TILE_HALF(0, 1);
+                TILE_HALF(1, 1);
+            } else {
+                TILE_HALF(0, 0);
+                TILE_HALF(1, 0);
+            }
+            if (contact && near)
+                seg_contact(G, sg, A, lo, hi - lo, 1);
+            if (failure && brk && tile_breaks(G, sg, A, lo, hi, 1, bl))
+                return -1;
+        }
+        double tx[GRID_TILE], ty[GRID_TILE], tz[GRID_TILE], ts[GRID_TILE];
+        for (int h = 0; h < 2; h++) {
+            _mm512_storeu_pd(tx + 8 * h, ax[h]);
+            _mm512_storeu_pd(ty + 8 * h, ay[h]);
+            _mm512_storeu_pd(tz + 8 * h, az[h]);
+            _mm512_storeu_pd(ts + 8 * h, sm[h]);
+        }
+        for (int64_t g = own; g < g0 + GRID_TILE; g++) {
+            A->f0[g] += tx[g - g0];
+            A->f1[g] += ty[g - g0];
+            A->f2[g] += tz[g - g0];
+            if (failure)
+                A->s0n[g] = ts[g - g0] > A->s0n[g] ? ts[g - g0] : A->s0n[g];
+        }
+    }
+    return 0;
+}
+
+/* The AVX-512 variants: runs at least a tile long take tile_run, shorter
+ * ones seg_bonds. */
+#define GRID_TILE_BLOCK(name, failure, contact)                                                \
+    __attribute__((target("avx512f"))) static int name(pd_grid *G, int64_t blk,                \
+                                                       const grid_arrays *A)                   \
+    {                                                                                          \
+        for (int64_t r = G->block_run[blk]; r < G->block_run[blk + 1]; r++) {                  \
+            const grid_run *R = &G->run[r];                                                    \
+            if (R->len >= GRID_TILE) {                                                         \
+                if (tile_run(G, R, A, failure, contact, &G->breaks[blk]))                      \
+                    return -1;                                                                 \
+            } else                                                                             \
+                for (int64_t s = R->seg0; s < R[1].seg0; s++)                                  \
+                    if (seg_bonds(G, &G->seg[s], A, failure, contact, 1, &G->breaks[blk]))     \
+                        return -1;                                                             \
+        }                                                                                      \
+        return 0;                                                                              \
+    }
+GRID_TILE_BLOCK(grid_tile_00, 0, 0)
+GRID_TILE_BLOCK(grid_tile_01, 0, 1)
+GRID_TILE_BLOCK(grid_tile_10, 1, 0)
+GRID_TILE_BLOCK(grid_tile_11, 1, 1)
+#endif
+
 /* The kernel's variants: with or without failure and contact, and with
  * one mask word per particle (up to 64 offsets, delta < 3.3 h: the
  * words load as one vector) or more. */
@@ -876,7 +1147,12 @@ pd_status pd_grid_pmb(pd_sim *sim, int failure)
     }
     tf = pd_wtime() - tf;
     const int contact = G->cmask != NULL;
-    const grid_block_fn fn = grid_blocks[4 * (failure != 0) + 2 * contact + (G->words == 1)];
+    grid_block_fn fn = grid_blocks[4 * (failure != 0) + 2 * contact + (G->words == 1)];
+#if PD_GRID_AVX512
+    static const grid_block_fn tiles[4] = {grid_tile_00, grid_tile_01, grid_tile_10, grid_tile_11};
+    if (G->tile)
+        fn = tiles[2 * (failure != 0) + contact];
+#endif
     int bad = 0;
     for (int64_t blk = 0; blk < G->nblocks; blk++)
         G->breaks[blk].n = 0;

@@ -465,8 +465,10 @@ pd_status pd_sim_step(pd_sim *sim);
 /* Names of the active effects, e.g. "pmb+failure contact indenter". */
 const char *pd_sim_effects(const pd_sim *sim);
 /* The PMB bonds' kernel: the half-stencil offsets of the lattice kernel
- * (lib/grid.c), or 0 when the bond list is walked. */
+ * (lib/grid.c), or 0 when the bond list is walked; whether the stencil
+ * walks its rows in AVX-512 tiles. */
 int pd_sim_stencil(const pd_sim *sim);
+int pd_sim_stencil_tiles(const pd_sim *sim);
 int64_t pd_sim_stepno(const pd_sim *sim);
 double pd_sim_time(const pd_sim *sim);
 double pd_sim_kinetic(const pd_sim *sim);

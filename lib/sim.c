@@ -417,6 +417,11 @@ int pd_sim_stencil(const pd_sim *sim)
     return pd_grid_offsets(sim->grid);
 }
 
+int pd_sim_stencil_tiles(const pd_sim *sim)
+{
+    return pd_grid_tiles(sim->grid);
+}
+
 int64_t pd_sim_stepno(const pd_sim *sim)
 {
     return sim->step;

@@ -162,9 +162,11 @@ void pd_grid_free(pd_grid *g);
 /* The PMB forces (and with `failure` the breaking test and s0), and the
  * contact forces of the stencil pairs when the scene has contact. */
 pd_status pd_grid_pmb(pd_sim *sim, int failure);
-/* Half-stencil offsets (0: no grid); does the kernel take the contact of
- * the stencil pairs; is i-j a stencil pair. */
+/* Half-stencil offsets (0: no grid); are its rows walked in AVX-512
+ * tiles; does the kernel take the contact of the stencil pairs; is i-j a
+ * stencil pair. */
 int pd_grid_offsets(const pd_grid *g);
+int pd_grid_tiles(const pd_grid *g);
 int pd_grid_contact(const pd_grid *g);
 int pd_grid_pair(const pd_grid *g, int64_t i, int64_t j);
 /* LPS on the stencil (lib/lps.c without ellipsoids, particles in lattice
