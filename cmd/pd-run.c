@@ -910,14 +910,17 @@ static void progress(int64_t step, int64_t steps, double elapsed)
     fflush(stderr);
 }
 
-/* The status line, with the energy balance; a kinetic energy that ran
- * away from the energy put in is flagged (once). */
-static void status_line(const pd_sim *sim, int64_t steps, int tty)
+/* The status line, with the energy balance (`known`: the energies of
+ * this step, already taken for its frame; NULL: taken here); a kinetic
+ * energy that ran away from the energy put in is flagged (once). */
+static void status_line(const pd_sim *sim, int64_t steps, int tty, const pd_energy *known)
 {
     static int flagged;
     pd_energy e;
     double ratio;
-    if (pd_sim_energy(sim, &e, NULL) != PD_OK)
+    if (known)
+        e = *known;
+    else if (pd_sim_energy(sim, &e, NULL) != PD_OK)
         return;
     if (!flagged && pd_energy_runaway(sim, &e, &ratio)) {
         fprintf(stderr,
@@ -943,8 +946,11 @@ static void status_line(const pd_sim *sim, int64_t steps, int tty)
                 (long long)pd_sim_lost(sim), e.lost);
 }
 
+/* A frame and the restart data of this step; its energies go to *energy
+ * as well (when not NULL). */
 static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
-                             const pd_sim *sim, unsigned fields, double *t_out)
+                             const pd_sim *sim, unsigned fields, double *t_out,
+                             pd_energy *energy)
 {
     double t0 = pd_wtime();
     pd_frame_info fi = {.step = pd_sim_stepno(sim), .time = pd_sim_time(sim),
@@ -986,6 +992,8 @@ static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds
     free(density);
     free(stress);
     free(mises);
+    if (energy)
+        *energy = fi.energy;
     *t_out += pd_wtime() - t0;
     return s;
 }
@@ -1297,7 +1305,7 @@ int main(int argc, char **argv)
     if (!restart) {
         s = pd_sim_setup(sim);
         if (s == PD_OK && sc->every > 0)
-            s = write_frame(out, p, b, sim, o.sc.fields, &t_output);
+            s = write_frame(out, p, b, sim, o.sc.fields, &t_output, NULL);
     }
     int64_t lost = pd_sim_lost(sim);
     for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
@@ -1311,13 +1319,19 @@ int main(int argc, char **argv)
                     tty ? "\r\033[K" : "", (long long)n, (long long)pd_sim_lost(sim),
                     sc->lost_margin);
         lost = pd_sim_lost(sim);
+        /* a frame first, so that a status line of the same step takes its
+         * energies instead of another pass over the bonds */
+        pd_energy e;
+        int known = 0;
+        if ((sc->every > 0 && n % sc->every == 0) || n == sc->steps) {
+            s = write_frame(out, p, b, sim, o.sc.fields, &t_output, &e);
+            known = s == PD_OK;
+        }
         if (((n - first) % status_every == 0 || n == sc->steps) && !o.quiet) {
             double t0 = pd_wtime(); /* its energy pass is output's time */
-            status_line(sim, sc->steps, tty);
+            status_line(sim, sc->steps, tty, known ? &e : NULL);
             t_output += pd_wtime() - t0;
         }
-        if ((sc->every > 0 && n % sc->every == 0) || n == sc->steps)
-            s = write_frame(out, p, b, sim, o.sc.fields, &t_output);
         if (tty) {
             double now = pd_wtime();
             if (now - t_shown > 0.2 || n == sc->steps) {
@@ -1327,7 +1341,7 @@ int main(int argc, char **argv)
         }
     }
     if (s == PD_OK && !restart && sc->steps == 0 && sc->every == 0)
-        s = write_frame(out, p, b, sim, o.sc.fields, &t_output);
+        s = write_frame(out, p, b, sim, o.sc.fields, &t_output, NULL);
     double wall = pd_wtime() - t_start;
     if (tty)
         fputc('\n', stderr);

@@ -99,54 +99,68 @@ static int64_t candidates(const pd_sim *sim, const pd_cells *c, double reach2, i
 }
 
 /* Is there any pair for the list?  With the lattice stencil (which takes
- * the contact of every pair that started within the horizon) the list is
- * mostly empty, and this pass, each cell with itself and its 13 forward
- * neighbours (every pair once), costs half of counting the candidates of
- * every particle, which it spares when it finds none. */
-static int any_candidate(const pd_sim *sim, const pd_cells *c, double reach2)
+ * the contact of every pair that started within the horizon) the list
+ * holds only pairs that started at least `gap` apart (the shortest lattice
+ * distance the stencil lacks), and is mostly empty.  Such a pair comes
+ * within `reach` only when |u_i| + |u_j| >= gap - reach: one of its ends
+ * has moved at least (gap - reach)/2 from its site.  Only those particles
+ * are searched; when there are none, no pair is possible and not even the
+ * cells are built (*cells stays 0).  Lost particles are out of contact. */
+static pd_status any_candidate(const pd_sim *sim, double reach, pd_cells *c, int *cells,
+                               int *found)
 {
-    static const int fwd[14][3] = {{0, 0, 0},  {1, 0, 0},  {-1, 1, 0}, {0, 1, 0},  {1, 1, 0},
-                                   {-1, -1, 1}, {0, -1, 1}, {1, -1, 1}, {-1, 0, 1}, {0, 0, 1},
-                                   {1, 0, 1},  {-1, 1, 1}, {0, 1, 1},  {1, 1, 1}};
-    const pd_grid *grid = sim->grid;
-    double *const *y = sim->y;
-    const int64_t nx = c->dim[0], ny = c->dim[1], nz = c->dim[2];
-    int found = 0;
-#pragma omp parallel for schedule(dynamic, 64) reduction(| : found)
-    for (int64_t cell = 0; cell < nx * ny * nz; cell++) {
-        const int64_t cx = cell % nx, cy = (cell / nx) % ny, cz = cell / (nx * ny);
-        for (int q = 0; q < 14 && !found; q++) {
-            const int64_t ox = cx + fwd[q][0], oy = cy + fwd[q][1], oz = cz + fwd[q][2];
-            if (ox < 0 || ox >= nx || oy < 0 || oy >= ny || oz < 0 || oz >= nz)
-                continue;
-            const int64_t other = (oz * ny + oy) * nx + ox;
-            for (int64_t e = c->start[cell]; e < c->start[cell + 1] && !found; e++) {
-                const int32_t i = c->index[e];
-                for (int64_t f = q == 0 ? e + 1 : c->start[other]; f < c->start[other + 1]; f++) {
-                    const int32_t j = c->index[f];
-                    const double dx = y[0][i] - y[0][j], dy = y[1][i] - y[1][j],
-                                 dz = y[2][i] - y[2][j];
-                    if (dx * dx + dy * dy + dz * dz <= reach2 && !pd_grid_pair(grid, i, j)) {
-                        found = 1;
-                        break;
-                    }
-                }
-            }
-        }
+    const double umin = 0.5 * (pd_grid_gap(sim->grid) - reach);
+    const double umin2 = umin > 0 ? umin * umin : 0.0; /* 0: every particle */
+    double *const *y = sim->y, *const *x = sim->p->x;
+    const uint8_t *lost = sim->lost;
+    const int64_t n = sim->n;
+    int64_t movers = 0;
+#pragma omp parallel for schedule(static) reduction(+ : movers)
+    for (int64_t i = 0; i < n; i++) {
+        const double ux = y[0][i] - x[0][i], uy = y[1][i] - x[1][i], uz = y[2][i] - x[2][i];
+        movers += !(ux * ux + uy * uy + uz * uz < umin2) && !(lost && lost[i]);
     }
-    return found;
+    *found = 0;
+    *cells = 0;
+    if (movers == 0)
+        return PD_OK;
+    pd_status s = pd_cells_build_except(c, n, sim->y, reach, sim->lost);
+    if (s != PD_OK)
+        return s;
+    *cells = 1;
+    int any = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(| : any)
+    for (int64_t i = 0; i < n; i++) {
+        if (any)
+            continue;
+        const double ux = y[0][i] - x[0][i], uy = y[1][i] - x[1][i], uz = y[2][i] - x[2][i];
+        if (!(ux * ux + uy * uy + uz * uz < umin2))
+            any |= candidates(sim, c, reach * reach, i, NULL, NULL) > 0;
+    }
+    *found = any;
+    return PD_OK;
 }
 
 static pd_status contact_build(pd_sim *sim, contact_list *cl)
 {
     double t0 = pd_wtime();
     double reach = cl->cutoff + cl->skin;
-    pd_cells c;
-    pd_status s = pd_cells_build_except(&c, sim->n, sim->y, reach, sim->lost);
-    if (s != PD_OK)
+    pd_cells c = {0};
+    int cells = 0, found = 1;
+    pd_status s = PD_OK;
+    if (pd_grid_contact(sim->grid))
+        s = any_candidate(sim, reach, &c, &cells, &found);
+    if (s == PD_OK && found && !cells) {
+        s = pd_cells_build_except(&c, sim->n, sim->y, reach, sim->lost);
+        cells = s == PD_OK;
+    }
+    if (s != PD_OK) {
+        if (cells)
+            pd_cells_free(&c);
         return s;
+    }
     int64_t n = sim->n;
-    if (pd_grid_contact(sim->grid) && !any_candidate(sim, &c, reach * reach))
+    if (!found)
         memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
     else
 #pragma omp parallel for schedule(static)
@@ -165,7 +179,8 @@ static pd_status contact_build(pd_sim *sim, contact_list *cl)
         if (nd)
             cl->d = nd;
         if (np == NULL || nd == NULL) {
-            pd_cells_free(&c);
+            if (cells)
+                pd_cells_free(&c);
             return pd_fail(PD_ERR_NOMEM, "out of memory for %lld contact pairs", (long long)total);
         }
         cl->cap = cap;
@@ -176,7 +191,8 @@ static pd_status contact_build(pd_sim *sim, contact_list *cl)
         for (int64_t i = 0; i < n; i++)
             candidates(sim, &c, reach * reach, i, cl->partner + cl->offset[i],
                        cl->d + cl->offset[i]);
-    pd_cells_free(&c);
+    if (cells)
+        pd_cells_free(&c);
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++)
         for (int k = 0; k < 3; k++)

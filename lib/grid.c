@@ -136,6 +136,8 @@ struct pd_grid {
     double *y[3], *f[3], *s0, *s0n; /* grid-order copies (perm only)       */
     uint64_t epoch;      /* of the half bonds the masks were built from    */
     int tile;            /* PMB walks runs as tiles (AVX-512)              */
+    double gap;          /* the shortest lattice distance not in the
+                            stencil, less the sites' tolerance, m          */
     int status;          /* PD_OK, or the error a parallel pass met        */
 };
 
@@ -631,6 +633,18 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
     free(order);
     if (ok > 0)
         ok = build_stencil(G, p, b);
+    if (ok > 0) { /* the gap: over the offsets one beyond the stencil's reach */
+        const int r = G->reach + 1;
+        double d2min = INFINITY;
+        for (int a = -r; a <= r; a++)
+            for (int m = -r; m <= r; m++)
+                for (int o = -r; o <= r; o++) {
+                    const int d[3] = {a, m, o};
+                    if ((a || m || o) && offset_of(G, d) == INT16_MIN)
+                        d2min = fmin(d2min, (double)(a * a + m * m + o * o));
+                }
+        G->gap = p->spacing * (sqrt(d2min) - 4 * GRID_TOL);
+    }
     /* the file's families are the whole stencil: each particle has a bond
      * to every particle at a stencil offset (counted over the segments) */
     if (ok > 0)
@@ -698,6 +712,11 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
 int pd_grid_offsets(const pd_grid *G)
 {
     return G ? G->nk : 0;
+}
+
+double pd_grid_gap(const pd_grid *G)
+{
+    return G ? G->gap : 0.0;
 }
 
 int pd_grid_tiles(const pd_grid *G)

@@ -167,6 +167,10 @@ pd_status pd_grid_pmb(pd_sim *sim, int failure);
  * stencil pair. */
 int pd_grid_offsets(const pd_grid *g);
 int pd_grid_tiles(const pd_grid *g);
+/* The shortest reference distance of a pair that is not a stencil pair,
+ * m (lib/contact.c searches only particles that moved enough to close
+ * it). */
+double pd_grid_gap(const pd_grid *g);
 int pd_grid_contact(const pd_grid *g);
 int pd_grid_pair(const pd_grid *g, int64_t i, int64_t j);
 /* LPS on the stencil (lib/lps.c without ellipsoids, particles in lattice
