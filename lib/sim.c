@@ -201,8 +201,10 @@ static pd_status compute_forces(pd_sim *sim)
 {
     double before = sim->power;
     sim->power = 0;
-    for (int d = 0; d < 3; d++)
-        memset(sim->f[d], 0, (size_t)sim->n * sizeof(double));
+    if (!sim->f_zeroed)
+        for (int d = 0; d < 3; d++)
+            memset(sim->f[d], 0, (size_t)sim->n * sizeof(double));
+    sim->f_zeroed = 0;
     for (int k = 0; k < sim->neffects; k++) {
         if (sim->effects[k]->force == NULL)
             continue;
@@ -338,11 +340,72 @@ static pd_status not_finite(const pd_sim *sim)
     return pd_fail(PD_ERR_UNSTABLE, "the state is not finite at step %lld", (long long)sim->step);
 }
 
+/* The drift y += dt v of particles [lo, hi) (after the first half kick v
+ * += dt/(2 rho) f when `kick`, which then also zeroes f for the forces to
+ * come: they are read for the last time here), branch-free so that it
+ * vectorizes.  Returns 1 when some particle (not lost already) is outside
+ * the box; a position that is not finite is not outside (the guard names
+ * it). */
+static inline __attribute__((always_inline)) int drift_range(pd_sim *sim, int64_t lo,
+                                                             int64_t hi, const int kick,
+                                                             const int lost_any)
+{
+    const double dt = sim->sc.dt, half = 0.5 * dt;
+    const double *restrict rho = sim->p->density;
+    const uint8_t *restrict lost = sim->lost;
+    double *restrict y0 = sim->y[0], *restrict y1 = sim->y[1], *restrict y2 = sim->y[2];
+    double *restrict v0 = sim->v[0], *restrict v1 = sim->v[1], *restrict v2 = sim->v[2];
+    double *restrict f0 = sim->f[0], *restrict f1 = sim->f[1], *restrict f2 = sim->f[2];
+    const double lo0 = sim->box_lo[0], lo1 = sim->box_lo[1], lo2 = sim->box_lo[2];
+    const double hi0 = sim->box_hi[0], hi1 = sim->box_hi[1], hi2 = sim->box_hi[2];
+    int away = 0;
+#pragma omp simd reduction(| : away)
+    for (int64_t i = lo; i < hi; i++) {
+        if (kick) {
+            const double dtfm = half / rho[i];
+            v0[i] += dtfm * f0[i];
+            v1[i] += dtfm * f1[i];
+            v2[i] += dtfm * f2[i];
+            f0[i] = f1[i] = f2[i] = 0.0;
+        }
+        y0[i] += dt * v0[i];
+        y1[i] += dt * v1[i];
+        y2[i] += dt * v2[i];
+        const int out = (y0[i] < lo0) | (y0[i] > hi0) | (y1[i] < lo1) | (y1[i] > hi1) |
+                        (y2[i] < lo2) | (y2[i] > hi2);
+        away |= lost_any ? out & (lost[i] == 0) : out;
+    }
+    return away;
+}
+
+PD_VECTOR_CLONES static int drift_block(pd_sim *sim, int64_t lo, int64_t hi, int kick,
+                                        int lost_any)
+{
+    if (kick)
+        return lost_any ? drift_range(sim, lo, hi, 1, 1) : drift_range(sim, lo, hi, 1, 0);
+    return lost_any ? drift_range(sim, lo, hi, 0, 1) : drift_range(sim, lo, hi, 0, 0);
+}
+
+/* The drift of every particle (with the first half kick when `kick`), in
+ * blocks of PD_DRIFT_BLOCK particles over the threads. */
+#define PD_DRIFT_BLOCK 8192
+static int drift(pd_sim *sim, int kick)
+{
+    const int64_t nb = (sim->n + PD_DRIFT_BLOCK - 1) / PD_DRIFT_BLOCK;
+    const int lost_any = sim->lost != NULL;
+    int away = 0;
+#pragma omp parallel for schedule(static) reduction(| : away)
+    for (int64_t b = 0; b < nb; b++) {
+        const int64_t lo = b * PD_DRIFT_BLOCK, hi = lo + PD_DRIFT_BLOCK < sim->n ? lo + PD_DRIFT_BLOCK : sim->n;
+        away |= drift_block(sim, lo, hi, kick, lost_any);
+    }
+    return away;
+}
+
 pd_status pd_sim_step(pd_sim *sim)
 {
     double t0 = pd_wtime();
     const double dt = sim->sc.dt;
-    const uint8_t *lost = sim->lost;
     /* without a hold between them the first half kick and the drift are
      * one pass over the particles (the same arithmetic, less traffic) */
     const int fused = !sim->constrained;
@@ -354,30 +417,8 @@ pd_status pd_sim_step(pd_sim *sim)
     }
     if (sim->has_projectile)
         pd_projectile_kick(sim);
-    int away = 0;
-    const double half = 0.5 * dt;
-    const double *restrict rho = sim->p->density;
-    double *restrict y0 = sim->y[0], *restrict y1 = sim->y[1], *restrict y2 = sim->y[2];
-    double *restrict v0 = sim->v[0], *restrict v1 = sim->v[1], *restrict v2 = sim->v[2];
-    const double *restrict f0 = sim->f[0], *restrict f1 = sim->f[1], *restrict f2 = sim->f[2];
-    const double lo[3] = {sim->box_lo[0], sim->box_lo[1], sim->box_lo[2]},
-                 hi[3] = {sim->box_hi[0], sim->box_hi[1], sim->box_hi[2]};
-#pragma omp parallel for schedule(static) reduction(| : away)
-    for (int64_t i = 0; i < sim->n; i++) {
-        if (fused) {
-            const double dtfm = half / rho[i];
-            v0[i] += dtfm * f0[i];
-            v1[i] += dtfm * f1[i];
-            v2[i] += dtfm * f2[i];
-        }
-        y0[i] += dt * v0[i];
-        y1[i] += dt * v1[i];
-        y2[i] += dt * v2[i];
-        /* outside the box (not finite is not outside: the guard names it) */
-        const int out = y0[i] < lo[0] || y0[i] > hi[0] || y1[i] < lo[1] || y1[i] > hi[1] ||
-                        y2[i] < lo[2] || y2[i] > hi[2];
-        away |= out && !(lost && lost[i]);
-    }
+    const int away = drift(sim, fused);
+    sim->f_zeroed = fused;
     if (sim->has_projectile)
         pd_projectile_drift(sim);
     sim->step++;

@@ -121,6 +121,7 @@ struct pd_sim {
     double timers[PD_T_COUNT];
     int64_t contact_builds;
     int constrained;    /* some effect has a constrain hook              */
+    int f_zeroed;       /* the drift pass has zeroed f for the next forces */
     /* the projectile (lib/projectile.c), a rigid sphere of mass
      * sc.proj_mass, integrated with the particles                     */
     int has_projectile;
