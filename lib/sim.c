@@ -301,22 +301,39 @@ static pd_status take_lost(pd_sim *sim)
     return PD_OK;
 }
 
-/* Half a kick: v += dt/(2 rho) f.  Returns 1 when some velocity is not
- * finite (a NaN or Inf in the forces or positions spreads to it). */
-static int half_kick(pd_sim *sim)
+/* Half a kick of particles [lo, hi): v += dt/(2 rho) f.  Returns 1 when
+ * some velocity is not finite (a NaN or Inf in the forces or positions
+ * spreads to it). */
+PD_VECTOR_CLONES static int half_kick_block(pd_sim *sim, int64_t lo, int64_t hi)
 {
     const double half = 0.5 * sim->sc.dt;
     const double *restrict rho = sim->p->density;
     double *restrict v0 = sim->v[0], *restrict v1 = sim->v[1], *restrict v2 = sim->v[2];
     const double *restrict f0 = sim->f[0], *restrict f1 = sim->f[1], *restrict f2 = sim->f[2];
     int bad = 0;
-#pragma omp parallel for schedule(static) reduction(| : bad)
-    for (int64_t i = 0; i < sim->n; i++) {
+#pragma omp simd reduction(| : bad)
+    for (int64_t i = lo; i < hi; i++) {
         const double dtfm = half / rho[i];
         v0[i] += dtfm * f0[i];
         v1[i] += dtfm * f1[i];
         v2[i] += dtfm * f2[i];
         bad |= !isfinite(v0[i] + v1[i] + v2[i]);
+    }
+    return bad;
+}
+
+/* Particles per block of the integration's passes over the threads. */
+#define PD_PASS_BLOCK 8192
+
+/* Half a kick of every particle; 1 when some velocity is not finite. */
+static int half_kick(pd_sim *sim)
+{
+    const int64_t nb = (sim->n + PD_PASS_BLOCK - 1) / PD_PASS_BLOCK;
+    int bad = 0;
+#pragma omp parallel for schedule(static) reduction(| : bad)
+    for (int64_t b = 0; b < nb; b++) {
+        const int64_t lo = b * PD_PASS_BLOCK;
+        bad |= half_kick_block(sim, lo, lo + PD_PASS_BLOCK < sim->n ? lo + PD_PASS_BLOCK : sim->n);
     }
     return bad;
 }
@@ -386,18 +403,18 @@ PD_VECTOR_CLONES static int drift_block(pd_sim *sim, int64_t lo, int64_t hi, int
     return lost_any ? drift_range(sim, lo, hi, 0, 1) : drift_range(sim, lo, hi, 0, 0);
 }
 
-/* The drift of every particle (with the first half kick when `kick`), in
- * blocks of PD_DRIFT_BLOCK particles over the threads. */
-#define PD_DRIFT_BLOCK 8192
+/* The drift of every particle (with the first half kick when `kick`); 1
+ * when some particle left the box. */
 static int drift(pd_sim *sim, int kick)
 {
-    const int64_t nb = (sim->n + PD_DRIFT_BLOCK - 1) / PD_DRIFT_BLOCK;
+    const int64_t nb = (sim->n + PD_PASS_BLOCK - 1) / PD_PASS_BLOCK;
     const int lost_any = sim->lost != NULL;
     int away = 0;
 #pragma omp parallel for schedule(static) reduction(| : away)
     for (int64_t b = 0; b < nb; b++) {
-        const int64_t lo = b * PD_DRIFT_BLOCK, hi = lo + PD_DRIFT_BLOCK < sim->n ? lo + PD_DRIFT_BLOCK : sim->n;
-        away |= drift_block(sim, lo, hi, kick, lost_any);
+        const int64_t lo = b * PD_PASS_BLOCK;
+        away |= drift_block(sim, lo, lo + PD_PASS_BLOCK < sim->n ? lo + PD_PASS_BLOCK : sim->n,
+                            kick, lost_any);
     }
     return away;
 }
