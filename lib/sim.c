@@ -600,6 +600,9 @@ int64_t pd_sim_broken(const pd_sim *sim)
 
 double pd_sim_max_damage(const pd_sim *sim)
 {
+    double dg;
+    if (pd_grid_max_damage(sim, &dg)) /* the stencil's masks, in parallel */
+        return dg;
     double *dmg = malloc((size_t)sim->n * sizeof(double));
     if (dmg == NULL)
         return NAN;
