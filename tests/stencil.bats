@@ -133,6 +133,27 @@ for name in a['frames']:
     run -0 h5_same two.h5 rest.h5 'history|threads|^/scene'
 }
 
+@test "the status line's largest damage (counted on the stencil) is pd-damage's, and the list's" {
+    pd-lattice -q --spacing "$SPACING" --density "$DENSITY" --box 0,0.024,0,0.01,0,0.01 \
+        -o long.h5
+    pd-bonds -q --horizon "$HORIZON" long.h5 -o model.h5
+    for k in grid list; do
+        extra=()
+        [ $k = list ] && extra=(--bond-list)
+        pd-run "${RUN_OPTS[@]}" "${extra[@]}" --steps 80 --every 20 --status 20 model.h5 \
+            -o $k.h5 2>$k.log
+        # "step S/80 ... max_damage=D" against pd-damage's table (step ... max_damage ...)
+        sed -n 's|^pd-run: step \([0-9]*\)/80 .* max_damage=\([0-9.]*\)$|\1 \2|p' $k.log >$k.status
+        pd-damage -n $k.h5 | awk '!/^#/ && $1 > 0 { printf "%d %.4f\n", $1, $5 }' >$k.table
+        [ "$(wc -l <$k.status)" -eq 4 ]
+        run diff $k.status $k.table
+        assert_success
+    done
+    # bonds did break, and the damage is not all 0 or 1
+    run awk '$2 > 0 && $2 < 1' grid.status
+    [ "${#lines[@]}" -ge 2 ]
+}
+
 @test "contact between the stencil pairs of a loose block: the same as the list's" {
     make_block
     # every bond breaks at the first stretch: contact alone holds the
