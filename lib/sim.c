@@ -15,6 +15,10 @@
 
 #include "sim.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 static pd_status add_effect(pd_sim *sim, const pd_effect *e)
 {
     if (sim->neffects == PD_MAX_EFFECTS)
@@ -322,18 +326,30 @@ PD_VECTOR_CLONES static int half_kick_block(pd_sim *sim, int64_t lo, int64_t hi)
     return bad;
 }
 
-/* Particles per block of the integration's passes over the threads. */
-#define PD_PASS_BLOCK 8192
+/* The calling thread's share of n particles in a parallel region: equal
+ * contiguous parts, as OpenMP's static schedule cuts a loop (the lattice
+ * stencil's blocks are split over the threads likewise, lib/grid.c), so
+ * that a thread walks what it touched in the pass before. */
+static void my_share(int64_t n, int64_t *lo, int64_t *hi)
+{
+#ifdef _OPENMP
+    const int64_t T = omp_get_num_threads(), t = omp_get_thread_num();
+#else
+    const int64_t T = 1, t = 0;
+#endif
+    *lo = n * t / T;
+    *hi = n * (t + 1) / T;
+}
 
 /* Half a kick of every particle; 1 when some velocity is not finite. */
 static int half_kick(pd_sim *sim)
 {
-    const int64_t nb = (sim->n + PD_PASS_BLOCK - 1) / PD_PASS_BLOCK;
     int bad = 0;
-#pragma omp parallel for schedule(static) reduction(| : bad)
-    for (int64_t b = 0; b < nb; b++) {
-        const int64_t lo = b * PD_PASS_BLOCK;
-        bad |= half_kick_block(sim, lo, lo + PD_PASS_BLOCK < sim->n ? lo + PD_PASS_BLOCK : sim->n);
+#pragma omp parallel reduction(| : bad)
+    {
+        int64_t lo, hi;
+        my_share(sim->n, &lo, &hi);
+        bad |= half_kick_block(sim, lo, hi);
     }
     return bad;
 }
@@ -407,14 +423,13 @@ PD_VECTOR_CLONES static int drift_block(pd_sim *sim, int64_t lo, int64_t hi, int
  * when some particle left the box. */
 static int drift(pd_sim *sim, int kick)
 {
-    const int64_t nb = (sim->n + PD_PASS_BLOCK - 1) / PD_PASS_BLOCK;
     const int lost_any = sim->lost != NULL;
     int away = 0;
-#pragma omp parallel for schedule(static) reduction(| : away)
-    for (int64_t b = 0; b < nb; b++) {
-        const int64_t lo = b * PD_PASS_BLOCK;
-        away |= drift_block(sim, lo, lo + PD_PASS_BLOCK < sim->n ? lo + PD_PASS_BLOCK : sim->n,
-                            kick, lost_any);
+#pragma omp parallel reduction(| : away)
+    {
+        int64_t lo, hi;
+        my_share(sim->n, &lo, &hi);
+        away |= drift_block(sim, lo, hi, kick, lost_any);
     }
     return away;
 }
