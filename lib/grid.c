@@ -142,6 +142,9 @@ struct pd_grid {
     double *y[3], *f[3], *s0, *s0n; /* grid-order copies (perm only)       */
     uint64_t epoch;      /* of the half bonds the masks were built from    */
     int tile;            /* PMB walks runs as tiles (AVX-512)              */
+    const double *s0n_ready; /* the s0 array the last step's end filled with
+                            -inf for the next one's new s0 (PMB, lattice
+                            order)                                         */
     double gap;          /* the shortest lattice distance not in the
                             stencil, less the sites' tolerance, m          */
     int status;          /* PD_OK, or the error a parallel pass met        */
@@ -1202,7 +1205,7 @@ pd_status pd_grid_pmb(pd_sim *sim, int failure)
         A.y0 = sim->y[0], A.y1 = sim->y[1], A.y2 = sim->y[2];
         A.f0 = sim->f[0], A.f1 = sim->f[1], A.f2 = sim->f[2];
         A.s0 = sim->s0, A.s0n = sim->s0_new;
-        if (failure)
+        if (failure && sim->s0_new != G->s0n_ready) /* else the last step's end did */
 #pragma omp parallel for schedule(static)
             for (int64_t g = 0; g < n; g++)
                 sim->s0_new[g] = -INFINITY;
@@ -1238,20 +1241,31 @@ pd_status pd_grid_pmb(pd_sim *sim, int failure)
         }
     }
     if (failure) {
+        if (perm)
 #pragma omp parallel for schedule(static)
-        for (int64_t i = 0; i < n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
-            if (sim->s0_new[i] == -INFINITY)
-                sim->s0_new[i] = DBL_MAX;
+            for (int64_t i = 0; i < n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
+                if (sim->s0_new[i] == -INFINITY)
+                    sim->s0_new[i] = DBL_MAX;
         /* the broken bonds into the half bonds, and their energy: per block,
          * summed in block order (the same at any thread count).  In lattice
          * order a block's bonds are half bonds of its own rows, whose bits
          * other blocks than its neighbours never share: even blocks, then
-         * odd ones, in parallel; through a permutation, one by one. */
+         * odd ones, in parallel; through a permutation, one by one.  In
+         * lattice order a block also finishes the new s0 of its particles
+         * (no intact bond: +inf, DBL_MAX as LAMMPS) and fills the old s0,
+         * which the step is done with and which becomes the next step's
+         * new s0, with -inf: two passes over the particles fewer. */
         for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel if (!perm)
             for (int64_t blk = phase; blk < G->nblocks; blk += 2) {
                 if (!grid_mine(G, blk))
                     continue;
+                if (!perm)
+                    for (int64_t i = G->run[G->block_run[blk]].start;
+                         i < G->run[G->block_run[blk + 1]].start; i++) {
+                        sim->s0_new[i] = sim->s0_new[i] == -INFINITY ? DBL_MAX : sim->s0_new[i];
+                        sim->s0[i] = -INFINITY;
+                    }
                 const grid_breaks *bl = &G->breaks[blk];
                 double rel = 0;
                 for (int64_t e = 0; e < bl->n; e++) {
@@ -1268,6 +1282,8 @@ pd_status pd_grid_pmb(pd_sim *sim, int failure)
         }
         for (int64_t blk = 0; blk < G->nblocks; blk++)
             sim->released += G->released[blk];
+        /* the caller swaps s0 and s0_new (lib/pmb.c) */
+        G->s0n_ready = perm ? NULL : sim->s0;
     }
     tf += pd_wtime() - t0;
     sim->timers[PD_T_FAILURE] += tf;
