@@ -98,101 +98,158 @@ static int64_t candidates(const pd_sim *sim, const pd_cells *c, double reach2, i
     return m;
 }
 
-/* Is there any pair for the list?  With the lattice stencil (which takes
- * the contact of every pair that started within the horizon) the list
- * holds only pairs that started at least `gap` apart (the shortest lattice
- * distance the stencil lacks), and is mostly empty.  Such a pair comes
- * within `reach` only when |u_i| + |u_j| >= gap - reach: one of its ends
- * has moved at least (gap - reach)/2 from its site.  Only those particles
- * are searched; when there are none, no pair is possible and not even the
- * cells are built (*cells stays 0).  Lost particles are out of contact. */
-static pd_status any_candidate(const pd_sim *sim, double reach, pd_cells *c, int *cells,
-                               int *found)
+/* Room for `total` pairs in the list. */
+static pd_status list_room(contact_list *cl, int64_t total)
+{
+    if (total <= cl->cap)
+        return PD_OK;
+    int64_t cap = total + total / 4 + 16;
+    int32_t *np = realloc(cl->partner, (size_t)cap * sizeof(int32_t));
+    if (np)
+        cl->partner = np;
+    double *nd = realloc(cl->d, (size_t)cap * sizeof(double));
+    if (nd)
+        cl->d = nd;
+    if (np == NULL || nd == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld contact pairs", (long long)total);
+    cl->cap = cap;
+    return PD_OK;
+}
+
+/* The list from every particle's own search (each pair found from both
+ * ends): without the lattice stencil. */
+static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
+{
+    pd_cells c = {0};
+    pd_status s = pd_cells_build_except(&c, sim->n, sim->y, reach, sim->lost);
+    if (s != PD_OK)
+        return s;
+    const int64_t n = sim->n;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++)
+        cl->offset[i + 1] = candidates(sim, &c, reach * reach, i, NULL, NULL);
+    cl->offset[0] = 0;
+    for (int64_t i = 0; i < n; i++)
+        cl->offset[i + 1] += cl->offset[i];
+    if ((s = list_room(cl, cl->offset[n])) == PD_OK)
+#pragma omp parallel for schedule(static)
+        for (int64_t i = 0; i < n; i++)
+            candidates(sim, &c, reach * reach, i, cl->partner + cl->offset[i],
+                       cl->d + cl->offset[i]);
+    pd_cells_free(&c);
+    return s;
+}
+
+/* The list with the lattice stencil, which takes the contact of every
+ * pair that started within the horizon: the list holds only pairs that
+ * started at least `gap` apart (the shortest lattice distance the stencil
+ * lacks), and such a pair comes within `reach` only when |u_i| + |u_j| >=
+ * gap - reach, so one of its ends (a "mover") has moved at least (gap -
+ * reach)/2 from its site.  Only the movers search the cells; a pair of a
+ * mover i and another particle j goes into j's list too when j is not a
+ * mover (in ascending i: the same order at any thread count).  No mover,
+ * no pair: not even the cells are built.  The pairs are those of
+ * build_all; only a non-mover's list is in another order.  Lost particles
+ * are out of contact. */
+static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
 {
     const double umin = 0.5 * (pd_grid_gap(sim->grid) - reach);
     const double umin2 = umin > 0 ? umin * umin : 0.0; /* 0: every particle */
     double *const *y = sim->y, *const *x = sim->p->x;
     const uint8_t *lost = sim->lost;
     const int64_t n = sim->n;
-    int64_t movers = 0;
-#pragma omp parallel for schedule(static) reduction(+ : movers)
+    memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
+    uint8_t *mv = malloc((size_t)(n > 0 ? n : 1));
+    if (mv == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+    int64_t nm = 0;
+#pragma omp parallel for schedule(static) reduction(+ : nm)
     for (int64_t i = 0; i < n; i++) {
         const double ux = y[0][i] - x[0][i], uy = y[1][i] - x[1][i], uz = y[2][i] - x[2][i];
-        movers += !(ux * ux + uy * uy + uz * uz < umin2) && !(lost && lost[i]);
+        mv[i] = !(ux * ux + uy * uy + uz * uz < umin2) && !(lost && lost[i]);
+        nm += mv[i];
     }
-    *found = 0;
-    *cells = 0;
-    if (movers == 0)
+    if (nm == 0) {
+        free(mv);
         return PD_OK;
-    pd_status s = pd_cells_build_except(c, n, sim->y, reach, sim->lost);
-    if (s != PD_OK)
-        return s;
-    *cells = 1;
-    int any = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(| : any)
-    for (int64_t i = 0; i < n; i++) {
-        if (any)
-            continue;
-        const double ux = y[0][i] - x[0][i], uy = y[1][i] - x[1][i], uz = y[2][i] - x[2][i];
-        if (!(ux * ux + uy * uy + uz * uz < umin2))
-            any |= candidates(sim, c, reach * reach, i, NULL, NULL) > 0;
     }
-    *found = any;
-    return PD_OK;
+    pd_cells c = {0};
+    int64_t *who = malloc((size_t)nm * sizeof(int64_t)), *toff = malloc((size_t)(nm + 1) * sizeof(int64_t));
+    int32_t *tp = NULL;
+    double *td = NULL;
+    pd_status s = who && toff ? pd_cells_build_except(&c, n, sim->y, reach, sim->lost)
+                              : pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+    if (s == PD_OK) {
+        for (int64_t i = 0, k = 0; i < n; i++)
+            if (mv[i])
+                who[k++] = i;
+        /* the movers' own searches, into a scratch list */
+        toff[0] = 0;
+#pragma omp parallel for schedule(dynamic, 256)
+        for (int64_t k = 0; k < nm; k++)
+            toff[k + 1] = candidates(sim, &c, reach * reach, who[k], NULL, NULL);
+        for (int64_t k = 0; k < nm; k++)
+            toff[k + 1] += toff[k];
+        tp = malloc((size_t)(toff[nm] > 0 ? toff[nm] : 1) * sizeof(int32_t));
+        td = malloc((size_t)(toff[nm] > 0 ? toff[nm] : 1) * sizeof(double));
+        if (tp == NULL || td == NULL)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory for %lld contact pairs", (long long)toff[nm]);
+    }
+    if (s == PD_OK && toff[nm] > 0) {
+#pragma omp parallel for schedule(dynamic, 256)
+        for (int64_t k = 0; k < nm; k++)
+            candidates(sim, &c, reach * reach, who[k], tp + toff[k], td + toff[k]);
+        /* the counts: a mover's own pairs; a non-mover's from the movers */
+        for (int64_t k = 0; k < nm; k++) {
+            cl->offset[who[k] + 1] += toff[k + 1] - toff[k];
+            for (int64_t e = toff[k]; e < toff[k + 1]; e++)
+                cl->offset[tp[e] + 1] += !mv[tp[e]];
+        }
+        for (int64_t i = 0; i < n; i++)
+            cl->offset[i + 1] += cl->offset[i];
+        s = list_room(cl, cl->offset[n]);
+    }
+    if (s == PD_OK && toff[nm] > 0) {
+        int64_t *at = malloc((size_t)n * sizeof(int64_t)); /* fill cursors */
+        if (at == NULL)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+        else {
+            memcpy(at, cl->offset, (size_t)n * sizeof(int64_t));
+            for (int64_t k = 0; k < nm; k++) {
+                const int64_t i = who[k], m = toff[k + 1] - toff[k];
+                memcpy(cl->partner + at[i], tp + toff[k], (size_t)m * sizeof(int32_t));
+                memcpy(cl->d + at[i], td + toff[k], (size_t)m * sizeof(double));
+                at[i] += m;
+                for (int64_t e = toff[k]; e < toff[k + 1]; e++)
+                    if (!mv[tp[e]]) {
+                        cl->partner[at[tp[e]]] = (int32_t)i;
+                        cl->d[at[tp[e]]++] = td[e];
+                    }
+            }
+            free(at);
+        }
+    }
+    if (s != PD_OK) /* no half-built list */
+        memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
+    if (who && toff)
+        pd_cells_free(&c);
+    free(mv);
+    free(who);
+    free(toff);
+    free(tp);
+    free(td);
+    return s;
 }
 
 static pd_status contact_build(pd_sim *sim, contact_list *cl)
 {
     double t0 = pd_wtime();
-    double reach = cl->cutoff + cl->skin;
-    pd_cells c = {0};
-    int cells = 0, found = 1;
-    pd_status s = PD_OK;
-    if (pd_grid_contact(sim->grid))
-        s = any_candidate(sim, reach, &c, &cells, &found);
-    if (s == PD_OK && found && !cells) {
-        s = pd_cells_build_except(&c, sim->n, sim->y, reach, sim->lost);
-        cells = s == PD_OK;
-    }
-    if (s != PD_OK) {
-        if (cells)
-            pd_cells_free(&c);
+    const double reach = cl->cutoff + cl->skin;
+    pd_status s = pd_grid_contact(sim->grid) ? build_movers(sim, cl, reach)
+                                             : build_all(sim, cl, reach);
+    if (s != PD_OK)
         return s;
-    }
-    int64_t n = sim->n;
-    if (!found)
-        memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
-    else
-#pragma omp parallel for schedule(static)
-        for (int64_t i = 0; i < n; i++)
-            cl->offset[i + 1] = candidates(sim, &c, reach * reach, i, NULL, NULL);
-    cl->offset[0] = 0;
-    for (int64_t i = 0; i < n; i++)
-        cl->offset[i + 1] += cl->offset[i];
-    int64_t total = cl->offset[n];
-    if (total > cl->cap) {
-        int64_t cap = total + total / 4 + 16;
-        int32_t *np = realloc(cl->partner, (size_t)cap * sizeof(int32_t));
-        if (np)
-            cl->partner = np;
-        double *nd = realloc(cl->d, (size_t)cap * sizeof(double));
-        if (nd)
-            cl->d = nd;
-        if (np == NULL || nd == NULL) {
-            if (cells)
-                pd_cells_free(&c);
-            return pd_fail(PD_ERR_NOMEM, "out of memory for %lld contact pairs", (long long)total);
-        }
-        cl->cap = cap;
-    }
-    /* (with the lattice stencil the list is mostly empty: no second pass) */
-    if (total > 0)
-#pragma omp parallel for schedule(static)
-        for (int64_t i = 0; i < n; i++)
-            candidates(sim, &c, reach * reach, i, cl->partner + cl->offset[i],
-                       cl->d + cl->offset[i]);
-    if (cells)
-        pd_cells_free(&c);
+    const int64_t n = sim->n;
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++)
         for (int k = 0; k < 3; k++)
