@@ -19,6 +19,10 @@
 
 #include "sim.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 typedef struct {
     double cutoff;     /* largest d_ij, m                      */
     double skin;       /* m                                    */
@@ -183,22 +187,75 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
         for (int64_t i = 0, k = 0; i < n; i++)
             if (mv[i])
                 who[k++] = i;
-        /* the movers' own searches, into a scratch list */
+        /* the movers' own searches, into a scratch list: each thread takes
+         * a contiguous share of the movers, in order, into its own buffer,
+         * and the buffers are joined in thread order (one search per
+         * mover; the same list at any thread count) */
         toff[0] = 0;
-#pragma omp parallel for schedule(dynamic, 256)
-        for (int64_t k = 0; k < nm; k++)
-            toff[k + 1] = candidates(sim, &c, reach * reach, who[k], NULL, NULL);
-        for (int64_t k = 0; k < nm; k++)
-            toff[k + 1] += toff[k];
-        tp = malloc((size_t)(toff[nm] > 0 ? toff[nm] : 1) * sizeof(int32_t));
-        td = malloc((size_t)(toff[nm] > 0 ? toff[nm] : 1) * sizeof(double));
-        if (tp == NULL || td == NULL)
-            s = pd_fail(PD_ERR_NOMEM, "out of memory for %lld contact pairs", (long long)toff[nm]);
+        int nt = 1;
+#ifdef _OPENMP
+        nt = omp_get_max_threads();
+#endif
+        int32_t **bp = calloc((size_t)nt, sizeof *bp);
+        double **bd = calloc((size_t)nt, sizeof *bd);
+        int64_t *bn = calloc((size_t)nt, sizeof *bn);
+        int bad = !bp || !bd || !bn;
+        if (!bad)
+#pragma omp parallel num_threads(nt) reduction(| : bad)
+        {
+#ifdef _OPENMP
+            const int64_t T = omp_get_num_threads(), t = omp_get_thread_num();
+#else
+            const int64_t T = 1, t = 0;
+#endif
+            int64_t cap = 0;
+            for (int64_t k = nm * t / T; k < nm * (t + 1) / T && !bad; k++) {
+                /* room for every particle of the mover's 27 cells */
+                const int64_t i = who[k];
+                const double yi[3] = {y[0][i], y[1][i], y[2][i]};
+                int64_t cells[27], most = 0;
+                const int nc = pd_cells_adjacent(&c, yi, cells);
+                for (int q = 0; q < nc; q++)
+                    most += c.start[cells[q] + 1] - c.start[cells[q]];
+                if (bn[t] + most > cap) {
+                    cap = 2 * (bn[t] + most) + 1024;
+                    int32_t *np = realloc(bp[t], (size_t)cap * sizeof(int32_t));
+                    if (np)
+                        bp[t] = np;
+                    double *nd = realloc(bd[t], (size_t)cap * sizeof(double));
+                    if (nd)
+                        bd[t] = nd;
+                    bad |= !np || !nd;
+                    if (bad)
+                        break;
+                }
+                toff[k + 1] = candidates(sim, &c, reach * reach, i, bp[t] + bn[t], bd[t] + bn[t]);
+                bn[t] += toff[k + 1];
+            }
+        }
+        if (!bad) {
+            for (int64_t k = 0; k < nm; k++)
+                toff[k + 1] += toff[k];
+            tp = malloc((size_t)(toff[nm] > 0 ? toff[nm] : 1) * sizeof(int32_t));
+            td = malloc((size_t)(toff[nm] > 0 ? toff[nm] : 1) * sizeof(double));
+            bad = tp == NULL || td == NULL;
+        }
+        for (int64_t t = 0, at = 0; t < nt && !bad; at += bn[t], t++)
+            if (bn[t] > 0) {
+                memcpy(tp + at, bp[t], (size_t)bn[t] * sizeof(int32_t));
+                memcpy(td + at, bd[t], (size_t)bn[t] * sizeof(double));
+            }
+        for (int t = 0; bp && bd && t < nt; t++) {
+            free(bp[t]);
+            free(bd[t]);
+        }
+        free(bp);
+        free(bd);
+        free(bn);
+        if (bad)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
     }
     if (s == PD_OK && toff[nm] > 0) {
-#pragma omp parallel for schedule(dynamic, 256)
-        for (int64_t k = 0; k < nm; k++)
-            candidates(sim, &c, reach * reach, who[k], tp + toff[k], td + toff[k]);
         /* the counts: a mover's own pairs; a non-mover's from the movers */
         for (int64_t k = 0; k < nm; k++) {
             cl->offset[who[k] + 1] += toff[k + 1] - toff[k];
