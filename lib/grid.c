@@ -1296,6 +1296,18 @@ pd_status pd_grid_pmb(pd_sim *sim, int failure)
  * pairs closer than d_k (lib/contact.c's), else e_i += 1/4 c s^2 |xi| nu
  * V_i V_j over the intact bonds (lib/pmb.c's pmb_energy).  Even blocks,
  * then odd ones, so that no two threads add to one particle. */
+/* The energy of a pair of squared length r2 and length r, half to each end
+ * (0 outside contact with `contact`). */
+static inline __attribute__((always_inline)) double pair_x(const int contact, double r2, double r,
+                                                          double c, double L, double iL, double dc)
+{
+    if (contact)
+        return r2 < dc * dc && r < dc ? c * (dc - r) * (dc - r) : 0.0;
+    double dr = r - L;
+    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+    return c * ((dr * iL) * (dr * iL));
+}
+
 static inline __attribute__((always_inline)) void
 seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, const int contact)
 {
@@ -1312,16 +1324,8 @@ seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, c
         for (int64_t g = sg->lo; g < sg->hi; g++) {
             const int64_t j = g + shift;
             const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
-            const double r2 = dx * dx + dy * dy + dz * dz, r = sqrt(r2);
-            double x;
-            if (contact) {
-                x = r2 < dc * dc && r < dc ? c * (dc - r) * (dc - r) : 0.0;
-            } else {
-                double dr = r - L;
-                dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-                x = c * ((dr * iL) * (dr * iL));
-            }
-            x = (bits[g * W] & bit) ? x : 0.0;
+            const double r2 = dx * dx + dy * dy + dz * dz;
+            const double x = (bits[g * W] & bit) ? pair_x(contact, r2, sqrt(r2), c, L, iL, dc) : 0.0;
             e[g] += x;
             e[j] += x;
         }
@@ -1336,17 +1340,7 @@ seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, c
         const double r2 = dx * dx + dy * dy + dz * dz;
         if (contact && !(r2 < dc * dc)) /* the most, no square root */
             continue;
-        const double r = sqrt(r2);
-        double x;
-        if (contact) {
-            if (!(r < dc))
-                continue;
-            x = c * (dc - r) * (dc - r);
-        } else {
-            double dr = r - L;
-            dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-            x = c * ((dr * iL) * (dr * iL));
-        }
+        const double x = pair_x(contact, r2, sqrt(r2), c, L, iL, dc);
         e[i] += x;
         e[j] += x;
     }
