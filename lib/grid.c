@@ -129,10 +129,8 @@ struct pd_grid {
     uint64_t *cmask;     /* words per particle: contact pair (NULL: none)  */
     grid_seg *seg;
     int64_t nseg;
-    grid_run *run;       /* nrun + 1 (the last: seg0 = nseg)               */
-    int64_t nrun;
+    grid_run *run;       /* the runs and a last one with start n, seg0 nseg */
     int64_t nblocks;
-    int64_t *block_seg;  /* nblocks + 1                                    */
     int64_t *block_run;  /* nblocks + 1                                    */
     double *block_at;    /* nblocks: where a block's middle particle falls
                             among those of its parity, in [0, 1)           */
@@ -171,7 +169,6 @@ void pd_grid_free(pd_grid *G)
     free(G->mask);
     free(G->cmask);
     free(G->seg);
-    free(G->block_seg);
     free(G->run);
     free(G->block_run);
     free(G->block_at);
@@ -186,6 +183,18 @@ void pd_grid_free(pd_grid *G)
     free(G->s0);
     free(G->s0n);
     free(G);
+}
+
+/* The first segment and the first particle of block blk (blk = nblocks:
+ * one past the last). */
+static inline int64_t block_seg0(const pd_grid *G, int64_t blk)
+{
+    return G->run[G->block_run[blk]].seg0;
+}
+
+static inline int64_t block_start(const pd_grid *G, int64_t blk)
+{
+    return G->run[G->block_run[blk]].start;
 }
 
 /* Is block blk (of the phase being walked) the calling thread's?  Each
@@ -508,13 +517,11 @@ static int build_segments(pd_grid *G, const int64_t *inv)
         thick = G->off[k][2] > thick ? G->off[k][2] : thick;
     thick = thick > 0 ? thick : 1;
     G->nblocks = (nout + thick - 1) / thick;
-    G->block_seg = calloc((size_t)G->nblocks + 1, sizeof(int64_t));
     G->block_run = calloc((size_t)G->nblocks + 1, sizeof(int64_t));
     G->run = malloc((size_t)(nrun + 1) * sizeof *G->run);
-    G->nrun = nrun;
     int64_t cap = nrun * G->nk + 16, nseg = 0;
     G->seg = malloc((size_t)cap * sizeof *G->seg);
-    int ok = G->block_seg && G->block_run && G->run && G->seg;
+    int ok = G->block_run && G->run && G->seg;
     for (int64_t A = 0; A < nrun && ok; A++) {
         const int64_t blk = (gc[2][run[A].start] - lo[2]) / thick;
         G->run[A].start = run[A].start;
@@ -548,18 +555,14 @@ static int build_segments(pd_grid *G, const int64_t *inv)
                 s->k = k;
             }
         }
-        G->block_seg[blk + 1] = nseg;
         G->block_run[blk + 1] = A + 1;
     }
     G->nseg = nseg;
     if (ok)
         G->run[nrun] = (grid_run){.start = n, .len = 0, .seg0 = nseg};
-    for (int64_t blk = 1; blk <= G->nblocks && ok; blk++) { /* blocks without runs */
-        if (G->block_seg[blk] < G->block_seg[blk - 1])
-            G->block_seg[blk] = G->block_seg[blk - 1];
+    for (int64_t blk = 1; blk <= G->nblocks && ok; blk++) /* blocks without runs */
         if (G->block_run[blk] < G->block_run[blk - 1])
             G->block_run[blk] = G->block_run[blk - 1];
-    }
     /* the threads' share of each phase: contiguous blocks of about equal
      * particle counts (grid_mine) */
     G->block_at = ok ? malloc((size_t)(G->nblocks > 0 ? G->nblocks : 1) * sizeof(double)) : NULL;
@@ -567,9 +570,9 @@ static int build_segments(pd_grid *G, const int64_t *inv)
     for (int parity = 0; parity < 2 && ok; parity++) {
         double total = 0, before = 0;
         for (int64_t blk = parity; blk < G->nblocks; blk += 2)
-            total += (double)(G->run[G->block_run[blk + 1]].start - G->run[G->block_run[blk]].start);
+            total += (double)(block_start(G, blk + 1) - block_start(G, blk));
         for (int64_t blk = parity; blk < G->nblocks; blk += 2) {
-            double np = (double)(G->run[G->block_run[blk + 1]].start - G->run[G->block_run[blk]].start);
+            double np = (double)(block_start(G, blk + 1) - block_start(G, blk));
             G->block_at[blk] = total > 0 ? (before + 0.5 * np) / total : 0.0;
             before += np;
         }
@@ -1154,7 +1157,7 @@ GRID_TILE_BLOCK(grid_tile_11, 1, 1)
 #define GRID_BLOCK(name, failure, contact, one_word)                                          \
     PD_VECTOR_CLONES static int name(pd_grid *G, int64_t blk, const grid_arrays *A)          \
     {                                                                                         \
-        for (int64_t s = G->block_seg[blk]; s < G->block_seg[blk + 1]; s++)                   \
+        for (int64_t s = block_seg0(G, blk); s < block_seg0(G, blk + 1); s++)                 \
             if (seg_bonds(G, &G->seg[s], A, failure, contact, one_word, &G->breaks[blk]))     \
                 return -1;                                                                    \
         return 0;                                                                             \
@@ -1261,8 +1264,7 @@ pd_status pd_grid_pmb(pd_sim *sim, int failure)
                 if (!grid_mine(G, blk))
                     continue;
                 if (!perm)
-                    for (int64_t i = G->run[G->block_run[blk]].start;
-                         i < G->run[G->block_run[blk + 1]].start; i++) {
+                    for (int64_t i = block_start(G, blk); i < block_start(G, blk + 1); i++) {
                         sim->s0_new[i] = sim->s0_new[i] == -INFINITY ? DBL_MAX : sim->s0_new[i];
                         sim->s0[i] = -INFINITY;
                     }
@@ -1351,7 +1353,7 @@ seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, c
 PD_VECTOR_CLONES static void block_energy(const pd_sim *sim, int64_t blk, double *e, int contact)
 {
     const pd_grid *G = sim->grid;
-    for (int64_t si = G->block_seg[blk]; si < G->block_seg[blk + 1]; si++)
+    for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++)
         if (contact)
             seg_energy(sim, G, &G->seg[si], e, 1);
         else
@@ -1386,7 +1388,7 @@ int pd_grid_max_damage(const pd_sim *sim, double *max_damage)
         for (int64_t blk = phase; blk < G->nblocks; blk += 2) {
             if (!grid_mine(G, blk))
                 continue;
-            for (int64_t si = G->block_seg[blk]; si < G->block_seg[blk + 1]; si++) {
+            for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++) {
                 const grid_seg *sg = &G->seg[si];
                 const int k = sg->k;
                 const uint64_t bit = UINT64_C(1) << (k & 63);
@@ -1453,7 +1455,7 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
 {
     const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
     const int W = G->words;
-    for (int64_t si = G->block_seg[blk]; si < G->block_seg[blk + 1]; si++) {
+    for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++) {
         const grid_seg *sg = &G->seg[si];
         const int k = sg->k;
         const uint64_t bit = UINT64_C(1) << (k & 63);
@@ -1515,7 +1517,7 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
         double *f0 = A->f0, *f1 = A->f1, *f2 = A->f2, *s0n = A->s0n;                           \
         const double s00 = A->s00, alpha = A->alpha;                                           \
         double brk[GRID_CHUNK];                                                                \
-        for (int64_t si = G->block_seg[blk]; si < G->block_seg[blk + 1]; si++) {               \
+        for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++) {             \
             const grid_seg *sg = &G->seg[si];                                                  \
             const int k = sg->k;                                                               \
             const uint64_t bit = UINT64_C(1) << (k & 63);                                      \
