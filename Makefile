@@ -31,33 +31,35 @@ export PD_SANITIZE = 1
 endif
 
 PROGRAMS   = $(patsubst cmd/%.c,%,$(wildcard cmd/pd-*.c))
-LIB_SRC    = $(wildcard lib/*.c)
+LIB_LAYERS = $(shell cat lib/LAYERS)
+LIB_SRC    = $(foreach l,$(LIB_LAYERS),$(wildcard lib/$(l)/*.c))
+LIB_HDR    = lib/pd.h $(wildcard lib/*/*.h)
 LIB_OBJ    = $(LIB_SRC:.c=.o)
 BIN        = $(addprefix bin/,$(PROGRAMS))
 UNIT_SRC   = $(wildcard tests/unit/*.c)
 UNIT_BIN   = $(UNIT_SRC:tests/unit/%.c=bin/test-%)
 
-.PHONY: all check test unit bats deps demo bench fuzz install uninstall clean
+.PHONY: all check test layers unit bats deps demo bench fuzz install uninstall clean
 
 all: $(BIN) lib/libpd.a
 
-lib/%.o: lib/%.c lib/pd.h $(wildcard lib/*.h)
+lib/%.o: lib/%.c $(LIB_HDR)
 	$(CC) $(PD_CFLAGS) $(CFLAGS) -c -o $@ $<
 
 # The bond kernel may reassociate its per-particle sums so that they
 # vectorize (the order is fixed per instruction set, not per thread count).
 VEC_CFLAGS = -fassociative-math -fno-signed-zeros -fno-trapping-math
-lib/pmb.o lib/contact.o: PD_CFLAGS += $(VEC_CFLAGS)
+lib/models/pmb.o lib/effects/contact.o: PD_CFLAGS += $(VEC_CFLAGS)
 
 lib/libpd.a: $(LIB_OBJ)
 	rm -f $@
 	ar rcs $@ $^
 
-bin/%: cmd/%.c cmd/cli.h lib/libpd.a lib/pd.h
+bin/%: cmd/%.c cmd/cli.h lib/libpd.a $(LIB_HDR)
 	@mkdir -p bin
 	$(CC) $(PD_CFLAGS) $(CFLAGS) -o $@ $< lib/libpd.a $(PD_LIBS)
 
-bin/test-%: tests/unit/%.c tests/unit/check.h lib/libpd.a lib/pd.h
+bin/test-%: tests/unit/%.c tests/unit/check.h lib/libpd.a $(LIB_HDR)
 	@mkdir -p bin
 	$(CC) $(PD_CFLAGS) $(CFLAGS) -o $@ $< lib/libpd.a $(PD_LIBS)
 
@@ -68,7 +70,12 @@ check: deps
 	$(MAKE) all $(UNIT_BIN)
 	$(MAKE) test
 
-test: unit bats
+test: layers unit bats
+
+# lib/ calls only downward: its folders are layers (lib/LAYERS, bottom
+# first; lib/README.md), read from the objects' symbols.
+layers: lib/libpd.a
+	@sh share/layers.sh
 
 unit: $(UNIT_BIN)
 	@for t in $(UNIT_BIN); do echo "$$t"; $$t || exit 1; done
@@ -119,4 +126,4 @@ uninstall:
 	rm -f $(DESTDIR)$(MANDIR)/man5/pd-h5.5 $(DESTDIR)$(MANDIR)/man7/pd.7
 
 clean:
-	rm -rf bin lib/*.o lib/libpd.a
+	rm -rf bin lib/*/*.o lib/libpd.a

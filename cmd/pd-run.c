@@ -689,7 +689,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         return usage_error("--model eps needs --yield-stress", NULL);
     if (o->sc.model != PD_MODEL_EPS && o->has_yield)
         return usage_error("--yield-stress is for --model eps", NULL);
-    if (PD_MODEL_STATE_BASED(o->sc.model)) {
+    if (pd_model_state_based(pd_model_of(o->sc.model))) {
         if (o->has_e)
             return usage_error("--youngs-modulus is for pmb (Poisson ratio 1/4); --model lps "
                                "takes --bulk-modulus and --shear-modulus",
@@ -775,7 +775,7 @@ static char *scene_text(const pd_scene *s)
             free(prof[k]);
         return NULL;
     }
-    if (PD_MODEL_STATE_BASED(s->model))
+    if (pd_model_state_based(pd_model_of(s->model)))
         p += sprintf(p, "model %s\nbulk-modulus %.17g\nshear-modulus %.17g\ninfluence %s\n",
                      s->model == PD_MODEL_VES   ? "ves"
                      : s->model == PD_MODEL_EPS ? "eps"
@@ -977,13 +977,6 @@ static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds
     pd_restart r;
     memset(&r, 0, sizeof r);
     pd_sim_accumulated(sim, &r);
-    double *const *yb = pd_sim_contact_positions(sim, &r.contact_builds);
-    for (int d = 0; d < 3; d++) {
-        r.position[d] = pd_sim_positions(sim)[d];
-        r.force[d] = pd_sim_forces(sim)[d];
-        r.contact_position[d] = yb ? yb[d] : NULL;
-    }
-    r.s0 = (double *)pd_sim_s0(sim);
     if (s == PD_OK)
         s = pd_write_restart(out, p->n, fi.step, &r);
     if (s == PD_OK)
@@ -1144,7 +1137,7 @@ int main(int argc, char **argv)
         sc->c = pd_pmb_c_for(p, sc->bulk_modulus, b->horizon);
     if (!o.has_k && !o.has_e)
         sc->bulk_modulus = sc->youngs_modulus = 0; /* a scene's K or E that --c overrode */
-    if (PD_MODEL_STATE_BASED(sc->model) && p->dimension == 2) {
+    if (pd_model_state_based(pd_model_of(sc->model)) && p->dimension == 2) {
         fprintf(stderr, PROG ": error: --model %s is for 3-D bodies; '%s' is a 2-D plate (run "
                              "it with pmb)\n",
                 sc->model == PD_MODEL_VES   ? "ves"

@@ -264,15 +264,31 @@ int pd_lattice_coords(const pd_particles *p, int axis[3], int32_t *lc[3]);
  * the old index of each new position (malloc'd), or NULL when the
  * particles are not on a lattice. */
 pd_status pd_lattice_order(const pd_particles *p, int64_t **order);
+/* The lattice order of n particles from their coordinates lc (as
+ * pd_lattice_coords gives them): the old index of each new position
+ * (malloc'd), or NULL when out of memory. */
+int64_t *pd_lattice_sort(int64_t n, int32_t *const lc[3]);
+/* A site within PD_LATTICE_TOL spacings of the lattice is on it. */
+#define PD_LATTICE_TOL 1e-6
 
 /* ---------------------------------------------------------------- scene */
 
 typedef enum { PD_MODEL_PMB = 0, PD_MODEL_LPS, PD_MODEL_VES, PD_MODEL_EPS } pd_model_kind;
-/* The state-based models (LPS and its viscoelastic and elastic-plastic
- * variants VES and EPS, lib/lps.c): K, G and an influence function, 3-D
- * only. */
-#define PD_MODEL_STATE_BASED(m)                                                                    \
-    ((m) == PD_MODEL_LPS || (m) == PD_MODEL_VES || (m) == PD_MODEL_EPS)
+
+/* The material models (lib/models/): one descriptor each, found by name or
+ * by kind (NULL: none such). */
+typedef struct pd_model pd_model;
+const pd_model *pd_model_by_name(const char *name);
+const pd_model *pd_model_of(pd_model_kind kind);
+/* The k-th model of the table (NULL past the last). */
+const pd_model *pd_model_at(int k);
+const char *pd_model_name(const pd_model *m);
+pd_model_kind pd_model_kind_of(const pd_model *m);
+/* Does it take K, G and an influence function (LPS and its viscoelastic
+ * and elastic-plastic variants VES and EPS, lib/models/lps.c), 3-D only? */
+int pd_model_state_based(const pd_model *m);
+/* The doubles per directed bond its restart data keep (0: none). */
+int pd_model_history_width(const pd_model *m);
 
 /* Influence functions omega(|xi|) of the LPS model (seed 000 eq. 4). */
 typedef enum {
@@ -537,8 +553,9 @@ typedef struct {
                                     the last step and the back
                                     extension), row-major; NULL: none */
 } pd_restart;
-/* The run's accumulated energies, power and lost particles, for its
- * restart data (r->lost points into the run). */
+/* What a run's restart data hold (pd_restart: the state, the accumulated
+ * energies and power, lost particles, and what its effects keep: contact
+ * list positions, the projectile, bond history), pointing into the run. */
 void pd_sim_accumulated(const pd_sim *sim, pd_restart *r);
 /* Particles lost so far (see pd_scene.lost_margin). */
 int64_t pd_sim_lost(const pd_sim *sim);
@@ -551,8 +568,6 @@ int pd_energy_runaway(const pd_sim *sim, const pd_energy *e, double *ratio);
 
 double *const *pd_sim_forces(const pd_sim *sim);
 const double *pd_sim_s0(const pd_sim *sim);
-/* Positions at the last contact-list build (NULL if none), and the count. */
-double *const *pd_sim_contact_positions(const pd_sim *sim, int64_t *builds);
 /* Put the run at `step` with the state of a restart slot, the frame's
  * velocities and bond states. */
 pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double *const v[3],
@@ -926,6 +941,10 @@ double pd_memory_bytes(void);
 pd_status pd_scene_args_text(const char *text, const char *name, int *argc, char ***argv);
 /* Wall clock, s. */
 double pd_wtime(void);
+/* The sum of x[0..n-1] in fixed chunks of PD_SUM_CHUNK, summed in order
+ * (the chunks in parallel): the same bits at any thread count. */
+#define PD_SUM_CHUNK 4096
+double pd_sum_fixed(const double *x, int64_t n);
 /* Peak resident memory of this process, bytes (0 if unknown). */
 int64_t pd_peak_rss(void);
 

@@ -18,7 +18,7 @@
 
 #include "check.h"
 #include "pd.h"
-#include "sim.h"
+#include "state/sim.h"
 
 static const double RHO = 2200.0, H = 1e-3, DELTA = 3.0001e-3;
 static const int M = 10; /* particles per edge */

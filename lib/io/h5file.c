@@ -21,7 +21,7 @@
 
 #include <hdf5.h>
 
-#include "h5util.h"
+#include "io/h5util.h"
 #include "pd.h"
 
 /* Temporary files being written, for pd_remove_temps() in a signal

@@ -29,77 +29,10 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "sim.h"
+#include "models/model.h"
+#include "stencil/grid.h"
 
 #define PMB_CHUNK 256 /* bonds per vector pass */
-
-static int64_t lower_bound(const int32_t *v, int64_t lo, int64_t hi, int32_t key)
-{
-    while (lo < hi) {
-        int64_t mid = lo + (hi - lo) / 2;
-        if (v[mid] < key)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
-void pd_half_free(pd_half_bonds *h)
-{
-    if (h == NULL)
-        return;
-    free(h->offset);
-    free(h->neighbor);
-    free(h->length);
-    if (h->w_ji != h->w_ij)
-        free(h->w_ji);
-    free(h->w_ij);
-    free(h->intact);
-    free(h->released);
-    free(h->cursor);
-    free(h->kfail);
-}
-
-pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
-{
-    int64_t n = b->n, count = 0;
-    h->n = n;
-    h->offset = malloc((size_t)(n + 1) * sizeof(int64_t));
-    h->cursor = malloc((size_t)(n > 0 ? n : 1) * sizeof(int64_t));
-    if (h->offset == NULL || h->cursor == NULL)
-        return pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");
-    h->offset[0] = 0;
-    int64_t span = 1;
-    for (int64_t i = 0; i < n; i++) {
-        int64_t first = lower_bound(b->neighbor, b->offset[i], b->offset[i + 1], (int32_t)i + 1);
-        count += b->offset[i + 1] - first;
-        h->offset[i + 1] = count;
-        if (b->offset[i + 1] > first) {
-            int64_t d = b->neighbor[b->offset[i + 1] - 1] - i;
-            span = d > span ? d : span;
-        }
-    }
-    h->count = count;
-    size_t m = (size_t)(count > 0 ? count : 1);
-    h->neighbor = malloc(m * sizeof(int32_t));
-    h->intact = calloc((size_t)pd_bits_words(count) + 1, sizeof(uint64_t));
-    if (!h->neighbor || !h->intact)
-        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)count);
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < n; i++) {
-        int64_t k = b->offset[i + 1] - (h->offset[i + 1] - h->offset[i]);
-        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++, k++)
-            h->neighbor[q] = b->neighbor[k];
-    }
-    pd_half_set_state(h, b, b->intact);
-    h->block = span;
-    h->nblocks = (n + span - 1) / span;
-    h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
-    if (h->released == NULL)
-        return pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");
-    return PD_OK;
-}
 
 pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h)
 {
@@ -137,60 +70,6 @@ pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd
         h->w_ji = h->w_ij;
     }
     return PD_OK;
-}
-
-void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact)
-{
-    h->epoch++;
-    /* a half bond i-j (j > i) takes the bit of its copy in i's family */
-    for (int64_t w = 0; w < pd_bits_words(h->count); w++)
-        h->intact[w] = 0;
-    for (int64_t i = 0; i < h->n; i++) {
-        int64_t q = h->offset[i];
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-            if (b->neighbor[k] > i) {
-                if (pd_bond_intact(intact, k))
-                    h->intact[q >> 6] |= UINT64_C(1) << (q & 63);
-                q++;
-            }
-    }
-}
-
-int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j)
-{
-    int64_t q = lower_bound(h->neighbor, h->offset[i], h->offset[i + 1], (int32_t)j);
-    return q < h->offset[i + 1] && h->neighbor[q] == j ? q : -1;
-}
-
-void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i)
-{
-    h->epoch++;
-    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        int32_t j = b->neighbor[k];
-        int64_t q = pd_half_find(h, j < i ? j : i, j < i ? i : j);
-        if (q >= 0)
-            pd_bond_break(h->intact, q);
-    }
-}
-
-void pd_half_expand(pd_half_bonds *h, const pd_bonds *b, uint64_t *intact)
-{
-    /* Row i meets its bonds to j < i in ascending i for each j, so a cursor
-     * per row walks the half bonds of j in order. */
-    for (int64_t i = 0; i < h->n; i++)
-        h->cursor[i] = h->offset[i];
-    int64_t words = pd_bits_words(b->count);
-    for (int64_t w = 0; w < words; w++)
-        intact[w] = 0;
-    for (int64_t i = 0; i < h->n; i++) {
-        int64_t own = h->offset[i];
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            int32_t j = b->neighbor[k];
-            int64_t q = j < i ? h->cursor[j]++ : own++;
-            if (pd_bond_intact(h->intact, q))
-                intact[k >> 6] |= UINT64_C(1) << (k & 63);
-        }
-    }
 }
 
 /* The elastic energy of half bond k of row i, J: 1/2 c s^2 |xi| nu V_i V_j,
@@ -518,11 +397,24 @@ static void pmb_stress(const pd_sim *sim, void *state, double *out)
         pmb_stress_uniform(sim, state, out);
 }
 
+/* The bond list's lengths and weights where the lattice stencil does not
+ * walk the bonds, each bond's own c and failure factor with laws. */
+static pd_status pmb_init(pd_sim *sim, void **state)
+{
+    (void)state;
+    pd_status s = pd_scene_has_laws(&sim->sc) ? pd_bond_laws_check(sim->p, &sim->sc) : PD_OK;
+    if (s == PD_OK && !sim->grid)
+        s = pd_half_weights(sim->p, sim->b, sim->sc.c, &sim->half);
+    if (s == PD_OK && !sim->grid && pd_scene_has_laws(&sim->sc))
+        s = pd_half_laws(sim->p, sim->b, &sim->sc, &sim->half);
+    return s;
+}
+
 const pd_effect pd_effect_pmb = {
-    .name = "pmb", .timer = PD_T_BONDS, .force = pmb_force,
+    .name = "pmb", .timer = PD_T_BONDS, .init = pmb_init, .force = pmb_force,
     .energy = pmb_energy, .kind = PD_ENERGY_ELASTIC, .stress = pmb_stress};
 const pd_effect pd_effect_pmb_failure = {
-    .name = "pmb+failure", .timer = PD_T_BONDS, .force = pmb_failure_force,
+    .name = "pmb+failure", .timer = PD_T_BONDS, .init = pmb_init, .force = pmb_failure_force,
     .energy = pmb_energy, .kind = PD_ENERGY_ELASTIC, .stress = pmb_stress};
 
 double pd_bond_stiffness(const pd_particles *p, const pd_bonds *b, double c, int64_t i)
@@ -533,10 +425,8 @@ double pd_bond_stiffness(const pd_particles *p, const pd_bonds *b, double c, int
     return sum;
 }
 
-double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
+static double pmb_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
 {
-    if (PD_MODEL_STATE_BASED(s->model))
-        return pd_lps_stable_dt(p, b, s);
     /* seed 004 eq. 46: dt < sqrt(2 rho_i / sum_p V_p C_ip), C_ip = c/|xi|
      * for PMB (|df/deta| of f = c s), here with the partial volume nu V_p
      * that the discrete force uses; the smallest over all particles. */
@@ -549,6 +439,21 @@ double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
     }
     return best;
 }
+
+/* One c and s00 for every bond: the lattice stencil's PMB kernels. */
+static pd_stencil_kind pmb_stencil(const pd_scene *s)
+{
+    return pd_scene_has_laws(s) ? PD_STENCIL_NONE : PD_STENCIL_PMB;
+}
+
+static const char *const pmb_takes[] = {"--c", "--bulk-modulus", "--youngs-modulus",
+                                        "--failure-energy", "--material", "--interface",
+                                        "--fibre", NULL};
+
+const pd_model pd_model_pmb = {
+    .name = "pmb", .kind = PD_MODEL_PMB, .force = &pd_effect_pmb,
+    .force_failure = &pd_effect_pmb_failure, .stable_dt = pmb_stable_dt, .stencil = pmb_stencil,
+    .takes = pmb_takes, .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS};
 
 double pd_pmb_c_from_bulk(double bulk_modulus, double horizon)
 {

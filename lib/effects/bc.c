@@ -30,7 +30,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "sim.h"
+#include "effects/effect.h"
 
 const char *pd_bc_option(pd_bc_kind kind)
 {
@@ -194,9 +194,24 @@ static pd_status body_force(pd_sim *sim, void *state)
     return PD_OK;
 }
 
+/* Does the scene hold a condition of the kind (body forces) or of the
+ * other kinds (prescribed motion)? */
+static int has_bc(const pd_scene *s, int body)
+{
+    for (int k = 0; k < s->nbc; k++)
+        if ((s->bc[k].kind == PD_BC_BODY_FORCE) == body)
+            return 1;
+    return 0;
+}
+
+static int body_declared(const pd_scene *s)
+{
+    return has_bc(s, 1);
+}
+
 const pd_effect pd_effect_body_force = {
     .name = "body-force", .timer = PD_T_INTEGRATE, .init = body_init, .force = body_force,
-    .free = bc_free};
+    .free = bc_free, .declared = body_declared};
 
 /* ------------------------------------------------------------ prescribed motion */
 
@@ -280,6 +295,11 @@ static pd_status held_constrain(pd_sim *sim, void *state, int phase)
     return PD_OK;
 }
 
+static int held_declared(const pd_scene *s)
+{
+    return has_bc(s, 0);
+}
+
 const pd_effect pd_effect_prescribed = {
     .name = "prescribed-motion", .timer = PD_T_INTEGRATE, .init = held_init, .free = bc_free,
-    .constrain = held_constrain};
+    .constrain = held_constrain, .declared = held_declared};

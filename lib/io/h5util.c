@@ -7,7 +7,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "h5util.h"
+#include "io/h5util.h"
 
 int pd_h5_has_attr(hid_t loc, const char *name)
 {

@@ -72,7 +72,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "sim.h"
+#include "stencil/grid.h"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -88,7 +88,6 @@
 #define PD_GRID_AVX512 0
 #endif
 
-#define GRID_TOL 1e-6    /* a site within 1e-6 h of the lattice is on it  */
 #define GRID_NU_TOL 1e-9 /* nu of one offset equal to this, relatively    */
 #define GRID_CHUNK 256   /* particles per vector pass of a segment        */
 #define GRID_SAFE 16     /* shifts below this take the two-pass loop      */
@@ -217,98 +216,6 @@ static inline int grid_mine(const pd_grid *G, int64_t blk)
     (void)blk;
     return 1;
 #endif
-}
-
-/* ------------------------------------------------------------ the lattice */
-
-int pd_lattice_coords(const pd_particles *p, int axis[3], int32_t *lc[3])
-{
-    const double h = p->spacing;
-    if (!(h > 0) || p->n == 0)
-        return 0;
-    double lo[3], hi[3];
-    pd_particles_bounds(p, lo, hi);
-    for (int d = 0; d < 3; d++)
-        if (!isfinite(lo[d]) || !isfinite(hi[d]) || (hi[d] - lo[d]) / h > 1e9)
-            return 0;
-    /* inner: the longest extent; outer: the next; mid: the shortest (ties
-     * by axis number) */
-    int ord[3] = {0, 1, 2};
-    for (int a = 0; a < 3; a++)
-        for (int b = a + 1; b < 3; b++)
-            if (hi[ord[b]] - lo[ord[b]] > hi[ord[a]] - lo[ord[a]]) {
-                int t = ord[a];
-                ord[a] = ord[b];
-                ord[b] = t;
-            }
-    axis[0] = ord[0];
-    axis[1] = ord[2];
-    axis[2] = ord[1];
-    for (int a = 0; a < 3; a++) {
-        int d = axis[a];
-        for (int64_t i = 0; i < p->n; i++) {
-            double c = (p->x[d][i] - lo[d]) / h, r = nearbyint(c);
-            if (!(fabs(c - r) <= GRID_TOL))
-                return 0;
-            if (lc)
-                lc[a][i] = (int32_t)r;
-        }
-    }
-    return 1;
-}
-
-typedef struct {
-    int64_t g;
-    int32_t c[3];
-} order_item;
-
-static int cmp_order(const void *a, const void *b)
-{
-    const order_item *x = a, *y = b;
-    for (int d = 2; d >= 0; d--)
-        if (x->c[d] != y->c[d])
-            return (x->c[d] > y->c[d]) - (x->c[d] < y->c[d]);
-    return (x->g > y->g) - (x->g < y->g);
-}
-
-/* The lattice order of n particles from their coordinates: the old index
- * of each new position (malloc'd), or NULL when out of memory. */
-static int64_t *sort_lattice(int64_t n, int32_t *const lc[3])
-{
-    order_item *it = malloc((size_t)(n > 0 ? n : 1) * sizeof *it);
-    int64_t *o = malloc((size_t)(n > 0 ? n : 1) * sizeof *o);
-    if (it && o) {
-        for (int64_t i = 0; i < n; i++) {
-            it[i].g = i;
-            for (int d = 0; d < 3; d++)
-                it[i].c[d] = lc[d][i];
-        }
-        qsort(it, (size_t)n, sizeof *it, cmp_order);
-        for (int64_t g = 0; g < n; g++)
-            o[g] = it[g].g;
-    } else {
-        free(o);
-        o = NULL;
-    }
-    free(it);
-    return o;
-}
-
-pd_status pd_lattice_order(const pd_particles *p, int64_t **order)
-{
-    *order = NULL;
-    int axis[3];
-    int32_t *lc[3] = {NULL, NULL, NULL};
-    for (int d = 0; d < 3; d++)
-        lc[d] = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof(int32_t));
-    pd_status s = PD_OK;
-    if (!lc[0] || !lc[1] || !lc[2])
-        s = pd_fail(PD_ERR_NOMEM, "out of memory ordering the lattice");
-    else if (pd_lattice_coords(p, axis, lc) && (*order = sort_lattice(p->n, lc)) == NULL)
-        s = pd_fail(PD_ERR_NOMEM, "out of memory ordering the lattice");
-    for (int d = 0; d < 3; d++)
-        free(lc[d]);
-    return s;
 }
 
 /* --------------------------------------------------------------- building */
@@ -634,17 +541,16 @@ static void grid_sync(pd_sim *sim, pd_grid *G)
     G->epoch = h->epoch;
 }
 
-pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
+pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
 {
     *out = NULL;
     const pd_particles *p = sim->p;
     const pd_bonds *b = sim->b;
     const pd_scene *sc = &sim->sc;
-    /* PMB with one c and s00 for every bond, or LPS with an influence
-     * function of |xi| alone (no ellipsoids); equal volumes and radii */
-    const int lps = sc->model == PD_MODEL_LPS;
-    if (sc->bond_list || (PD_MODEL_STATE_BASED(sc->model) && !lps) ||
-        (lps && sc->nellipsoids > 0) || pd_scene_has_laws(sc) || sim->half.kfail || p->n < 2 ||
+    /* the model's stencil (PMB with one c and s00 for every bond, or LPS
+     * with an influence function of |xi| alone); equal volumes and radii */
+    const int lps = kind == PD_STENCIL_LPS;
+    if (kind == PD_STENCIL_NONE || sc->bond_list || sim->half.kfail || p->n < 2 ||
         b->count == 0)
         return PD_OK;
     for (int64_t i = 1; i < p->n; i++)
@@ -661,7 +567,7 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
     int ok = G->lc[0] && G->lc[1] && G->lc[2] ? 1 : -1;
     if (ok > 0)
         ok = pd_lattice_coords(p, G->axis, G->lc);
-    if (ok > 0 && (order = sort_lattice(n, G->lc)) == NULL)
+    if (ok > 0 && (order = pd_lattice_sort(n, G->lc)) == NULL)
         ok = -1;
     if (ok > 0 && order) {
         int identity = 1;
@@ -692,7 +598,7 @@ pd_status pd_grid_new(pd_sim *sim, pd_grid **out)
                     if ((a || m || o) && offset_of(G, d) == INT16_MIN)
                         d2min = fmin(d2min, (double)(a * a + m * m + o * o));
                 }
-        G->gap = p->spacing * (sqrt(d2min) - 4 * GRID_TOL);
+        G->gap = p->spacing * (sqrt(d2min) - 4 * PD_LATTICE_TOL);
     }
     /* the file's families are the whole stencil: each particle has a bond
      * to every particle at a stencil offset (counted over the segments) */

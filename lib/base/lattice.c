@@ -152,3 +152,93 @@ pd_status pd_plate_make(const pd_region *regions, int nregions, const pd_lattice
 {
     return make(regions, nregions, lp, 1, thickness, out);
 }
+
+/* ------------------------------------------------------- lattice order */
+
+int pd_lattice_coords(const pd_particles *p, int axis[3], int32_t *lc[3])
+{
+    const double h = p->spacing;
+    if (!(h > 0) || p->n == 0)
+        return 0;
+    double lo[3], hi[3];
+    pd_particles_bounds(p, lo, hi);
+    for (int d = 0; d < 3; d++)
+        if (!isfinite(lo[d]) || !isfinite(hi[d]) || (hi[d] - lo[d]) / h > 1e9)
+            return 0;
+    /* inner: the longest extent; outer: the next; mid: the shortest (ties
+     * by axis number) */
+    int ord[3] = {0, 1, 2};
+    for (int a = 0; a < 3; a++)
+        for (int b = a + 1; b < 3; b++)
+            if (hi[ord[b]] - lo[ord[b]] > hi[ord[a]] - lo[ord[a]]) {
+                int t = ord[a];
+                ord[a] = ord[b];
+                ord[b] = t;
+            }
+    axis[0] = ord[0];
+    axis[1] = ord[2];
+    axis[2] = ord[1];
+    for (int a = 0; a < 3; a++) {
+        int d = axis[a];
+        for (int64_t i = 0; i < p->n; i++) {
+            double c = (p->x[d][i] - lo[d]) / h, r = nearbyint(c);
+            if (!(fabs(c - r) <= PD_LATTICE_TOL))
+                return 0;
+            if (lc)
+                lc[a][i] = (int32_t)r;
+        }
+    }
+    return 1;
+}
+
+typedef struct {
+    int64_t g;
+    int32_t c[3];
+} order_item;
+
+static int cmp_order(const void *a, const void *b)
+{
+    const order_item *x = a, *y = b;
+    for (int d = 2; d >= 0; d--)
+        if (x->c[d] != y->c[d])
+            return (x->c[d] > y->c[d]) - (x->c[d] < y->c[d]);
+    return (x->g > y->g) - (x->g < y->g);
+}
+
+int64_t *pd_lattice_sort(int64_t n, int32_t *const lc[3])
+{
+    order_item *it = malloc((size_t)(n > 0 ? n : 1) * sizeof *it);
+    int64_t *o = malloc((size_t)(n > 0 ? n : 1) * sizeof *o);
+    if (it && o) {
+        for (int64_t i = 0; i < n; i++) {
+            it[i].g = i;
+            for (int d = 0; d < 3; d++)
+                it[i].c[d] = lc[d][i];
+        }
+        qsort(it, (size_t)n, sizeof *it, cmp_order);
+        for (int64_t g = 0; g < n; g++)
+            o[g] = it[g].g;
+    } else {
+        free(o);
+        o = NULL;
+    }
+    free(it);
+    return o;
+}
+
+pd_status pd_lattice_order(const pd_particles *p, int64_t **order)
+{
+    *order = NULL;
+    int axis[3];
+    int32_t *lc[3] = {NULL, NULL, NULL};
+    for (int d = 0; d < 3; d++)
+        lc[d] = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof(int32_t));
+    pd_status s = PD_OK;
+    if (!lc[0] || !lc[1] || !lc[2])
+        s = pd_fail(PD_ERR_NOMEM, "out of memory ordering the lattice");
+    else if (pd_lattice_coords(p, axis, lc) && (*order = pd_lattice_sort(p->n, lc)) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory ordering the lattice");
+    for (int d = 0; d < 3; d++)
+        free(lc[d]);
+    return s;
+}

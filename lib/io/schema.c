@@ -9,7 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "h5util.h"
+#include "io/h5util.h"
+#include "models/model.h"
 
 /* ------------------------------------------------------------ header */
 
@@ -559,10 +560,10 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
         if (s == PD_OK)                                                                            \
             s = (call);                                                                            \
     } while (0)
-    TRY(pd_h5_write_attr_string(g, "model", sc->model == PD_MODEL_LPS   ? "lps"
-                                            : sc->model == PD_MODEL_VES ? "ves"
-                                            : sc->model == PD_MODEL_EPS ? "eps"
-                                                                        : "pmb"));
+    const pd_model *model = pd_model_of(sc->model);
+    if (model == NULL)
+        s = pd_fail(PD_ERR_INVALID, "unknown model %d", (int)sc->model);
+    TRY(pd_h5_write_attr_string(g, "model", model->name));
     TRY(pd_h5_write_attr_string(g, "effects", effects));
     TRY(pd_h5_write_attr_string(g, "options", options_text));
     TRY(pd_h5_write_attr_doubles(g, "c", &sc->c, 1));
@@ -594,7 +595,7 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
     TRY(pd_h5_write_attr_int(g, "steps", sc->steps));
     TRY(pd_h5_write_attr_int(g, "every", sc->every));
     TRY(pd_h5_write_attr_int(g, "threads", sc->threads));
-    if (PD_MODEL_STATE_BASED(sc->model)) {
+    if (model && model->state_based) {
         TRY(pd_h5_write_attr_doubles(g, "shear_modulus", &sc->shear_modulus, 1));
         TRY(pd_h5_write_attr_string(g, "influence", pd_influence_name(sc->influence)));
     }
@@ -608,12 +609,12 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
         }
         TRY(pd_h5_write_attr_doubles(g, "ellipsoids", el, 6 * sc->nellipsoids));
     }
-    if (sc->model == PD_MODEL_PMB && sc->has_fibre) {
+    if (sc->has_fibre) { /* PMB only (pd_scene_check) */
         double fb[7] = {sc->fibre_g[0], sc->fibre_g[1], sc->fibre_g[2],  sc->fibre_c[0],
                         sc->fibre_c[1], sc->fibre_s00[0], sc->fibre_s00[1]};
         TRY(pd_h5_write_attr_doubles(g, "fibre", fb, 7));
     }
-    if (sc->model == PD_MODEL_PMB && sc->nlaws > 0) {
+    if (sc->nlaws > 0) { /* PMB only */
         /* rows (a, b, c, s00) of the bond laws, a == b for a material */
         double *rows = malloc((size_t)sc->nlaws * 4 * sizeof(double));
         if (rows == NULL && s == PD_OK)
@@ -628,12 +629,9 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
             TRY(pd_h5_write_attr_doubles(g, "bond_laws", rows, 4 * sc->nlaws));
         free(rows);
     }
-    if (sc->model == PD_MODEL_VES) {
-        TRY(pd_h5_write_attr_doubles(g, "ves_lambda", &sc->ves_lambda, 1));
-        TRY(pd_h5_write_attr_doubles(g, "ves_tau", &sc->ves_tau, 1));
-    }
-    if (sc->model == PD_MODEL_EPS)
-        TRY(pd_h5_write_attr_doubles(g, "yield_stress", &sc->yield_stress, 1));
+    for (const pd_model_param *q = model ? model->params : NULL; q && q->option; q++)
+        TRY(pd_h5_write_attr_doubles(g, q->attr,
+                                     (const double *)((const char *)sc + q->offset), 1));
 #undef TRY
     H5Gclose(g);
     return s;

@@ -109,7 +109,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "sim.h"
+#include "models/model.h"
+#include "stencil/grid.h"
 
 typedef struct {
     double *m;         /* n: weighted volume m_i, m^5 times omega's unit */
@@ -134,34 +135,6 @@ typedef struct {
 
 /* The row arrays of a thread's scratch: omega, then six bond terms. */
 #define LPS_ROWS 7
-
-const char *pd_influence_name(pd_influence w)
-{
-    return w == PD_INFLUENCE_ONE ? "1" : w == PD_INFLUENCE_GAUSSIAN ? "gaussian" : "1/r";
-}
-
-int pd_influence_parse(const char *name)
-{
-    if (strcmp(name, "1/r") == 0)
-        return PD_INFLUENCE_INV_R;
-    if (strcmp(name, "1") == 0)
-        return PD_INFLUENCE_ONE;
-    if (strcmp(name, "gaussian") == 0)
-        return PD_INFLUENCE_GAUSSIAN;
-    return -1;
-}
-
-double pd_lps_influence(pd_influence w, double length, double horizon)
-{
-    switch (w) {
-    case PD_INFLUENCE_ONE:
-        return 1.0;
-    case PD_INFLUENCE_GAUSSIAN:
-        return exp(-(length * length) / (horizon * horizon));
-    default:
-        return 1.0 / length; /* LAMMPS peri/lps (seed 000, the note on omega) */
-    }
-}
 
 void pd_lps_weighted_volume(const pd_particles *p, const pd_bonds *b, pd_influence w, double *m)
 {
@@ -903,24 +876,58 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
     free(theta);
 }
 
+/* The bond history a restart needs (VES: 2 values per directed bond, EPS:
+ * 1; none without bonds). */
+static double *history_of(const pd_sim *sim, const lps_state *st, int *width)
+{
+    *width = !st || !st->hist || sim->b->count == 0 ? 0 : st->model == PD_MODEL_EPS ? 1 : 2;
+    return *width ? st->hist : NULL;
+}
+
+static void lps_save(const pd_sim *sim, void *state, pd_restart *r)
+{
+    r->bond_history = history_of(sim, state, &r->history_width);
+    r->history_bonds = r->bond_history ? sim->b->count : 0;
+}
+
+static pd_status lps_restore(pd_sim *sim, void *state, const pd_restart *r)
+{
+    int width;
+    double *hist = history_of(sim, state, &width);
+    if (hist == NULL)
+        return PD_OK;
+    if (r->bond_history == NULL || r->history_width != width || r->history_bonds != sim->b->count)
+        return pd_fail(PD_ERR_FORMAT, "the restart data have no bond history of %d values "
+                       "for each of %lld directed bonds, the scene's model keeps one",
+                       width, (long long)sim->b->count);
+    memcpy(hist, r->bond_history, (size_t)sim->b->count * (size_t)width * sizeof(double));
+    return PD_OK;
+}
+
 const pd_effect pd_effect_lps = {
     .name = "lps", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
+    .save = lps_save, .restore = lps_restore};
 const pd_effect pd_effect_lps_failure = {
     .name = "lps+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
+    .save = lps_save, .restore = lps_restore};
 const pd_effect pd_effect_ves = {
     .name = "ves", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
+    .save = lps_save, .restore = lps_restore};
 const pd_effect pd_effect_eps = {
     .name = "eps", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
+    .save = lps_save, .restore = lps_restore};
 const pd_effect pd_effect_eps_failure = {
     .name = "eps+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
+    .save = lps_save, .restore = lps_restore};
 const pd_effect pd_effect_ves_failure = {
     .name = "ves+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress};
+    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
+    .save = lps_save, .restore = lps_restore};
 
 /* The state of the run's LPS-family effect, or NULL. */
 static lps_state *lps_of(const pd_sim *sim)
@@ -935,11 +942,7 @@ static lps_state *lps_of(const pd_sim *sim)
 
 double *pd_sim_bond_history(const pd_sim *sim, int *width)
 {
-    const lps_state *st = lps_of(sim);
-    *width = !st || !st->hist || sim->b->count == 0 ? 0 /* none without bonds */
-             : st->model == PD_MODEL_EPS            ? 1
-                                                    : 2;
-    return *width ? st->hist : NULL;
+    return history_of(sim, lps_of(sim), width);
 }
 
 pd_status pd_sim_dilatation(const pd_sim *sim, double *theta)
@@ -1010,3 +1013,45 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
     free(S);
     return best;
 }
+
+/* The radial influence of LPS on a lattice: the stencil's LPS kernels;
+ * ellipsoids, VES and EPS walk the bond lists. */
+static pd_stencil_kind lps_stencil(const pd_scene *s)
+{
+    return s->nellipsoids > 0 ? PD_STENCIL_NONE : PD_STENCIL_LPS;
+}
+
+static pd_stencil_kind no_stencil(const pd_scene *s)
+{
+    (void)s;
+    return PD_STENCIL_NONE;
+}
+
+static const char *const lps_needs[] = {"--bulk-modulus", "--shear-modulus", NULL};
+static const char *const ves_needs[] = {"--bulk-modulus", "--shear-modulus", "--ves-lambda",
+                                        "--ves-tau", NULL};
+static const char *const eps_needs[] = {"--bulk-modulus", "--shear-modulus", "--yield-stress",
+                                        NULL};
+static const char *const lps_takes[] = {"--influence", "--ellipsoid", NULL};
+static const pd_model_param ves_params[] = {
+    {"ves-lambda", "ves_lambda", offsetof(pd_scene, ves_lambda)},
+    {"ves-tau", "ves_tau", offsetof(pd_scene, ves_tau)},
+    {NULL, NULL, 0}};
+static const pd_model_param eps_params[] = {
+    {"yield-stress", "yield_stress", offsetof(pd_scene, yield_stress)}, {NULL, NULL, 0}};
+
+const pd_model pd_model_lps = {
+    .name = "lps", .kind = PD_MODEL_LPS, .state_based = 1, .force = &pd_effect_lps,
+    .force_failure = &pd_effect_lps_failure, .stable_dt = pd_lps_stable_dt,
+    .stencil = lps_stencil, .needs = lps_needs, .takes = lps_takes,
+    .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS};
+const pd_model pd_model_ves = {
+    .name = "ves", .kind = PD_MODEL_VES, .state_based = 1, .force = &pd_effect_ves,
+    .force_failure = &pd_effect_ves_failure, .stable_dt = pd_lps_stable_dt,
+    .stencil = no_stencil, .history_width = 2, .needs = ves_needs, .takes = lps_takes,
+    .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .params = ves_params};
+const pd_model pd_model_eps = {
+    .name = "eps", .kind = PD_MODEL_EPS, .state_based = 1, .force = &pd_effect_eps,
+    .force_failure = &pd_effect_eps_failure, .stable_dt = pd_lps_stable_dt,
+    .stencil = no_stencil, .history_width = 1, .needs = eps_needs, .takes = lps_takes,
+    .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .params = eps_params};

@@ -83,3 +83,24 @@ int64_t pd_peak_rss(void)
         return 0;
     return (int64_t)ru.ru_maxrss * 1024;
 }
+
+double pd_sum_fixed(const double *x, int64_t n)
+{
+    int64_t nchunks = (n + PD_SUM_CHUNK - 1) / PD_SUM_CHUNK;
+    double part[64], total = 0;
+    /* groups of 64 chunks: a stack array, the same order at any thread count */
+    for (int64_t g = 0; g < nchunks; g += 64) {
+        int64_t m = nchunks - g < 64 ? nchunks - g : 64;
+#pragma omp parallel for schedule(static)
+        for (int64_t c = 0; c < m; c++) {
+            int64_t lo = (g + c) * PD_SUM_CHUNK, hi = lo + PD_SUM_CHUNK < n ? lo + PD_SUM_CHUNK : n;
+            double sum = 0;
+            for (int64_t i = lo; i < hi; i++)
+                sum += x[i];
+            part[c] = sum;
+        }
+        for (int64_t c = 0; c < m; c++)
+            total += part[c];
+    }
+    return total;
+}

@@ -11,7 +11,7 @@
  */
 #include <math.h>
 
-#include "sim.h"
+#include "effects/effect.h"
 
 /* The centre at the current step. */
 static void centre(const pd_sim *sim, double c[3])
@@ -101,6 +101,11 @@ static void indenter_energy(const pd_sim *sim, void *state, double *e)
     pd_sphere_energy(sim, c, sim->sc.ind_radius, sim->sc.ind_k, e);
 }
 
+static int indenter_declared(const pd_scene *s)
+{
+    return s->has_indenter;
+}
+
 const pd_effect pd_effect_indenter = {
     .name = "indenter", .timer = PD_T_INDENTER, .force = indenter_force,
-    .energy = indenter_energy, .kind = PD_ENERGY_CONTACT};
+    .energy = indenter_energy, .kind = PD_ENERGY_CONTACT, .declared = indenter_declared};

@@ -17,7 +17,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "sim.h"
+#include "effects/effect.h"
+#include "models/model.h"
+#include "stencil/grid.h"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -376,23 +378,36 @@ static pd_status contact_force(pd_sim *sim, void *state)
     return PD_OK;
 }
 
-pd_status pd_contact_restore(pd_sim *sim, void *state, double *const yb[3], int64_t builds)
+/* The list at the last build, for a restart: its positions. */
+static void contact_save(const pd_sim *sim, void *state, pd_restart *r)
 {
-    /* the list as it was built: from the positions of the last build */
+    const contact_list *cl = state;
+    r->contact_builds = sim->contact_builds;
+    for (int d = 0; d < 3; d++)
+        r->contact_position[d] = sim->contact_builds > 0 ? cl->ybuild[d] : NULL;
+}
+
+/* The list as it was built: from the positions of the last build. */
+static pd_status contact_restore(pd_sim *sim, void *state, const pd_restart *r)
+{
+    if (r->contact_builds <= 0)
+        return PD_OK;
+    if (r->contact_position[0] == NULL)
+        return pd_fail(PD_ERR_FORMAT, "the restart data have no contact list positions");
     contact_list *cl = state;
     double *y[3] = {sim->y[0], sim->y[1], sim->y[2]};
     for (int d = 0; d < 3; d++)
-        sim->y[d] = yb[d];
+        sim->y[d] = r->contact_position[d];
     pd_status s = contact_build(sim, cl);
     for (int d = 0; d < 3; d++)
         sim->y[d] = y[d];
-    sim->contact_builds = builds;
+    sim->contact_builds = r->contact_builds;
     return s;
 }
 
-double *const *pd_contact_positions(void *state)
+static int contact_declared(const pd_scene *s)
 {
-    return ((contact_list *)state)->ybuild;
+    return s->has_contact;
 }
 
 /* The contact energy, half of each pair to each end (the list holds both
@@ -422,7 +437,8 @@ static void contact_energy(const pd_sim *sim, void *state, double *e)
 
 const pd_effect pd_effect_contact = {
     .name = "contact", .timer = PD_T_CONTACT, .init = contact_init, .force = contact_force,
-    .free = contact_free, .energy = contact_energy, .kind = PD_ENERGY_CONTACT};
+    .free = contact_free, .energy = contact_energy, .kind = PD_ENERGY_CONTACT,
+    .declared = contact_declared, .save = contact_save, .restore = contact_restore};
 
 int64_t pd_sim_contact_builds(const pd_sim *sim)
 {

@@ -1,6 +1,7 @@
 /*
- * influence.c -- the ellipsoidal (anisotropic) influence function of seed
- * 002, for the state-based models.
+ * influence.c -- the influence functions of the state-based models: the
+ * radial omega(|xi|) of seed 000 eq. 4 (1/|xi|, 1, a Gaussian; at the end
+ * of this file), and the ellipsoidal (anisotropic) factor of seed 002.
  *
  * An ellipsoid centred at the origin has its major semi-axis, of length 1,
  * along the preferred direction u, and the semi-axes a and b (fractions of
@@ -32,6 +33,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include <gsl/gsl_blas.h>
 #include <gsl/gsl_linalg.h>
@@ -136,4 +138,34 @@ double pd_bond_influence(const pd_scene *s, double length, double horizon, const
     if (s->nellipsoids <= 0)
         return w; /* isotropic: omega_r itself, bit for bit */
     return w * pd_ellipsoids_factor(s->ellipsoid, s->nellipsoids, xi);
+}
+
+/* ------------------------------------------------ omega(|xi|), seed 000 eq. 4 */
+
+const char *pd_influence_name(pd_influence w)
+{
+    return w == PD_INFLUENCE_ONE ? "1" : w == PD_INFLUENCE_GAUSSIAN ? "gaussian" : "1/r";
+}
+
+int pd_influence_parse(const char *name)
+{
+    if (strcmp(name, "1/r") == 0)
+        return PD_INFLUENCE_INV_R;
+    if (strcmp(name, "1") == 0)
+        return PD_INFLUENCE_ONE;
+    if (strcmp(name, "gaussian") == 0)
+        return PD_INFLUENCE_GAUSSIAN;
+    return -1;
+}
+
+double pd_lps_influence(pd_influence w, double length, double horizon)
+{
+    switch (w) {
+    case PD_INFLUENCE_ONE:
+        return 1.0;
+    case PD_INFLUENCE_GAUSSIAN:
+        return exp(-(length * length) / (horizon * horizon));
+    default:
+        return 1.0 / length; /* LAMMPS peri/lps (seed 000, the note on omega) */
+    }
 }

@@ -29,7 +29,9 @@
  */
 #include <math.h>
 
-#include "sim.h"
+#include "effects/effect.h"
+#include "models/model.h"
+#include "stencil/grid.h"
 
 double pd_projectile_default_k(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
 {
@@ -59,18 +61,73 @@ static void projectile_energy(const pd_sim *sim, void *state, double *e)
     pd_sphere_energy(sim, sim->proj_x, sim->sc.proj_radius, sim->sc.proj_k, e);
 }
 
-int pd_projectile_kick(pd_sim *sim)
+/* The sphere at t = 0, with the default K when the scene gives none. */
+static pd_status projectile_init(pd_sim *sim, void **state)
 {
+    (void)state;
+    const pd_scene *s = &sim->sc;
+    if (!(s->proj_radius > 0) || !(s->proj_mass > 0) || !(s->proj_k >= 0))
+        return pd_fail(PD_ERR_INVALID, "the projectile's radius, mass and stiffness must be "
+                                       "positive");
+    if (!(s->proj_k > 0))
+        sim->sc.proj_k = pd_projectile_default_k(sim->p, sim->b, s);
+    sim->has_projectile = 1;
+    for (int d = 0; d < 3; d++) {
+        sim->proj_x[d] = s->proj_center[d];
+        sim->proj_v[d] = s->proj_velocity[d];
+    }
+    return PD_OK;
+}
+
+static int projectile_declared(const pd_scene *s)
+{
+    return s->has_projectile;
+}
+
+/* Its half kick V += dt/(2M) F, and its drift X += dt V. */
+static pd_status projectile_kick(pd_sim *sim, void *state, int second)
+{
+    (void)state;
     const double h = 0.5 * sim->sc.dt / sim->sc.proj_mass;
     for (int d = 0; d < 3; d++)
         sim->proj_v[d] += h * sim->proj_f[d];
-    return !isfinite(sim->proj_v[0] + sim->proj_v[1] + sim->proj_v[2]);
+    if (second && !isfinite(sim->proj_v[0] + sim->proj_v[1] + sim->proj_v[2]))
+        return pd_fail(PD_ERR_UNSTABLE,
+                       "the projectile's velocity is not finite at step %lld: the time step "
+                       "may be too large for its stiffness",
+                       (long long)sim->step);
+    return PD_OK;
 }
 
-void pd_projectile_drift(pd_sim *sim)
+static void projectile_drift(pd_sim *sim, void *state)
 {
+    (void)state;
     for (int d = 0; d < 3; d++)
         sim->proj_x[d] += sim->sc.dt * sim->proj_v[d];
+}
+
+static void projectile_save(const pd_sim *sim, void *state, pd_restart *r)
+{
+    (void)state;
+    r->has_projectile = 1;
+    for (int d = 0; d < 3; d++) {
+        r->projectile[d] = sim->proj_x[d];
+        r->projectile[3 + d] = sim->proj_v[d];
+        r->projectile[6 + d] = sim->proj_f[d];
+    }
+}
+
+static pd_status projectile_restore(pd_sim *sim, void *state, const pd_restart *r)
+{
+    (void)state;
+    if (!r->has_projectile)
+        return pd_fail(PD_ERR_FORMAT, "the restart data have no projectile, the scene has one");
+    for (int d = 0; d < 3; d++) {
+        sim->proj_x[d] = r->projectile[d];
+        sim->proj_v[d] = r->projectile[3 + d];
+        sim->proj_f[d] = r->projectile[6 + d];
+    }
+    return PD_OK;
 }
 
 int pd_sim_projectile(const pd_sim *sim, double x[3], double v[3])
@@ -85,5 +142,7 @@ int pd_sim_projectile(const pd_sim *sim, double x[3], double v[3])
 }
 
 const pd_effect pd_effect_projectile = {
-    .name = "projectile", .timer = PD_T_INDENTER, .force = projectile_force,
-    .energy = projectile_energy, .kind = PD_ENERGY_CONTACT};
+    .name = "projectile", .timer = PD_T_INDENTER, .init = projectile_init,
+    .force = projectile_force, .energy = projectile_energy, .kind = PD_ENERGY_CONTACT,
+    .declared = projectile_declared, .kick = projectile_kick, .drift = projectile_drift,
+    .save = projectile_save, .restore = projectile_restore};

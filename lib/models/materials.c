@@ -36,7 +36,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "sim.h"
+#include "models/model.h"
 
 int pd_scene_has_laws(const pd_scene *s)
 {

@@ -13,7 +13,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "sim.h"
+#include "effects/effect.h"
+#include "models/model.h"
+#include "stencil/grid.h"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -93,62 +95,29 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
     for (int d = 0; d < 3; d++)
         memcpy(sim->y[d], p->x[d], n * sizeof(double));
     memcpy(sim->intact, b->intact, (size_t)words * sizeof(uint64_t));
-    pd_status hs = pd_half_build(b, &sim->half);
-    if (hs == PD_OK && pd_scene_has_laws(s))
-        hs = pd_bond_laws_check(p, s);
-    if (hs == PD_OK)
-        hs = pd_grid_new(sim, &sim->grid);
-    /* the bond list of PMB, where the lattice stencil does not serve (LPS
-     * keeps its own weights) */
-    if (hs == PD_OK && !sim->grid && !PD_MODEL_STATE_BASED(s->model))
-        hs = pd_half_weights(p, b, s->c, &sim->half);
-    if (hs == PD_OK && !sim->grid && pd_scene_has_laws(s))
-        hs = pd_half_laws(p, b, s, &sim->half);
-    if (hs != PD_OK) {
+    /* the bonds as the model's kernels walk them: the lattice stencil when
+     * the model and the body allow it, else the half bonds' list */
+    sim->model = pd_model_of(s->model);
+    pd_status st = sim->model ? PD_OK : pd_fail(PD_ERR_INVALID, "unknown model %d", (int)s->model);
+    if (st == PD_OK)
+        st = pd_half_build(b, &sim->half);
+    if (st == PD_OK)
+        st = pd_grid_new(sim, sim->model->stencil(s), &sim->grid);
+    if (st != PD_OK) {
         pd_sim_free(sim);
-        return hs;
+        return st;
     }
     if (s->has_failure)
         for (size_t i = 0; i < n; i++)
             sim->s0[i] = sim->s0_new[i] = DBL_MAX;
     lost_box(sim);
 
-    /* The step is assembled from the declared effects only. */
-    const pd_effect *model = s->has_failure ? &pd_effect_pmb_failure : &pd_effect_pmb;
-    if (s->model == PD_MODEL_LPS)
-        model = s->has_failure ? &pd_effect_lps_failure : &pd_effect_lps;
-    if (s->model == PD_MODEL_VES)
-        model = s->has_failure ? &pd_effect_ves_failure : &pd_effect_ves;
-    if (s->model == PD_MODEL_EPS)
-        model = s->has_failure ? &pd_effect_eps_failure : &pd_effect_eps;
-    pd_status st = add_effect(sim, model);
-    if (st == PD_OK && s->has_contact)
-        st = add_effect(sim, &pd_effect_contact);
-    if (st == PD_OK && s->has_indenter)
-        st = add_effect(sim, &pd_effect_indenter);
-    int body = 0, held = 0;
-    for (int k = 0; k < s->nbc; k++) {
-        body |= s->bc[k].kind == PD_BC_BODY_FORCE;
-        held |= s->bc[k].kind != PD_BC_BODY_FORCE;
-    }
-    if (st == PD_OK && body)
-        st = add_effect(sim, &pd_effect_body_force);
-    if (st == PD_OK && held)
-        st = add_effect(sim, &pd_effect_prescribed);
-    if (st == PD_OK && s->has_projectile) {
-        if (!(s->proj_radius > 0) || !(s->proj_mass > 0) || !(s->proj_k >= 0))
-            st = pd_fail(PD_ERR_INVALID, "the projectile's radius, mass and stiffness must be "
-                                         "positive");
-        if (st == PD_OK && !(s->proj_k > 0))
-            sim->sc.proj_k = pd_projectile_default_k(p, b, s);
-        sim->has_projectile = 1;
-        for (int d = 0; d < 3; d++) {
-            sim->proj_x[d] = s->proj_center[d];
-            sim->proj_v[d] = s->proj_velocity[d];
-        }
-        if (st == PD_OK)
-            st = add_effect(sim, &pd_effect_projectile);
-    }
+    /* The step is assembled from the model's force and the declared
+     * effects only. */
+    st = add_effect(sim, s->has_failure ? sim->model->force_failure : sim->model->force);
+    for (int k = 0; pd_effects[k] && st == PD_OK; k++)
+        if (pd_effects[k]->declared(s))
+            st = add_effect(sim, pd_effects[k]);
     if (st != PD_OK) {
         pd_sim_free(sim);
         return st;
@@ -176,27 +145,6 @@ void pd_sim_free(pd_sim *sim)
     free(sim->s0_new);
     free(sim->lost);
     free(sim);
-}
-
-double pd_sum_fixed(const double *x, int64_t n)
-{
-    int64_t nchunks = (n + PD_SUM_CHUNK - 1) / PD_SUM_CHUNK;
-    double part[64], total = 0;
-    /* groups of 64 chunks: a stack array, the same order at any thread count */
-    for (int64_t g = 0; g < nchunks; g += 64) {
-        int64_t m = nchunks - g < 64 ? nchunks - g : 64;
-#pragma omp parallel for schedule(static)
-        for (int64_t c = 0; c < m; c++) {
-            int64_t lo = (g + c) * PD_SUM_CHUNK, hi = lo + PD_SUM_CHUNK < n ? lo + PD_SUM_CHUNK : n;
-            double sum = 0;
-            for (int64_t i = lo; i < hi; i++)
-                sum += x[i];
-            part[c] = sum;
-        }
-        for (int64_t c = 0; c < m; c++)
-            total += part[c];
-    }
-    return total;
 }
 
 /* All force densities at the current positions; the power the effects put
@@ -447,12 +395,14 @@ pd_status pd_sim_step(pd_sim *sim)
         if (s != PD_OK)
             return s;
     }
-    if (sim->has_projectile)
-        pd_projectile_kick(sim);
+    for (int k = 0; k < sim->neffects; k++) /* the effects' own motion */
+        if (sim->effects[k]->kick)
+            sim->effects[k]->kick(sim, sim->state[k], 0);
     const int away = drift(sim, fused);
     sim->f_zeroed = fused;
-    if (sim->has_projectile)
-        pd_projectile_drift(sim);
+    for (int k = 0; k < sim->neffects; k++)
+        if (sim->effects[k]->drift)
+            sim->effects[k]->drift(sim, sim->state[k]);
     sim->step++;
     sim->time = (double)sim->step * dt;
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
@@ -469,20 +419,15 @@ pd_status pd_sim_step(pd_sim *sim)
         return s;
     t0 = pd_wtime();
     int bad = half_kick(sim);
-    if (sim->has_projectile && pd_projectile_kick(sim))
-        return pd_fail(PD_ERR_UNSTABLE,
-                       "the projectile's velocity is not finite at step %lld: the time step "
-                       "may be too large for its stiffness",
-                       (long long)sim->step);
+    for (int k = 0; k < sim->neffects && s == PD_OK; k++)
+        if (sim->effects[k]->kick)
+            s = sim->effects[k]->kick(sim, sim->state[k], 1);
+    if (s != PD_OK)
+        return s;
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
     if (!bad && (s = constrain(sim, PD_PHASE_KICK2)) != PD_OK)
         return s;
     return bad ? not_finite(sim) : PD_OK;
-}
-
-const char *pd_sim_effects(const pd_sim *sim)
-{
-    return sim->names;
 }
 
 int pd_sim_stencil(const pd_sim *sim)
@@ -493,16 +438,6 @@ int pd_sim_stencil(const pd_sim *sim)
 int pd_sim_stencil_tiles(const pd_sim *sim)
 {
     return pd_grid_tiles(sim->grid);
-}
-
-int64_t pd_sim_stepno(const pd_sim *sim)
-{
-    return sim->step;
-}
-
-double pd_sim_time(const pd_sim *sim)
-{
-    return sim->time;
 }
 
 /* 1/2 rho V |v|^2 of every particle into e. */
@@ -593,24 +528,14 @@ void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
     r->lost_energy = sim->lost_energy;
     r->energy0 = sim->energy0;
     r->lost = sim->lost;
-    r->has_projectile = sim->has_projectile;
-    r->bond_history = pd_sim_bond_history(sim, &r->history_width);
-    r->history_bonds = r->bond_history ? sim->b->count : 0;
-    for (int d = 0; d < 3 && sim->has_projectile; d++) {
-        r->projectile[d] = sim->proj_x[d];
-        r->projectile[3 + d] = sim->proj_v[d];
-        r->projectile[6 + d] = sim->proj_f[d];
+    for (int d = 0; d < 3; d++) {
+        r->position[d] = sim->y[d];
+        r->force[d] = sim->f[d];
     }
-}
-
-int64_t pd_sim_lost(const pd_sim *sim)
-{
-    return sim->nlost;
-}
-
-int64_t pd_sim_broken(const pd_sim *sim)
-{
-    return pd_bits_count_broken(sim->half.intact, sim->half.count);
+    r->s0 = sim->sc.has_failure ? sim->s0 : NULL;
+    for (int k = 0; k < sim->neffects; k++) /* what the effects keep */
+        if (sim->effects[k]->save)
+            sim->effects[k]->save(sim, sim->state[k], r);
 }
 
 double pd_sim_max_damage(const pd_sim *sim)
@@ -627,57 +552,6 @@ double pd_sim_max_damage(const pd_sim *sim)
         m = fmax(m, dmg[i]);
     free(dmg);
     return m;
-}
-
-const double *pd_sim_timers(const pd_sim *sim)
-{
-    return sim->timers;
-}
-
-double *const *pd_sim_positions(const pd_sim *sim)
-{
-    return sim->y;
-}
-
-double *const *pd_sim_velocities(const pd_sim *sim)
-{
-    return sim->v;
-}
-
-const uint64_t *pd_sim_intact(const pd_sim *sim)
-{
-    pd_sim *mut = (pd_sim *)sim; /* a cache: the state itself does not change */
-    if (mut->intact_stale) {
-        pd_half_expand(&mut->half, sim->b, mut->intact);
-        mut->intact_stale = 0;
-    }
-    return sim->intact;
-}
-
-/* The state of the effect `e`, or NULL when it is not declared. */
-static void *effect_state(const pd_sim *sim, const pd_effect *e)
-{
-    for (int k = 0; k < sim->neffects; k++)
-        if (sim->effects[k] == e)
-            return sim->state[k];
-    return NULL;
-}
-
-double *const *pd_sim_forces(const pd_sim *sim)
-{
-    return sim->f;
-}
-
-const double *pd_sim_s0(const pd_sim *sim)
-{
-    return sim->sc.has_failure ? sim->s0 : NULL;
-}
-
-double *const *pd_sim_contact_positions(const pd_sim *sim, int64_t *builds)
-{
-    void *st = effect_state(sim, &pd_effect_contact);
-    *builds = sim->contact_builds;
-    return st && sim->contact_builds > 0 ? pd_contact_positions(st) : NULL;
 }
 
 pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double *const v[3],
@@ -714,30 +588,9 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
         for (int64_t i = 0; i < sim->n; i++)
             sim->nlost += sim->lost[i] != 0;
     }
-    if (sim->has_projectile) {
-        if (!r->has_projectile)
-            return pd_fail(PD_ERR_FORMAT, "the restart data have no projectile, the scene has one");
-        for (int d = 0; d < 3; d++) {
-            sim->proj_x[d] = r->projectile[d];
-            sim->proj_v[d] = r->projectile[3 + d];
-            sim->proj_f[d] = r->projectile[6 + d];
-        }
-    }
-    int width;
-    double *hist = pd_sim_bond_history(sim, &width);
-    if (hist) {
-        if (r->bond_history == NULL || r->history_width != width ||
-            r->history_bonds != sim->b->count)
-            return pd_fail(PD_ERR_FORMAT, "the restart data have no bond history of %d values "
-                           "for each of %lld directed bonds, the scene's model keeps one",
-                           width, (long long)sim->b->count);
-        memcpy(hist, r->bond_history, (size_t)sim->b->count * (size_t)width * sizeof(double));
-    }
-    void *cs = effect_state(sim, &pd_effect_contact);
-    if (cs && r->contact_builds > 0) {
-        if (r->contact_position[0] == NULL)
-            return pd_fail(PD_ERR_FORMAT, "the restart data have no contact list positions");
-        return pd_contact_restore(sim, cs, r->contact_position, r->contact_builds);
-    }
-    return PD_OK;
+    pd_status s = PD_OK; /* what the effects keep */
+    for (int k = 0; k < sim->neffects && s == PD_OK; k++)
+        if (sim->effects[k]->restore)
+            s = sim->effects[k]->restore(sim, sim->state[k], r);
+    return s;
 }

@@ -1,0 +1,46 @@
+/*
+ * half.h -- internal (lib/bonds/half.c): the bonds of a run, each stored
+ * once (i < j).
+ */
+#ifndef PD_HALF_H
+#define PD_HALF_H
+
+#include "pd.h"
+
+/* The bonds of a run, each stored once (i < j), as the PMB kernel walks
+ * them; the directed bonds of the file are expanded from it on demand. */
+typedef struct {
+    int64_t n;         /* particles                                      */
+    int64_t count;     /* bonds                                          */
+    int64_t *offset;   /* n+1 CSR offsets                                */
+    int32_t *neighbor; /* j > i, ascending                               */
+    double *length;    /* |xi|, m                                        */
+    double *w_ij;      /* c V_j nu_ij: force density on i per stretch    */
+    double *w_ji;      /* c V_i nu_ji: force density on j per stretch
+                          (the same array as w_ij when they are equal)   */
+    uint64_t *intact;  /* mu per bond                                    */
+    int64_t block;     /* rows per block (>= the largest j - i)          */
+    int64_t nblocks;
+    double *released;  /* nblocks: energy of the bonds broken in a block
+                          in this step, J (summed in block order)        */
+    int64_t *cursor;   /* scratch of pd_half_expand                      */
+    double *kfail;     /* per bond s00_bond / s00: the bond breaks at
+                          kfail min(s0_i, s0_j) (lib/materials.c); NULL:
+                          all 1, the kernel of old                       */
+    uint64_t epoch;    /* bumped when `intact` is changed from outside the
+                          kernels (a restart, a lost particle)           */
+} pd_half_bonds;
+/* The half bonds of b: rows, partners and state (what every kernel needs);
+ * lib/models/pmb.c's pd_half_weights adds the lengths and the weights
+ * c V nu that its bond list walks. */
+pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h);
+void pd_half_free(pd_half_bonds *h);
+/* The half bonds' bits from directed state bits (the file's), and back. */
+void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact);
+void pd_half_expand(pd_half_bonds *h, const pd_bonds *b, uint64_t *intact);
+/* Break every bond of particle i (both halves). */
+void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i);
+/* The half bond i-j (i < j): its index, or -1 when there is none. */
+int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j);
+
+#endif

@@ -1,0 +1,110 @@
+/*
+ * sim.h -- internal: the state of a run and the effect table.  A run's step
+ * is assembled from the effects its scene declares; an effect that is not
+ * declared has no state and costs nothing.
+ */
+#ifndef PD_SIM_H
+#define PD_SIM_H
+
+#include "bonds/half.h"
+#include "pd.h"
+
+typedef struct pd_effect {
+    const char *name;  /* as listed in the log and /scene/effects   */
+    pd_timer timer;    /* where its time is booked                  */
+    /* Allocate the effect's state (may stay NULL). */
+    pd_status (*init)(pd_sim *sim, void **state);
+    /* Add the effect's force density to sim->f (and the power it puts in
+     * to sim->power). */
+    pd_status (*force)(pd_sim *sim, void *state);
+    void (*free)(void *state);
+    /* Add each particle's share of the effect's potential energy, J, to
+     * e[i]; NULL: none.  `kind` says where pd_energy books it. */
+    void (*energy)(const pd_sim *sim, void *state, double *e);
+    enum { PD_ENERGY_ELASTIC, PD_ENERGY_CONTACT } kind;
+    /* Add each particle's peridynamic stress from the effect's bonds, Pa,
+     * to s[9i + 3a + b] (pd_sim_stress); NULL: the effect adds none. */
+    void (*stress)(const pd_sim *sim, void *state, double *s);
+    /* Hold prescribed motion at a phase of the step (pd_phase); NULL:
+     * none.  The work it does goes into sim->work. */
+    pd_status (*constrain)(pd_sim *sim, void *state, int phase);
+    /* Does the scene declare it?  (The effects of lib/effects/effects.c's
+     * table; a model's force is chosen by its descriptor instead.) */
+    int (*declared)(const pd_scene *s);
+    /* Its own motion, in step with the particles': a half kick (`second`:
+     * the one after the forces, which fails when its state is not finite)
+     * and the drift; NULL: none. */
+    pd_status (*kick)(pd_sim *sim, void *state, int second);
+    void (*drift)(pd_sim *sim, void *state);
+    /* What a restart needs of it beyond the particles' state: into the
+     * restart data (pointing into the run), and back; NULL: nothing. */
+    void (*save)(const pd_sim *sim, void *state, pd_restart *r);
+    pd_status (*restore)(pd_sim *sim, void *state, const pd_restart *r);
+} pd_effect;
+
+/* Where pd_effect.constrain is called: in pd_sim_setup before the first
+ * forces, and in pd_sim_step after the first half kick, after the drift
+ * (step and time already n+1, before the forces) and after the second
+ * half kick. */
+enum { PD_PHASE_SETUP, PD_PHASE_KICK1, PD_PHASE_DRIFT, PD_PHASE_KICK2 };
+
+#define PD_MAX_EFFECTS 8
+
+typedef struct pd_grid pd_grid; /* lib/stencil/ */
+
+/* Hot loops are compiled for AVX-512, AVX2 and the baseline, picked at run
+ * time (GCC function multiversioning), so one binary runs anywhere. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(PD_NO_CLONES)
+#define PD_VECTOR_CLONES \
+    __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define PD_VECTOR_CLONES
+#endif
+
+struct pd_sim {
+    const pd_particles *p;
+    const pd_bonds *b;
+    pd_scene sc;
+    const struct pd_model *model; /* the scene's (lib/models/)            */
+    int64_t n;
+    double *y[3];       /* current positions, m                          */
+    double *v[3];       /* velocities, m/s                               */
+    double *f[3];       /* force densities, N/m^3                        */
+    pd_half_bonds half; /* the bonds as the kernel walks them             */
+    pd_grid *grid;      /* the same as a lattice stencil, or NULL         */
+    uint64_t *intact;   /* directed bond state bits mu (1 = intact), kept
+                           up to date from `half` on demand              */
+    int intact_stale;   /* `intact` lags behind half.intact              */
+    double *s0;         /* critical stretch of the previous step (eq. 9) */
+    double *s0_new;     /* being computed in this step                   */
+    int64_t step;
+    double time;        /* s                                             */
+    double power;       /* power put in by the effects at this step's
+                           force evaluation, W                           */
+    double work;        /* its time integral (trapezoidal), J            */
+    double released;    /* energy of the bonds broken so far, J          */
+    double energy0;     /* kinetic + elastic + contact at step 0, J      */
+    double box_lo[3];   /* a particle outside [box_lo, box_hi] is lost, m */
+    double box_hi[3];
+    uint8_t *lost;      /* n flags, NULL until the first loss            */
+    int64_t nlost;
+    double lost_energy; /* kinetic energy of the lost particles, J       */
+    int setup;          /* 1 while computing the forces of the initial state */
+    const pd_effect *effects[PD_MAX_EFFECTS];
+    void *state[PD_MAX_EFFECTS];
+    int neffects;
+    char names[256];
+    double timers[PD_T_COUNT];
+    int64_t contact_builds;
+    int constrained;    /* some effect has a constrain hook              */
+    int f_zeroed;       /* the drift pass has zeroed f for the next forces */
+    /* the projectile (lib/projectile.c), a rigid sphere of mass
+     * sc.proj_mass, integrated with the particles                     */
+    int has_projectile;
+    double proj_x[3];   /* centre, m                                     */
+    double proj_v[3];   /* velocity, m/s                                 */
+    double proj_f[3];   /* force on it at the last force evaluation, N   */
+};
+
+
+#endif

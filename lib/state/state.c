@@ -1,0 +1,68 @@
+/*
+ * state.c -- the run's state as the kernels and the programs read it:
+ * the step, the time, positions, velocities, forces, s0, the bond states
+ * (the directed bits brought up to date from the half bonds on demand),
+ * lost particles, timers.  Nothing here steps or calls an effect: the
+ * integrator that does is lib/run/sim.c.
+ */
+#include "state/sim.h"
+
+const char *pd_sim_effects(const pd_sim *sim)
+{
+    return sim->names;
+}
+
+int64_t pd_sim_stepno(const pd_sim *sim)
+{
+    return sim->step;
+}
+
+double pd_sim_time(const pd_sim *sim)
+{
+    return sim->time;
+}
+
+int64_t pd_sim_lost(const pd_sim *sim)
+{
+    return sim->nlost;
+}
+
+int64_t pd_sim_broken(const pd_sim *sim)
+{
+    return pd_bits_count_broken(sim->half.intact, sim->half.count);
+}
+
+const double *pd_sim_timers(const pd_sim *sim)
+{
+    return sim->timers;
+}
+
+double *const *pd_sim_positions(const pd_sim *sim)
+{
+    return sim->y;
+}
+
+double *const *pd_sim_velocities(const pd_sim *sim)
+{
+    return sim->v;
+}
+
+const uint64_t *pd_sim_intact(const pd_sim *sim)
+{
+    pd_sim *mut = (pd_sim *)sim; /* a cache: the state itself does not change */
+    if (mut->intact_stale) {
+        pd_half_expand(&mut->half, sim->b, mut->intact);
+        mut->intact_stale = 0;
+    }
+    return sim->intact;
+}
+
+double *const *pd_sim_forces(const pd_sim *sim)
+{
+    return sim->f;
+}
+
+const double *pd_sim_s0(const pd_sim *sim)
+{
+    return sim->sc.has_failure ? sim->s0 : NULL;
+}

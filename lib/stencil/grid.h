@@ -1,0 +1,53 @@
+/*
+ * grid.h -- internal (lib/stencil/): the bonds of a body on a lattice,
+ * walked as a stencil.
+ */
+#ifndef PD_GRID_H
+#define PD_GRID_H
+
+#include "state/sim.h"
+
+/* Which lattice stencil (lib/stencil/) can walk a model's bonds. */
+typedef enum {
+    PD_STENCIL_NONE = 0, /* none: the bonds need data of their own (laws, ellipsoids) */
+    PD_STENCIL_PMB,      /* the PMB kernels, with failure and contact            */
+    PD_STENCIL_LPS       /* LPS's dilatation and pair forces                     */
+} pd_stencil_kind;
+
+/* The PMB bonds of a body on a lattice, walked as a stencil (lib/grid.c).
+ * pd_grid_new builds the stencil of `kind` (the model's, lib/models/) and
+ * leaves *out NULL when the body or the scene (--bond-list) does not allow
+ * it (then the model's bond list serves). */
+pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out);
+void pd_grid_free(pd_grid *g);
+/* The PMB forces (and with `failure` the breaking test and s0), and the
+ * contact forces of the stencil pairs when the scene has contact. */
+pd_status pd_grid_pmb(pd_sim *sim, int failure);
+/* Half-stencil offsets (0: no grid); are its rows walked in AVX-512
+ * tiles; does the kernel take the contact of the stencil pairs; is i-j a
+ * stencil pair. */
+int pd_grid_offsets(const pd_grid *g);
+int pd_grid_tiles(const pd_grid *g);
+/* The shortest reference distance of a pair that is not a stencil pair,
+ * m (lib/contact.c searches only particles that moved enough to close
+ * it). */
+double pd_grid_gap(const pd_grid *g);
+/* The largest damage of a particle (seed 000 eq. 10), counted on the
+ * stencil's masks in parallel: 1 when *max_damage is set, 0 when the grid
+ * cannot tell (none, or its masks lag behind the half bonds). */
+int pd_grid_max_damage(const pd_sim *sim, double *max_damage);
+int pd_grid_contact(const pd_grid *g);
+int pd_grid_pair(const pd_grid *g, int64_t i, int64_t j);
+/* LPS on the stencil (lib/lps.c without ellipsoids, particles in lattice
+ * order): theta of Algorithm 4 into theta (m: the weighted volumes), the
+ * forces of Algorithm 2 and with failure the test and s0_new; each broken
+ * bond i-j (i < j) goes to mark(ctx, i, j), its stencil bit already
+ * cleared. */
+pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, int failure,
+                      void (*mark)(void *ctx, int64_t i, int64_t j), void *ctx);
+/* The bonds' elastic energy, J, added to e[i]. */
+void pd_grid_pmb_energy(const pd_sim *sim, double *e);
+/* The contact energy of the stencil pairs, J, added to e[i]. */
+void pd_grid_contact_energy(const pd_sim *sim, double *e);
+
+#endif
