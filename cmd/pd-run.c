@@ -29,18 +29,10 @@
 #define PROG "pd-run"
 #include "cli.h"
 #define MAX_BC 64
-#define MAX_LAWS 64
 
 struct options {
-    pd_scene sc;
-    int has_g0;      /* --failure-energy: s00 from G0 once c is known */
-    double g0;       /* J/m^2                                       */
-    int has_e;       /* --youngs-modulus: K from E once the dimension is known */
-    int has_proj_k;  /* --projectile with its K                     */
-    int has_c, has_k, has_dt, has_steps, force_dt, has_status, has_output;
-    int has_g, has_influence; /* --shear-modulus, --influence (LPS) */
-    int has_lambda, has_tau;  /* --ves-lambda, --ves-tau (VES)      */
-    int has_yield;            /* --yield-stress (EPS)               */
+    pd_scene_spec spec; /* the scene as given (lib/run/scene.c)      */
+    int has_steps, has_status, has_output;
     int64_t status_every;
     const char *input;
     const char *output;
@@ -48,11 +40,6 @@ struct options {
     int quiet, timing, debug;
     pd_bc bc[MAX_BC]; /* --velocity-bc, --displacement-bc, --body-force */
     int nbc;
-    pd_bond_law laws[MAX_LAWS]; /* --material, --interface (a pair once:
-                                   the last spec of it wins)           */
-    double law_k[MAX_LAWS];     /* its K= (Pa), c resolved once the body
-                                   is read; 0: c= was given            */
-    int nlaws;
 };
 
 static void usage(FILE *out)
@@ -240,14 +227,18 @@ static int parse_law(struct options *o, int interface, const char *arg)
     if (nid < 1 + interface || !have_c || (interface && law.a == law.b))
         return usage_error(what, arg);
     int slot = 0;
-    while (slot < o->nlaws && !((o->laws[slot].a == law.a && o->laws[slot].b == law.b) ||
-                                (o->laws[slot].a == law.b && o->laws[slot].b == law.a)))
+    while (slot < o->spec.nlaws && !((o->spec.laws[slot].a == law.a && o->spec.laws[slot].b == law.b) ||
+                                (o->spec.laws[slot].a == law.b && o->spec.laws[slot].b == law.a)))
         slot++;
-    if (slot == MAX_LAWS)
+    if (slot == PD_LAWS_MAX)
         return usage_error("too many --material and --interface laws", NULL);
-    o->laws[slot] = law;
-    o->law_k[slot] = k;
-    o->nlaws += slot == o->nlaws;
+    o->spec.laws[slot] = law;
+    o->spec.law_k[slot] = k;
+    o->spec.nlaws += slot == o->spec.nlaws;
+    if (interface)
+        o->spec.has_interface = 1;
+    else
+        o->spec.has_material = 1;
     return 0;
 }
 
@@ -447,85 +438,86 @@ static int parse_options(int argc, char **argv, struct options *o)
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->output = "-";
-    o->sc.model = PD_MODEL_PMB;
-    o->sc.safety = 0.8;
+    o->spec.sc.model = PD_MODEL_PMB;
+    o->spec.sc.safety = 0.8;
     int c, rc, status = 0;
     int64_t iv;
     double ind[8];
     while ((c = next_option(argc, argv, "o:qhV", longopts, usage, &o->debug, &status)) != -1) {
         switch (c) {
-        case OPT_MODEL:
-            if (strcmp(optarg, "pmb") == 0)
-                o->sc.model = PD_MODEL_PMB;
-            else if (strcmp(optarg, "lps") == 0)
-                o->sc.model = PD_MODEL_LPS;
-            else if (strcmp(optarg, "ves") == 0)
-                o->sc.model = PD_MODEL_VES;
-            else if (strcmp(optarg, "eps") == 0)
-                o->sc.model = PD_MODEL_EPS;
-            else
-                return usage_error("unknown --model (this pd knows: pmb, lps, ves, eps)", optarg);
+        case OPT_MODEL: {
+            const pd_model *m = pd_model_by_name(optarg);
+            if (m == NULL) {
+                char known[128] = "unknown --model (this pd knows:";
+                for (int k = 0; pd_model_at(k); k++)
+                    snprintf(known + strlen(known), sizeof known - strlen(known), "%s %s",
+                             k ? "," : "", pd_model_name(pd_model_at(k)));
+                strcat(known, ")");
+                return usage_error(known, optarg);
+            }
+            o->spec.sc.model = pd_model_kind_of(m);
             break;
+        }
         case OPT_LAMBDA:
-            if (!pd_parse_double(optarg, &o->sc.ves_lambda) || !(o->sc.ves_lambda >= 0) ||
-                !(o->sc.ves_lambda <= 1))
+            if (!pd_parse_double(optarg, &o->spec.sc.ves_lambda) || !(o->spec.sc.ves_lambda >= 0) ||
+                !(o->spec.sc.ves_lambda <= 1))
                 return usage_error("--ves-lambda must be a number in [0, 1], not", optarg);
-            o->has_lambda = 1;
+            o->spec.has_lambda = 1;
             break;
         case OPT_TAU:
-            if ((rc = positive("--ves-tau", optarg, &o->sc.ves_tau)))
+            if ((rc = positive("--ves-tau", optarg, &o->spec.sc.ves_tau)))
                 return rc;
-            o->has_tau = 1;
+            o->spec.has_tau = 1;
             break;
         case OPT_YIELD:
-            if ((rc = positive("--yield-stress", optarg, &o->sc.yield_stress)))
+            if ((rc = positive("--yield-stress", optarg, &o->spec.sc.yield_stress)))
                 return rc;
-            o->has_yield = 1;
+            o->spec.has_yield = 1;
             break;
         case OPT_G:
-            if ((rc = positive("--shear-modulus", optarg, &o->sc.shear_modulus)))
+            if ((rc = positive("--shear-modulus", optarg, &o->spec.sc.shear_modulus)))
                 return rc;
-            o->has_g = 1;
+            o->spec.has_g = 1;
             break;
         case OPT_INFLUENCE: {
             int w = pd_influence_parse(optarg);
             if (w < 0)
                 return usage_error("--influence takes 1/r, 1 or gaussian, not", optarg);
-            o->sc.influence = (pd_influence)w;
-            o->has_influence = 1;
+            o->spec.sc.influence = (pd_influence)w;
+            o->spec.has_influence = 1;
             break;
         }
         case OPT_C:
-            if ((rc = positive("--c", optarg, &o->sc.c)))
+            if ((rc = positive("--c", optarg, &o->spec.sc.c)))
                 return rc;
-            o->has_c = 1; /* the last of --c, --bulk-modulus and --youngs-modulus wins */
-            o->has_k = 0;
-            o->has_e = 0;
+            o->spec.has_c = 1; /* the last of --c, --bulk-modulus and --youngs-modulus wins */
+            o->spec.has_k = 0;
+            o->spec.has_e = 0;
             break;
         case OPT_K:
-            if ((rc = positive("--bulk-modulus", optarg, &o->sc.bulk_modulus)))
+            if ((rc = positive("--bulk-modulus", optarg, &o->spec.sc.bulk_modulus)))
                 return rc;
-            o->has_k = 1;
-            o->has_c = 0;
-            o->has_e = 0;
-            o->sc.youngs_modulus = 0;
+            o->spec.has_k = 1;
+            o->spec.has_c = 0;
+            o->spec.has_e = 0;
+            o->spec.sc.youngs_modulus = 0;
             break;
         case OPT_E:
-            if ((rc = positive("--youngs-modulus", optarg, &o->sc.youngs_modulus)))
+            if ((rc = positive("--youngs-modulus", optarg, &o->spec.sc.youngs_modulus)))
                 return rc;
-            o->has_e = 1;
-            o->has_c = 0;
-            o->has_k = 0;
+            o->spec.has_e = 1;
+            o->spec.has_c = 0;
+            o->spec.has_k = 0;
             break;
         case OPT_FAILURE: {
             double v[2];
             if (!pd_parse_doubles(optarg, v, 2) || !(v[0] > 0) || !(v[1] >= 0))
                 return usage_error("--failure needs S00,ALPHA with S00 > 0 and ALPHA >= 0, not",
                                    optarg);
-            o->sc.has_failure = 1;
-            o->sc.s00 = v[0];
-            o->sc.alpha = v[1];
-            o->has_g0 = 0; /* the last of --failure and --failure-energy wins */
+            o->spec.sc.has_failure = 1;
+            o->spec.sc.s00 = v[0];
+            o->spec.sc.alpha = v[1];
+            o->spec.has_g0 = 0; /* the last of --failure and --failure-energy wins */
             break;
         }
         case OPT_G0: {
@@ -535,17 +527,17 @@ static int parse_options(int argc, char **argv, struct options *o)
                 return usage_error("--failure-energy needs G0[,ALPHA] with G0 > 0 (J/m^2) and "
                                    "ALPHA >= 0, not",
                                    optarg);
-            o->sc.has_failure = 1;
-            o->has_g0 = 1;
-            o->g0 = v[0];
-            o->sc.alpha = v[1];
+            o->spec.sc.has_failure = 1;
+            o->spec.has_g0 = 1;
+            o->spec.g0 = v[0];
+            o->spec.sc.alpha = v[1];
             break;
         }
         case OPT_CONTACT:
-            o->sc.has_contact = 1;
+            o->spec.sc.has_contact = 1;
             break;
         case OPT_SKIN:
-            if ((rc = positive("--contact-skin", optarg, &o->sc.contact_skin)))
+            if ((rc = positive("--contact-skin", optarg, &o->spec.sc.contact_skin)))
                 return rc;
             break;
         case OPT_INDENTER:
@@ -554,46 +546,46 @@ static int parse_options(int argc, char **argv, struct options *o)
             if (!(ind[3] > 0) || !(ind[4] > 0))
                 return usage_error("--indenter radius R and stiffness K must be positive in",
                                    optarg);
-            o->sc.has_indenter = 1;
+            o->spec.sc.has_indenter = 1;
             for (int d = 0; d < 3; d++) {
-                o->sc.ind_center[d] = ind[d];
-                o->sc.ind_velocity[d] = ind[5 + d];
+                o->spec.sc.ind_center[d] = ind[d];
+                o->spec.sc.ind_velocity[d] = ind[5 + d];
             }
-            o->sc.ind_radius = ind[3];
-            o->sc.ind_k = ind[4];
+            o->spec.sc.ind_radius = ind[3];
+            o->spec.sc.ind_k = ind[4];
             break;
         case OPT_STEPS:
             if (!pd_parse_int64(optarg, &iv) || iv < 0)
                 return usage_error("--steps must be a non-negative integer, not", optarg);
-            o->sc.steps = iv;
+            o->spec.sc.steps = iv;
             o->has_steps = 1;
             break;
         case OPT_DT:
-            if ((rc = positive("--dt", optarg, &o->sc.dt)))
+            if ((rc = positive("--dt", optarg, &o->spec.sc.dt)))
                 return rc;
-            o->has_dt = 1;
+            o->spec.has_dt = 1;
             break;
         case OPT_SAFETY:
-            if ((rc = positive("--safety", optarg, &o->sc.safety)))
+            if ((rc = positive("--safety", optarg, &o->spec.sc.safety)))
                 return rc;
-            if (o->sc.safety > 1)
+            if (o->spec.sc.safety > 1)
                 return usage_error("--safety must not exceed 1, not", optarg);
             break;
         case OPT_BONDLIST:
-            o->sc.bond_list = 1;
+            o->spec.sc.bond_list = 1;
             break;
         case OPT_FORCE_DT:
-            o->force_dt = 1;
+            o->spec.force_dt = 1;
             break;
         case OPT_EVERY:
             if (!pd_parse_int64(optarg, &iv) || iv < 0)
                 return usage_error("--every must be a non-negative integer, not", optarg);
-            o->sc.every = iv;
+            o->spec.sc.every = iv;
             break;
         case OPT_THREADS:
             if (!pd_parse_int64(optarg, &iv) || iv < 1 || iv > 4096)
                 return usage_error("--threads must be a positive integer, not", optarg);
-            o->sc.threads = (int)iv;
+            o->spec.sc.threads = (int)iv;
             break;
         case OPT_STATUS:
             if (!pd_parse_int64(optarg, &iv) || iv < 1)
@@ -612,11 +604,11 @@ static int parse_options(int argc, char **argv, struct options *o)
             o->restart = optarg;
             break;
         case OPT_LOST:
-            if ((rc = positive("--lost-margin", optarg, &o->sc.lost_margin)))
+            if ((rc = positive("--lost-margin", optarg, &o->spec.sc.lost_margin)))
                 return rc;
             break;
         case OPT_FIELDS:
-            if ((rc = parse_fields(optarg, &o->sc.fields)))
+            if ((rc = parse_fields(optarg, &o->spec.sc.fields)))
                 return rc;
             break;
         case OPT_VBC:
@@ -638,25 +630,25 @@ static int parse_options(int argc, char **argv, struct options *o)
                 return usage_error("--projectile radius R, mass MASS and stiffness K must be "
                                    "positive in",
                                    optarg);
-            o->sc.has_projectile = 1;
+            o->spec.sc.has_projectile = 1;
             for (int d = 0; d < 3; d++) {
-                o->sc.proj_center[d] = v[d];
-                o->sc.proj_velocity[d] = v[5 + d];
+                o->spec.sc.proj_center[d] = v[d];
+                o->spec.sc.proj_velocity[d] = v[5 + d];
             }
-            o->sc.proj_radius = v[3];
-            o->sc.proj_mass = v[4];
-            o->sc.proj_k = hk ? v[8] : 0;
-            o->has_proj_k = hk;
+            o->spec.sc.proj_radius = v[3];
+            o->spec.sc.proj_mass = v[4];
+            o->spec.sc.proj_k = hk ? v[8] : 0;
+            o->spec.has_proj_k = hk;
             break;
         }
         case OPT_ELLIPSOID:
-            if (o->sc.nellipsoids == PD_ELLIPSOID_MAX)
+            if (o->spec.sc.nellipsoids == PD_ELLIPSOID_MAX)
                 return usage_error("--ellipsoid is given at most 8 times; one more:", optarg);
-            if (pd_ellipsoid_parse(optarg, &o->sc.ellipsoid[o->sc.nellipsoids]) != PD_OK)
+            if (pd_ellipsoid_parse(optarg, &o->spec.sc.ellipsoid[o->spec.sc.nellipsoids]) != PD_OK)
                 return usage_error("--ellipsoid needs UX,UY,UZ,A,B,ROLL with U nonzero and A, B "
                                    "in (0, 1], not",
                                    optarg);
-            o->sc.nellipsoids++;
+            o->spec.sc.nellipsoids++;
             break;
         case OPT_MATERIAL:
         case OPT_INTERFACE:
@@ -664,7 +656,7 @@ static int parse_options(int argc, char **argv, struct options *o)
                 return rc;
             break;
         case OPT_FIBRE:
-            if ((rc = parse_fibre(&o->sc, optarg)))
+            if ((rc = parse_fibre(&o->spec.sc, optarg)))
                 return rc;
             break;
         case 'q':
@@ -678,68 +670,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         return status;
     if (!o->has_steps)
         return usage_error("--steps is required", NULL);
-    if (o->sc.model == PD_MODEL_VES) {
-        if (!o->has_lambda || !o->has_tau)
-            return usage_error("--model ves needs --ves-lambda and --ves-tau", NULL);
-    } else if (o->has_lambda || o->has_tau)
-        return usage_error(o->has_lambda ? "--ves-lambda is for --model ves"
-                                         : "--ves-tau is for --model ves",
-                           NULL);
-    if (o->sc.model == PD_MODEL_EPS && !o->has_yield)
-        return usage_error("--model eps needs --yield-stress", NULL);
-    if (o->sc.model != PD_MODEL_EPS && o->has_yield)
-        return usage_error("--yield-stress is for --model eps", NULL);
-    if (pd_model_state_based(pd_model_of(o->sc.model))) {
-        if (o->has_e)
-            return usage_error("--youngs-modulus is for pmb (Poisson ratio 1/4); --model lps "
-                               "takes --bulk-modulus and --shear-modulus",
-                               NULL);
-        if (o->has_c)
-            return usage_error("--c is the PMB micromodulus; --model lps takes --bulk-modulus "
-                               "and --shear-modulus",
-                               NULL);
-        if (!o->has_k || !o->has_g)
-            return usage_error("--model lps needs --bulk-modulus and --shear-modulus", NULL);
-        if (o->has_g0)
-            return usage_error("--failure-energy derives s00 for PMB (seed 004 eq. 27); with "
-                               "--model lps give --failure S00,ALPHA",
-                               NULL);
-    } else if (o->has_g || o->has_influence)
-        return usage_error(o->has_g ? "--shear-modulus is for --model lps (PMB has Poisson "
-                                      "ratio 1/4: only K)"
-                                    : "--influence is for --model lps",
-                           NULL);
-    if (o->sc.nellipsoids > 0 && o->sc.model == PD_MODEL_PMB)
-        return usage_error("--ellipsoid is an influence function of the state-based models "
-                           "(--model lps)",
-                           NULL);
-    if (o->nlaws > 0 || o->sc.has_fibre) {
-        if (o->sc.model != PD_MODEL_PMB)
-            return usage_error("--material, --interface and --fibre are for --model pmb", NULL);
-        int s00 = o->sc.fibre_s00[0] > 0;
-        for (int k = 0; k < o->nlaws; k++)
-            s00 |= o->laws[k].s00 > 0;
-        if (s00 && !o->sc.has_failure)
-            return usage_error("a critical stretch of --material, --interface or --fibre needs "
-                               "--failure or --failure-energy (the scene's s00 and alpha)",
-                               NULL);
-        /* the scene's c: the fibres' matrix, else the stiffest material
-         * (contact, and the materials without a law) */
-        if (!o->has_c && !o->has_k && !o->has_e && o->sc.has_fibre)
-            o->sc.c = o->sc.fibre_c[1], o->has_c = 1;
-        for (int k = 0; k < o->nlaws && !o->has_c && !o->has_k && !o->has_e; k++)
-            if (o->laws[k].a == o->laws[k].b && o->law_k[k] == 0)
-                o->sc.c = fmax(o->sc.c, o->laws[k].c);
-        if (o->sc.c > 0)
-            o->has_c = 1;
-        for (int k = 0; k < o->nlaws && !o->has_c && !o->has_k && !o->has_e; k++)
-            if (o->laws[k].a == o->laws[k].b)
-                o->sc.bulk_modulus = fmax(o->sc.bulk_modulus, o->law_k[k]);
-        if (!o->has_c && o->sc.bulk_modulus > 0)
-            o->has_k = 1;
-    }
-    if (!o->has_c && !o->has_k && !o->has_e)
-        return usage_error("give the stiffness: --c or --bulk-modulus (or --youngs-modulus)", NULL);
+    if (pd_scene_check(&o->spec) != PD_OK) /* the options each model takes */
+        return usage_error(pd_errmsg(), NULL);
     if (o->restart) { /* the run file is the input and, without -o, the output */
         if (optind < argc)
             return usage_error("--restart takes no INPUT besides RUN.h5:", argv[optind]);
@@ -753,149 +685,6 @@ static int parse_options(int argc, char **argv, struct options *o)
                            NULL);
     o->input = argv[optind];
     return 0;
-}
-
-/* The resolved scene in scene-file form, enough to rerun. */
-static char *scene_text(const pd_scene *s)
-{
-    size_t cap = 2048 + 160 * (size_t)s->nellipsoids;
-    char *prof[MAX_BC] = {NULL};
-    for (int k = 0; k < s->nbc; k++) { /* a table in resolved form */
-        if ((prof[k] = pd_profile_text(&s->bc[k].profile)) == NULL) {
-            for (int m = 0; m < k; m++)
-                free(prof[m]);
-            return NULL;
-        }
-        cap += strlen(prof[k]) + 2 * PD_SET_NAME_MAX;
-    }
-    cap += (size_t)s->nlaws * 160 + 256;
-    char *t = malloc(cap), *p = t;
-    if (t == NULL) {
-        for (int k = 0; k < s->nbc; k++)
-            free(prof[k]);
-        return NULL;
-    }
-    if (pd_model_state_based(pd_model_of(s->model)))
-        p += sprintf(p, "model %s\nbulk-modulus %.17g\nshear-modulus %.17g\ninfluence %s\n",
-                     s->model == PD_MODEL_VES   ? "ves"
-                     : s->model == PD_MODEL_EPS ? "eps"
-                                                : "lps",
-                     s->bulk_modulus,
-                     s->shear_modulus, pd_influence_name(s->influence));
-    else
-        p += sprintf(p, "model pmb\nc %.17g\n", s->c);
-    for (int k = 0; k < s->nellipsoids; k++)
-        p += sprintf(p, "ellipsoid %.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", s->ellipsoid[k].u[0],
-                     s->ellipsoid[k].u[1], s->ellipsoid[k].u[2], s->ellipsoid[k].a,
-                     s->ellipsoid[k].b, s->ellipsoid[k].roll);
-    if (s->model == PD_MODEL_VES)
-        p += sprintf(p, "ves-lambda %.17g\nves-tau %.17g\n", s->ves_lambda, s->ves_tau);
-    if (s->model == PD_MODEL_EPS)
-        p += sprintf(p, "yield-stress %.17g\n", s->yield_stress);
-    if (s->has_failure)
-        p += sprintf(p, "failure %.17g,%.17g\n", s->s00, s->alpha);
-    if (s->has_contact)
-        p += sprintf(p, "contact\ncontact-skin %.17g\n", s->contact_skin);
-    if (s->has_indenter)
-        p += sprintf(p, "indenter sphere,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
-                     s->ind_center[0], s->ind_center[1], s->ind_center[2], s->ind_radius, s->ind_k,
-                     s->ind_velocity[0], s->ind_velocity[1], s->ind_velocity[2]);
-    if (s->has_projectile)
-        p += sprintf(p,
-                     "projectile sphere,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
-                     s->proj_center[0], s->proj_center[1], s->proj_center[2], s->proj_radius,
-                     s->proj_mass, s->proj_velocity[0], s->proj_velocity[1], s->proj_velocity[2],
-                     s->proj_k);
-    for (int k = 0; k < s->nlaws; k++) { /* K= resolved to c */
-        const pd_bond_law *l = &s->laws[k];
-        if (l->a == l->b)
-            p += sprintf(p, "material %d,c=%.17g", (int)l->a, l->c);
-        else
-            p += sprintf(p, "interface %d,%d,c=%.17g", (int)l->a, (int)l->b, l->c);
-        p += l->s00 > 0 ? sprintf(p, ",s00=%.17g\n", l->s00) : sprintf(p, "\n");
-    }
-    if (s->has_fibre) {
-        p += sprintf(p, "fibre %.17g,%.17g,%.17g,%.17g,%.17g", s->fibre_g[0], s->fibre_g[1],
-                     s->fibre_g[2], s->fibre_c[0], s->fibre_c[1]);
-        p += s->fibre_s00[0] > 0
-                 ? sprintf(p, ",%.17g,%.17g\n", s->fibre_s00[0], s->fibre_s00[1])
-                 : sprintf(p, "\n");
-    }
-    p += sprintf(p, "dt %.17g\nsteps %lld\nevery %lld\n", s->dt, (long long)s->steps,
-                 (long long)s->every);
-    if (s->fields)
-        p += sprintf(p, "fields %s%s%s\n", s->fields & PD_FIELD_ENERGY ? "energy" : "",
-                     s->fields == (PD_FIELD_ENERGY | PD_FIELD_STRESS) ? "," : "",
-                     s->fields & PD_FIELD_STRESS ? "stress" : "");
-    p += sprintf(p, "lost-margin %.17g\n", s->lost_margin);
-    if (s->dt > s->dt_stable)
-        p += sprintf(p, "force-dt\n");
-    if (s->bond_list)
-        p += sprintf(p, "bond-list\n");
-    for (int k = 0; k < s->nbc; k++) {
-        p += sprintf(p, "%s %s,%c,%s\n", pd_bc_option(s->bc[k].kind), s->bc[k].set,
-                     'x' + s->bc[k].axis, prof[k]);
-        free(prof[k]);
-    }
-    return t;
-}
-
-/* The steps after `first` that get a frame: every, 2 every, ... and the
- * last; only the last with --every 0; and step 0 itself in a new run
- * (`fresh`), not in a restart (even from step 0, whose frame exists). */
-static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds *b,
-                             const pd_scene *sc, unsigned fields, int64_t first, int fresh)
-{
-    int64_t cap = sc->every > 0 ? sc->steps / sc->every + 2 : 1, m = 0;
-    int64_t *steps = malloc((size_t)cap * sizeof *steps);
-    double *times = malloc((size_t)cap * sizeof *times);
-    if (steps == NULL || times == NULL) {
-        free(steps);
-        free(times);
-        return pd_fail(PD_ERR_NOMEM, "out of memory planning %lld frames", (long long)cap);
-    }
-    if (sc->every > 0)
-        for (int64_t n = 0; n <= sc->steps; n += sc->every)
-            if (n > first || (n == 0 && fresh))
-                steps[m++] = n;
-    if ((m == 0 || steps[m - 1] != sc->steps) && (sc->steps > first || fresh))
-        steps[m++] = sc->steps;
-    for (int64_t k = 0; k < m; k++)
-        times[k] = (double)steps[k] * sc->dt;
-    pd_status s = pd_plan_frames(out, p->n, b->count, m, steps, times, fields);
-    free(steps);
-    free(times);
-    return s;
-}
-
-/* The state at the last complete frame of a run: its step, the restart
- * slot, the frame's velocities and bond states. */
-static pd_status load_restart(pd_file *f, const pd_particles *p, const pd_bonds *b,
-                              int64_t *step, pd_restart *r, double *v[3], uint64_t **bits)
-{
-    int64_t nframes = 0;
-    char **names = NULL;
-    pd_status s = pd_list_frames(f, &nframes, &names);
-    if (s == PD_OK && nframes == 0)
-        s = pd_fail(PD_ERR_FORMAT, "the run has no complete frame to restart from");
-    pd_frame_info fi;
-    if (s == PD_OK)
-        s = pd_read_frame_info(f, names[nframes - 1], &fi);
-    for (int d = 0; d < 3 && s == PD_OK; d++)
-        if ((v[d] = malloc((size_t)p->n * sizeof(double))) == NULL)
-            s = pd_fail(PD_ERR_NOMEM, "out of memory");
-    if (s == PD_OK && (*bits = calloc((size_t)pd_bits_words(b->count) + 1, 8)) == NULL)
-        s = pd_fail(PD_ERR_NOMEM, "out of memory");
-    if (s == PD_OK)
-        s = pd_read_frame_vectors(f, names[nframes - 1], p->n, NULL, v);
-    if (s == PD_OK)
-        s = pd_read_frame_state(f, names[nframes - 1], b->count, *bits);
-    if (s == PD_OK)
-        s = pd_read_restart(f, p->n, fi.step, r);
-    if (s == PD_OK)
-        *step = fi.step;
-    pd_frames_free_list(nframes, names);
-    return s;
 }
 
 static void progress(int64_t step, int64_t steps, double elapsed)
@@ -946,47 +735,12 @@ static void status_line(const pd_sim *sim, int64_t steps, int tty, const pd_ener
                 (long long)pd_sim_lost(sim), e.lost);
 }
 
-/* A frame and the restart data of this step; its energies go to *energy
- * as well (when not NULL). */
-static pd_status write_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
-                             const pd_sim *sim, unsigned fields, double *t_out,
-                             pd_energy *energy)
+/* A frame, its time booked as output's. */
+static pd_status timed_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
+                             const pd_sim *sim, unsigned fields, double *t_out, pd_energy *energy)
 {
     double t0 = pd_wtime();
-    pd_frame_info fi = {.step = pd_sim_stepno(sim), .time = pd_sim_time(sim),
-                        .broken = pd_sim_broken(sim), .lost = pd_sim_lost(sim)};
-    fi.has_projectile = pd_sim_projectile(sim, fi.projectile_position, fi.projectile_velocity);
-    size_t n = (size_t)(p->n > 0 ? p->n : 1);
-    double *density = NULL, *stress = NULL, *mises = NULL;
-    if ((fields & PD_FIELD_ENERGY) && (density = malloc(n * sizeof(double))) == NULL)
-        return pd_fail(PD_ERR_NOMEM, "out of memory for the strain energy density");
-    if ((fields & PD_FIELD_STRESS) && ((stress = malloc(9 * n * sizeof(double))) == NULL ||
-                                       (mises = malloc(n * sizeof(double))) == NULL)) {
-        free(density);
-        free(stress);
-        return pd_fail(PD_ERR_NOMEM, "out of memory for the stress");
-    }
-    pd_status s = pd_sim_energy(sim, &fi.energy, density);
-    if (s == PD_OK && stress) {
-        s = pd_sim_stress(sim, stress);
-        for (int64_t i = 0; i < p->n; i++)
-            mises[i] = pd_von_mises(stress + 9 * i);
-    }
-    pd_frame_fields ff = {density, stress, mises};
-    /* what a restart needs, then the frame (marked complete last) */
-    pd_restart r;
-    memset(&r, 0, sizeof r);
-    pd_sim_accumulated(sim, &r);
-    if (s == PD_OK)
-        s = pd_write_restart(out, p->n, fi.step, &r);
-    if (s == PD_OK)
-        s = pd_write_frame(out, p, &fi, pd_sim_positions(sim), pd_sim_velocities(sim),
-                           pd_sim_intact(sim), b->count, &ff);
-    free(density);
-    free(stress);
-    free(mises);
-    if (energy)
-        *energy = fi.energy;
+    pd_status s = pd_run_file_frame(out, p, b, sim, fields, energy);
     *t_out += pd_wtime() - t0;
     return s;
 }
@@ -1012,18 +766,18 @@ static void log_constants(const pd_particles *p, const pd_scene *sc, const struc
                 PROG ": a 2-D plate of thickness %g m: plane-stress PMB constants (nu = 1/3), "
                      "c = 12K/(pi H delta^3) = 9E/(pi H delta^3)\n",
                 p->thickness);
-    if (o->has_e)
+    if (o->spec.has_e)
         fprintf(stderr, PROG ": Young's modulus %g Pa: bulk modulus %g Pa (%s), c %.6g N/m^6\n",
                 sc->youngs_modulus, sc->bulk_modulus,
                 p->dimension == 2 ? "K = 3E/4, plane stress" : "K = 2E/3, nu = 1/4", sc->c);
-    else if (o->has_k)
+    else if (o->spec.has_k)
         fprintf(stderr, PROG ": bulk modulus %g Pa%s: c %.6g N/m^6\n", sc->bulk_modulus,
                 p->dimension == 2 ? " (2-D, plane stress)" : "", sc->c);
-    if (o->has_g0)
+    if (o->spec.has_g0)
         fprintf(stderr,
                 PROG ": critical stretch s00 %.6g from the fracture energy G0 %g J/m^2 (%s), "
                      "alpha %g\n",
-                sc->s00, o->g0,
+                sc->s00, o->spec.g0,
                 p->dimension == 2 ? "2-D: sqrt(4 G0/(c H delta^4))" : "seed 004 eq. 27",
                 sc->alpha);
 }
@@ -1091,9 +845,9 @@ int main(int argc, char **argv)
     h.opts = &o;
     pd_h5_debug(o.debug);
     remove_temps_on_signal();
-    if (o.sc.threads > 0)
-        omp_set_num_threads(o.sc.threads);
-    o.sc.threads = omp_get_max_threads();
+    if (o.spec.sc.threads > 0)
+        omp_set_num_threads(o.spec.sc.threads);
+    o.spec.sc.threads = omp_get_max_threads();
     const int restart = o.restart != NULL;
 
     /* a restart updates the run (through a copy renamed over it) */
@@ -1116,70 +870,19 @@ int main(int argc, char **argv)
     }
     pd_particles *p = h.p;
     pd_bonds *b = h.b;
-    pd_scene *sc = &o.sc;
+    pd_scene *sc = &o.spec.sc;
     sc->nbc = o.nbc;
     sc->bc = o.bc;
     sc->sets = h.sets;
-    for (int k = 0; k < o.nlaws; k++) /* --material/--interface K=: c for the dimension */
-        if (o.law_k[k] > 0)
-            o.laws[k].c = pd_pmb_c_for(p, o.law_k[k], b->horizon);
-    sc->nlaws = o.nlaws;
-    sc->laws = o.laws;
-    if (pd_scene_has_laws(sc) && pd_bond_laws_check(p, sc) != PD_OK) {
+    if (pd_scene_resolve(&o.spec, p, b, o.input) != PD_OK) {
         if (restart)
             pd_file_abort(h.in), h.in = NULL;
         release(&h);
         return fail();
     }
-    if (o.has_e) /* PMB's fixed Poisson ratio: K from E by dimension */
-        sc->bulk_modulus = pd_pmb_bulk_from_youngs(sc->youngs_modulus, p->dimension);
-    if (o.has_k || o.has_e)
-        sc->c = pd_pmb_c_for(p, sc->bulk_modulus, b->horizon);
-    if (!o.has_k && !o.has_e)
-        sc->bulk_modulus = sc->youngs_modulus = 0; /* a scene's K or E that --c overrode */
-    if (pd_model_state_based(pd_model_of(sc->model)) && p->dimension == 2) {
-        fprintf(stderr, PROG ": error: --model %s is for 3-D bodies; '%s' is a 2-D plate (run "
-                             "it with pmb)\n",
-                sc->model == PD_MODEL_VES   ? "ves"
-                : sc->model == PD_MODEL_EPS ? "eps"
-                                            : "lps",
-                o.input);
-        if (restart)
-            pd_file_abort(h.in), h.in = NULL;
-        release(&h);
-        return 1;
-    }
-    if (o.has_g0)
-        sc->s00 = pd_pmb_s0_for(p, o.g0, sc->c, b->horizon);
-    if (sc->has_contact && !(sc->contact_skin > 0))
-        sc->contact_skin = 0.5 * p->spacing;
-    if (!(sc->lost_margin > 0))
-        sc->lost_margin = pd_lost_margin_default(p);
-    sc->dt_stable = pd_stable_dt(p, b, sc);
-    if (sc->has_projectile && !o.has_proj_k)
-        sc->proj_k = pd_projectile_default_k(p, b, sc);
-    if (!o.has_dt) {
-        if (!isfinite(sc->dt_stable)) {
-            fprintf(stderr, PROG ": error: no bonds, so no stable time step; give --dt\n");
-            if (restart)
-                pd_file_abort(h.in), h.in = NULL;
-            release(&h);
-            return 1;
-        }
-        sc->dt = sc->safety * sc->dt_stable;
-    } else if (sc->dt > sc->dt_stable && !o.force_dt) {
-        fprintf(stderr,
-                PROG ": error: --dt %g s exceeds the stable time step %g s (seed 004 eq. 46); "
-                     "use --force-dt to run anyway\n",
-                sc->dt, sc->dt_stable);
-        if (restart)
-            pd_file_abort(h.in), h.in = NULL;
-        release(&h);
-        return 1;
-    }
     int64_t first = 0; /* the step the run starts from */
     if (restart) {
-        s = load_restart(h.in, p, b, &first, &h.r, h.v0, &h.bits0);
+        s = pd_run_file_load(h.in, p, b, &first, &h.r, h.v0, &h.bits0);
         sc->steps += first; /* --steps N more */
     }
     int64_t nsteps = sc->steps - first;
@@ -1189,43 +892,15 @@ int main(int argc, char **argv)
         s = pd_sim_new(p, b, sc, &h.sim);
     if (s == PD_OK && restart)
         s = pd_sim_restore(h.sim, first, &h.r, h.v0, h.bits0);
-    h.text = scene_text(sc);
-    if (s == PD_OK && restart) {
-        /* the same file goes on: unfinished frames out, the scene and the
-         * history say what was added */
-        h.out = h.in;
-        s = pd_drop_incomplete_frames(h.out);
-        if (s == PD_OK)
-            s = pd_append_history(h.out, h.cmdline ? h.cmdline : PROG);
-    } else if (s == PD_OK) {
+    h.text = pd_scene_text(sc);
+    if (s == PD_OK && restart)
+        h.out = h.in; /* the same file goes on */
+    else if (s == PD_OK)
         s = pd_file_create(o.output, &h.out);
-        if (s == PD_OK)
-            s = pd_write_header(h.out, h.in, h.cmdline ? h.cmdline : PROG);
-        if (s == PD_OK)
-            s = pd_write_particles(h.out, p);
-        if (s == PD_OK)
-            s = pd_write_bonds(h.out, b);
-        if (s == PD_OK)
-            s = pd_write_sets(h.out, h.sets);
-    }
     if (s == PD_OK)
-        s = pd_write_scene(h.out, sc, pd_sim_effects(h.sim), h.text ? h.text : "");
-    /* every frame laid out now, then the file under its final name: a run
-     * killed at any moment leaves it readable with its complete frames */
-    if (s == PD_OK)
-        s = plan_frames(h.out, p, b, sc,
-                        o.sc.fields | (sc->has_projectile ? PD_FRAME_PROJECTILE : 0), first,
-                        !restart);
-    if (s == PD_OK)
-        s = pd_plan_restart(h.out, p->n, sc->has_failure, sc->has_contact);
-    if (s == PD_OK && sc->has_projectile)
-        s = pd_plan_restart_projectile(h.out);
-    if (s == PD_OK && sc->model == PD_MODEL_VES && b->count > 0)
-        s = pd_plan_restart_history(h.out, b->count, 2);
-    if (s == PD_OK && sc->model == PD_MODEL_EPS && b->count > 0)
-        s = pd_plan_restart_history(h.out, b->count, 1);
-    if (s == PD_OK)
-        s = pd_file_publish(h.out);
+        s = pd_run_file_start(h.out, restart ? NULL : h.in, p, b, h.sets, sc,
+                              pd_sim_effects(h.sim), h.cmdline ? h.cmdline : PROG,
+                              h.text ? h.text : "", first);
     if (!restart) {
         pd_file_close(h.in);
         h.in = NULL;
@@ -1289,7 +964,7 @@ int main(int argc, char **argv)
         fprintf(stderr,
                 PROG ": projectile: mass %g kg, radius %g m, stiffness K %.6g N/m^5%s\n",
                 sc->proj_mass, sc->proj_radius, sc->proj_k,
-                o.has_proj_k ? "" : " (default: 2 K p = the largest bond stiffness sum of "
+                o.spec.has_proj_k ? "" : " (default: 2 K p = the largest bond stiffness sum of "
                                     "seed 004 eq. 46 at p = spacing/4)");
     if (!o.quiet && restart)
         fprintf(stderr, PROG ": going on from step %lld of '%s'\n", (long long)first, o.restart);
@@ -1298,7 +973,7 @@ int main(int argc, char **argv)
     if (!restart) {
         s = pd_sim_setup(sim);
         if (s == PD_OK && sc->every > 0)
-            s = write_frame(out, p, b, sim, o.sc.fields, &t_output, NULL);
+            s = timed_frame(out, p, b, sim, sc->fields, &t_output, NULL);
     }
     int64_t lost = pd_sim_lost(sim);
     for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
@@ -1317,7 +992,7 @@ int main(int argc, char **argv)
         pd_energy e;
         int known = 0;
         if ((sc->every > 0 && n % sc->every == 0) || n == sc->steps) {
-            s = write_frame(out, p, b, sim, o.sc.fields, &t_output, &e);
+            s = timed_frame(out, p, b, sim, sc->fields, &t_output, &e);
             known = s == PD_OK;
         }
         if (((n - first) % status_every == 0 || n == sc->steps) && !o.quiet) {
@@ -1334,7 +1009,7 @@ int main(int argc, char **argv)
         }
     }
     if (s == PD_OK && !restart && sc->steps == 0 && sc->every == 0)
-        s = write_frame(out, p, b, sim, o.sc.fields, &t_output, NULL);
+        s = timed_frame(out, p, b, sim, sc->fields, &t_output, NULL);
     double wall = pd_wtime() - t_start;
     if (tty)
         fputc('\n', stderr);

@@ -473,6 +473,43 @@ double pd_ellipsoid_distance(const pd_ellipsoid *e, const double dir[3]);
 double pd_ellipsoids_factor(const pd_ellipsoid *e, int n, const double dir[3]);
 double pd_bond_influence(const pd_scene *s, double length, double horizon, const double xi[3]);
 
+/* What a user says of a scene (pd-run's options, lib/run/scene.c): the
+ * scene as given, and which of its numbers were given. */
+#define PD_LAWS_MAX 64 /* --material and --interface laws of a scene */
+typedef struct {
+    pd_scene sc;        /* as given; pd_scene_resolve completes it        */
+    int has_c, has_k, has_e; /* the stiffness was given as c, K or E (the
+                                last of them wins)                       */
+    int has_g0;         /* --failure-energy: s00 from G0 once c is known  */
+    double g0;          /* G0, J/m^2                                      */
+    int has_g, has_influence, has_lambda, has_tau, has_yield; /* the
+                           state-based models' --shear-modulus, --influence,
+                           --ves-lambda, --ves-tau, --yield-stress          */
+    int has_material, has_interface; /* some law of either kind           */
+    int has_proj_k;     /* the projectile's K given (else its default)    */
+    int has_dt;         /* dt given (else safety x the stable step)       */
+    int force_dt;       /* run a dt above the stable step anyway          */
+    int nlaws;          /* laws[0..nlaws-1] (sc.laws points here once
+                           resolved)                                     */
+    pd_bond_law laws[PD_LAWS_MAX];
+    double law_k[PD_LAWS_MAX]; /* laws[k]'s K=, Pa; 0: its c= was given  */
+} pd_scene_spec;
+
+/* Before the body is read: the options each model needs and takes (its
+ * descriptor), the scene's c from laws and fibres, a stiffness given.
+ * PD_ERR_INVALID (a usage error) names what is wrong. */
+pd_status pd_scene_check(pd_scene_spec *spec);
+/* Against the body p, b (`body` names it in messages): the laws' c, K from
+ * E, c from K (3-D or plane stress), s00 from G0, the defaults (contact
+ * skin, lost margin, the projectile's K), the stable step of seed 004 eq.
+ * 46 and dt (safety x the stable step; a larger --dt without force_dt is
+ * refused).  spec->sc is then the scene a run takes (pd_sim_new). */
+pd_status pd_scene_resolve(pd_scene_spec *spec, const pd_particles *p, const pd_bonds *b,
+                           const char *body);
+/* The resolved scene as scene-file lines ("option value"), enough to rerun
+ * or restart (/scene/options); malloc'ed, NULL when out of memory. */
+char *pd_scene_text(const pd_scene *s);
+
 /* Compute the forces of the initial state (step 0). */
 pd_status pd_sim_setup(pd_sim *sim);
 /* One velocity-Verlet step (seed 000 Algorithm 1) with the declared effects. */
@@ -787,6 +824,26 @@ pd_status pd_plan_restart_projectile(pd_file *f);
  * directed bonds, in both restart slots (nothing when it is there). */
 pd_status pd_plan_restart_history(pd_file *f, int64_t nbonds, int width);
 void pd_restart_free(pd_restart *r);
+/* A run's file (lib/io/runfile.c).  Start it: a new run (from: the model
+ * file it reads, for the header's history) gets the header, the particles,
+ * bonds and sets, the scene (`effects`, the scene's text) and every frame
+ * and restart slot laid out (frames from step 0); a restart (from NULL:
+ * `out` is the run file itself, updated through a copy) drops unfinished
+ * frames, appends `cmdline` to the history and lays out the frames after
+ * step `first`.  Then the file is published. */
+pd_status pd_run_file_start(pd_file *out, const pd_file *from, const pd_particles *p,
+                            const pd_bonds *b, const pd_sets *sets, const pd_scene *sc,
+                            const char *effects, const char *cmdline, const char *text,
+                            int64_t first);
+/* The state at the last complete frame of a run: its step, the restart
+ * slot (pd_restart_free), the frame's velocities and bond states
+ * (malloc'ed), for pd_sim_restore. */
+pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int64_t *step,
+                           pd_restart *r, double *v[3], uint64_t **bits);
+/* The frame of the run's current step (energies, the optional `fields`)
+ * and its restart data; the energies also go to *energy (may be NULL). */
+pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
+                            const pd_sim *sim, unsigned fields, pd_energy *energy);
 /* Remove frames laid out but never completed. */
 pd_status pd_drop_incomplete_frames(pd_file *f);
 /* Write a frame (into its place when planned), then mark it complete;

@@ -19,7 +19,7 @@ EPS_RUN=("${EPS[@]}" --failure 0.0005,0.25 --contact
     make_block
     run -2 --separate-stderr pd-run --model eps --bulk-modulus "$BULK" --shear-modulus 6e9 \
         --steps 1 model.h5
-    [[ "$stderr" =~ ^pd-run:\ error:\ --model\ eps\ needs\ --yield-stress ]]
+    [[ "$stderr" =~ ^pd-run:\ error:\ --model\ eps\ needs\ .*--yield-stress ]]
     [ "$(printf '%s\n' "$stderr" | wc -l)" -eq 1 ]
     run -2 --separate-stderr pd-run "${EPS[@]}" --yield-stress -3 --steps 1 model.h5
     [[ "$stderr" =~ --yield-stress\ must\ be\ a\ positive\ number ]]
@@ -30,7 +30,7 @@ EPS_RUN=("${EPS[@]}" --failure 0.0005,0.25 --contact
     [[ "$stderr" =~ --ves-tau\ is\ for\ --model\ ves ]]
     run -2 --separate-stderr pd-run --model eps --bulk-modulus "$BULK" --yield-stress 5e7 \
         --steps 1 model.h5
-    [[ "$stderr" =~ needs\ --bulk-modulus\ and\ --shear-modulus ]]
+    [[ "$stderr" =~ needs\ --bulk-modulus,\ --shear-modulus ]]
     run -0 pd-run --help
     assert_line --partial "--yield-stress Y"
     assert_line --partial "--model pmb|lps|ves|eps"

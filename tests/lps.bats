@@ -34,7 +34,7 @@ with h5py.File(sys.argv[1]) as f:
     run -2 --separate-stderr pd-run --model lps --bulk-modulus "$BULK" --steps 1 model.h5
     [[ "$stderr" =~ ^pd-run:\ error:\ --model\ lps\ needs\ --bulk-modulus\ and\ --shear-modulus ]]
     run -2 --separate-stderr pd-run "${LPS[@]}" --c 1e22 --steps 1 model.h5
-    [[ "$stderr" =~ ^pd-run:\ error:\ --c\ is\ the\ PMB\ micromodulus ]]
+    [[ "$stderr" =~ ^pd-run:\ error:\ --c\ is\ for\ --model\ pmb,\ not\ lps ]]
     run -2 --separate-stderr pd-run --bulk-modulus "$BULK" --shear-modulus "$G" --steps 1 model.h5
     [[ "$stderr" =~ ^pd-run:\ error:\ --shear-modulus\ is\ for\ --model\ lps ]]
     run -2 --separate-stderr pd-run --bulk-modulus "$BULK" --influence 1 --steps 1 model.h5

@@ -163,6 +163,6 @@ for line in ('material 2,c=2e+21,s00=0.02', 'interface 2,1,c=5e+20,s00=0.0015',
     expect_usage_error "--fibre needs GX,GY,GZ" "${R[@]}" --fibre 1,0,0,1e20,1e20,0.1
     expect_usage_error "needs --failure" pd-run --bulk-modulus "$BULK" --steps 1 \
         --material 1,c=1e20,s00=0.1 two.h5
-    expect_usage_error "are for --model pmb" pd-run --model lps --bulk-modulus 1e9 \
+    expect_usage_error "--interface is for --model pmb, not lps" pd-run --model lps --bulk-modulus 1e9 \
         --shear-modulus 1e9 --steps 1 --interface 1,2,c=1e20 two.h5
 }

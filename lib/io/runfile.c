@@ -1,0 +1,152 @@
+/*
+ * runfile.c -- the file protocol of a run (pd-run, or a program of a
+ * user's own): a new run file holds the model it started from, the
+ * resolved scene and every frame laid out before the first step, then it is
+ * published under its final name, so that a run killed at any moment leaves
+ * a readable file of complete frames; each frame is written with the
+ * restart data of its step; a restart goes on from the last complete
+ * frame, bit for bit (schema.c on the slots).
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "pd.h"
+
+/* The steps after `first` that get a frame: every, 2 every, ... and the
+ * last; only the last with --every 0; and step 0 itself in a new run
+ * (`fresh`), not in a restart (even from step 0, whose frame exists). */
+static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds *b,
+                             const pd_scene *sc, unsigned fields, int64_t first, int fresh)
+{
+    int64_t cap = sc->every > 0 ? sc->steps / sc->every + 2 : 1, m = 0;
+    int64_t *steps = malloc((size_t)cap * sizeof *steps);
+    double *times = malloc((size_t)cap * sizeof *times);
+    if (steps == NULL || times == NULL) {
+        free(steps);
+        free(times);
+        return pd_fail(PD_ERR_NOMEM, "out of memory planning %lld frames", (long long)cap);
+    }
+    if (sc->every > 0)
+        for (int64_t n = 0; n <= sc->steps; n += sc->every)
+            if (n > first || (n == 0 && fresh))
+                steps[m++] = n;
+    if ((m == 0 || steps[m - 1] != sc->steps) && (sc->steps > first || fresh))
+        steps[m++] = sc->steps;
+    for (int64_t k = 0; k < m; k++)
+        times[k] = (double)steps[k] * sc->dt;
+    pd_status s = pd_plan_frames(out, p->n, b->count, m, steps, times, fields);
+    free(steps);
+    free(times);
+    return s;
+}
+
+/* The state at the last complete frame of a run: its step, the restart
+ * slot, the frame's velocities and bond states. */
+pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int64_t *step,
+                           pd_restart *r, double *v[3], uint64_t **bits)
+{
+    int64_t nframes = 0;
+    char **names = NULL;
+    pd_status s = pd_list_frames(f, &nframes, &names);
+    if (s == PD_OK && nframes == 0)
+        s = pd_fail(PD_ERR_FORMAT, "the run has no complete frame to restart from");
+    pd_frame_info fi;
+    if (s == PD_OK)
+        s = pd_read_frame_info(f, names[nframes - 1], &fi);
+    for (int d = 0; d < 3 && s == PD_OK; d++)
+        if ((v[d] = malloc((size_t)p->n * sizeof(double))) == NULL)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory");
+    if (s == PD_OK && (*bits = calloc((size_t)pd_bits_words(b->count) + 1, 8)) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory");
+    if (s == PD_OK)
+        s = pd_read_frame_vectors(f, names[nframes - 1], p->n, NULL, v);
+    if (s == PD_OK)
+        s = pd_read_frame_state(f, names[nframes - 1], b->count, *bits);
+    if (s == PD_OK)
+        s = pd_read_restart(f, p->n, fi.step, r);
+    if (s == PD_OK)
+        *step = fi.step;
+    pd_frames_free_list(nframes, names);
+    return s;
+}
+
+
+pd_status pd_run_file_start(pd_file *out, const pd_file *from, const pd_particles *p,
+                            const pd_bonds *b, const pd_sets *sets, const pd_scene *sc,
+                            const char *effects, const char *cmdline, const char *text,
+                            int64_t first)
+{
+    pd_status s;
+    if (from == NULL) {
+        /* the same file goes on: unfinished frames out, the scene and the
+         * history say what was added */
+        s = pd_drop_incomplete_frames(out);
+        if (s == PD_OK)
+            s = pd_append_history(out, cmdline);
+    } else {
+        s = pd_write_header(out, from, cmdline);
+        if (s == PD_OK)
+            s = pd_write_particles(out, p);
+        if (s == PD_OK)
+            s = pd_write_bonds(out, b);
+        if (s == PD_OK)
+            s = pd_write_sets(out, sets);
+    }
+    if (s == PD_OK)
+        s = pd_write_scene(out, sc, effects, text);
+    /* every frame laid out now, then the file under its final name: a run
+     * killed at any moment leaves it readable with its complete frames */
+    if (s == PD_OK)
+        s = plan_frames(out, p, b, sc, sc->fields | (sc->has_projectile ? PD_FRAME_PROJECTILE : 0),
+                        first, from != NULL);
+    if (s == PD_OK)
+        s = pd_plan_restart(out, p->n, sc->has_failure, sc->has_contact);
+    if (s == PD_OK && sc->has_projectile)
+        s = pd_plan_restart_projectile(out);
+    const int width = pd_model_history_width(pd_model_of(sc->model));
+    if (s == PD_OK && width > 0 && b->count > 0)
+        s = pd_plan_restart_history(out, b->count, width);
+    if (s == PD_OK)
+        s = pd_file_publish(out);
+    return s;
+}
+
+pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
+                            const pd_sim *sim, unsigned fields, pd_energy *energy)
+{
+    pd_frame_info fi = {.step = pd_sim_stepno(sim), .time = pd_sim_time(sim),
+                        .broken = pd_sim_broken(sim), .lost = pd_sim_lost(sim)};
+    fi.has_projectile = pd_sim_projectile(sim, fi.projectile_position, fi.projectile_velocity);
+    size_t n = (size_t)(p->n > 0 ? p->n : 1);
+    double *density = NULL, *stress = NULL, *mises = NULL;
+    if ((fields & PD_FIELD_ENERGY) && (density = malloc(n * sizeof(double))) == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the strain energy density");
+    if ((fields & PD_FIELD_STRESS) && ((stress = malloc(9 * n * sizeof(double))) == NULL ||
+                                       (mises = malloc(n * sizeof(double))) == NULL)) {
+        free(density);
+        free(stress);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the stress");
+    }
+    pd_status s = pd_sim_energy(sim, &fi.energy, density);
+    if (s == PD_OK && stress) {
+        s = pd_sim_stress(sim, stress);
+        for (int64_t i = 0; i < p->n; i++)
+            mises[i] = pd_von_mises(stress + 9 * i);
+    }
+    pd_frame_fields ff = {density, stress, mises};
+    /* what a restart needs, then the frame (marked complete last) */
+    pd_restart r;
+    memset(&r, 0, sizeof r);
+    pd_sim_accumulated(sim, &r);
+    if (s == PD_OK)
+        s = pd_write_restart(out, p->n, fi.step, &r);
+    if (s == PD_OK)
+        s = pd_write_frame(out, p, &fi, pd_sim_positions(sim), pd_sim_velocities(sim),
+                           pd_sim_intact(sim), b->count, &ff);
+    free(density);
+    free(stress);
+    free(mises);
+    if (energy)
+        *energy = fi.energy;
+    return s;
+}

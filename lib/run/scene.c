@@ -1,0 +1,262 @@
+/*
+ * scene.c -- a scene from what a user says (pd-run's options, a library
+ * user's pd_scene_spec) to what a run uses:
+ *   - pd_scene_check, before the body is read: the options each model
+ *     takes and needs (its descriptor, lib/models/), the scene's c with
+ *     laws and fibres, that the stiffness is given;
+ *   - pd_scene_resolve, against the body: the laws' K= to c, Young's
+ *     modulus to K with PMB's fixed Poisson ratio, K to c (3-D or plane
+ *     stress, lib/models/plate.c), G0 to s00 (seed 004 eq. 27), the
+ *     defaults (contact skin, lost margin, the projectile's K), the stable
+ *     step (seed 004 eq. 46) and the refusal of a --dt above it;
+ *   - pd_scene_text, the resolved scene as scene-file lines (/scene/options),
+ *     enough to rerun or restart.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "models/model.h"
+
+/* The default contact skin, in spacings (pd-run(1)): the list is rebuilt
+ * when a particle has moved half of it. */
+#define PD_CONTACT_SKIN_SPACINGS 0.5
+
+/* Was a model's own option given?  (Each option of a descriptor's needs
+ * and takes lists is one of these.) */
+static int given(const pd_scene_spec *o, const char *opt)
+{
+    const struct {
+        const char *opt;
+        int on;
+    } said[] = {{"--c", o->has_c},
+                {"--bulk-modulus", o->has_k},
+                {"--youngs-modulus", o->has_e},
+                {"--shear-modulus", o->has_g},
+                {"--influence", o->has_influence},
+                {"--ellipsoid", o->sc.nellipsoids > 0},
+                {"--ves-lambda", o->has_lambda},
+                {"--ves-tau", o->has_tau},
+                {"--yield-stress", o->has_yield},
+                {"--failure-energy", o->has_g0},
+                {"--material", o->has_material},
+                {"--interface", o->has_interface},
+                {"--fibre", o->sc.has_fibre}};
+    for (size_t k = 0; k < sizeof said / sizeof said[0]; k++)
+        if (strcmp(said[k].opt, opt) == 0)
+            return said[k].on;
+    return 0;
+}
+
+static int listed(const char *const *list, const char *opt)
+{
+    for (int k = 0; list && list[k]; k++)
+        if (strcmp(list[k], opt) == 0)
+            return 1;
+    return 0;
+}
+
+/* An option of some model's own that the scene's model m neither needs nor
+ * takes: refused, naming the models that take it. */
+static pd_status refuse_others(const pd_scene_spec *o, const pd_model *m)
+{
+    for (int k = 0; pd_model_at(k); k++) {
+        const pd_model *other = pd_model_at(k);
+        const char *const *lists[2] = {other->needs, other->takes};
+        for (int l = 0; l < 2; l++)
+            for (int q = 0; lists[l] && lists[l][q]; q++) {
+                const char *opt = lists[l][q];
+                if (!given(o, opt) || listed(m->needs, opt) || listed(m->takes, opt))
+                    continue;
+                char owners[128] = "";
+                for (int r = 0; pd_model_at(r); r++)
+                    if (listed(pd_model_at(r)->needs, opt) || listed(pd_model_at(r)->takes, opt))
+                        snprintf(owners + strlen(owners), sizeof owners - strlen(owners),
+                                 "%s%s", owners[0] ? "|" : "", pd_model_at(r)->name);
+                return pd_fail(PD_ERR_INVALID, "%s is for --model %s, not %s", opt, owners,
+                               m->name);
+            }
+    }
+    return PD_OK;
+}
+
+/* Some option m needs is not given: refused, naming all it needs. */
+static pd_status need_own(const pd_scene_spec *o, const pd_model *m)
+{
+    char all[256] = "";
+    int missing = 0, total = 0;
+    for (int q = 0; m->needs && m->needs[q]; q++) {
+        missing |= !given(o, m->needs[q]);
+        total++;
+    }
+    for (int q = 0; missing && q < total; q++)
+        snprintf(all + strlen(all), sizeof all - strlen(all), "%s%s",
+                 q == 0 ? "" : q == total - 1 ? " and " : ", ", m->needs[q]);
+    return missing ? pd_fail(PD_ERR_INVALID, "--model %s needs %s", m->name, all) : PD_OK;
+}
+
+pd_status pd_scene_check(pd_scene_spec *o)
+{
+    const pd_model *m = pd_model_of(o->sc.model);
+    if (m == NULL)
+        return pd_fail(PD_ERR_INVALID, "unknown model %d", (int)o->sc.model);
+    pd_status s = refuse_others(o, m);
+    if (s == PD_OK)
+        s = need_own(o, m);
+    if (s != PD_OK)
+        return s;
+    if (o->nlaws > 0 || o->sc.has_fibre) {
+        int s00 = o->sc.fibre_s00[0] > 0;
+        for (int k = 0; k < o->nlaws; k++)
+            s00 |= o->laws[k].s00 > 0;
+        if (s00 && !o->sc.has_failure)
+            return pd_fail(PD_ERR_INVALID, "a critical stretch of --material, --interface or "
+                           "--fibre needs --failure or --failure-energy (the scene's s00 and "
+                           "alpha)");
+        /* the scene's c: the fibres' matrix, else the stiffest material
+         * (contact, and the materials without a law) */
+        if (!o->has_c && !o->has_k && !o->has_e && o->sc.has_fibre)
+            o->sc.c = o->sc.fibre_c[1], o->has_c = 1;
+        for (int k = 0; k < o->nlaws && !o->has_c && !o->has_k && !o->has_e; k++)
+            if (o->laws[k].a == o->laws[k].b && o->law_k[k] == 0)
+                o->sc.c = fmax(o->sc.c, o->laws[k].c);
+        if (o->sc.c > 0)
+            o->has_c = 1;
+        for (int k = 0; k < o->nlaws && !o->has_c && !o->has_k && !o->has_e; k++)
+            if (o->laws[k].a == o->laws[k].b)
+                o->sc.bulk_modulus = fmax(o->sc.bulk_modulus, o->law_k[k]);
+        if (!o->has_c && o->sc.bulk_modulus > 0)
+            o->has_k = 1;
+    }
+    if (!o->has_c && !o->has_k && !o->has_e)
+        return pd_fail(PD_ERR_INVALID,
+                       "give the stiffness: --c or --bulk-modulus (or --youngs-modulus)");
+    return PD_OK;
+}
+
+pd_status pd_scene_resolve(pd_scene_spec *o, const pd_particles *p, const pd_bonds *b,
+                           const char *body)
+{
+    pd_scene *sc = &o->sc;
+    const pd_model *m = pd_model_of(sc->model);
+    for (int k = 0; k < o->nlaws; k++) /* --material/--interface K=: c for the dimension */
+        if (o->law_k[k] > 0)
+            o->laws[k].c = pd_pmb_c_for(p, o->law_k[k], b->horizon);
+    sc->nlaws = o->nlaws;
+    sc->laws = o->laws;
+    pd_status s = pd_scene_has_laws(sc) ? pd_bond_laws_check(p, sc) : PD_OK;
+    if (s != PD_OK)
+        return s;
+    if (o->has_e) /* PMB's fixed Poisson ratio: K from E by dimension */
+        sc->bulk_modulus = pd_pmb_bulk_from_youngs(sc->youngs_modulus, p->dimension);
+    if (o->has_k || o->has_e)
+        sc->c = pd_pmb_c_for(p, sc->bulk_modulus, b->horizon);
+    if (!o->has_k && !o->has_e)
+        sc->bulk_modulus = sc->youngs_modulus = 0; /* a scene's K or E that --c overrode */
+    if (m->state_based && p->dimension == 2)
+        return pd_fail(PD_ERR_INVALID, "--model %s is for 3-D bodies; '%s' is a 2-D plate (run "
+                       "it with pmb)", m->name, body);
+    if (o->has_g0)
+        sc->s00 = pd_pmb_s0_for(p, o->g0, sc->c, b->horizon);
+    if (sc->has_contact && !(sc->contact_skin > 0))
+        sc->contact_skin = PD_CONTACT_SKIN_SPACINGS * p->spacing;
+    if (!(sc->lost_margin > 0))
+        sc->lost_margin = pd_lost_margin_default(p);
+    sc->dt_stable = pd_stable_dt(p, b, sc);
+    if (sc->has_projectile && !o->has_proj_k)
+        sc->proj_k = pd_projectile_default_k(p, b, sc);
+    if (!o->has_dt) {
+        if (!isfinite(sc->dt_stable))
+            return pd_fail(PD_ERR_INVALID, "no bonds, so no stable time step; give --dt");
+        sc->dt = sc->safety * sc->dt_stable;
+    } else if (sc->dt > sc->dt_stable && !o->force_dt)
+        return pd_fail(PD_ERR_INVALID, "--dt %g s exceeds the stable time step %g s (seed 004 eq. "
+                       "46); use --force-dt to run anyway", sc->dt, sc->dt_stable);
+    return PD_OK;
+}
+
+/* The resolved scene in scene-file form, enough to rerun. */
+char *pd_scene_text(const pd_scene *s)
+{
+    size_t cap = 2048 + 160 * (size_t)s->nellipsoids;
+    char **prof = calloc((size_t)(s->nbc > 0 ? s->nbc : 1), sizeof *prof);
+    if (prof == NULL)
+        return NULL;
+    for (int k = 0; k < s->nbc; k++) { /* a table in resolved form */
+        if ((prof[k] = pd_profile_text(&s->bc[k].profile)) == NULL) {
+            for (int m = 0; m < k; m++)
+                free(prof[m]);
+            free(prof);
+            return NULL;
+        }
+        cap += strlen(prof[k]) + 2 * PD_SET_NAME_MAX;
+    }
+    cap += (size_t)s->nlaws * 160 + 256;
+    char *t = malloc(cap), *p = t;
+    if (t == NULL) {
+        for (int k = 0; k < s->nbc; k++)
+            free(prof[k]);
+        free(prof);
+        return NULL;
+    }
+    const pd_model *m = pd_model_of(s->model);
+    if (m->state_based)
+        p += sprintf(p, "model %s\nbulk-modulus %.17g\nshear-modulus %.17g\ninfluence %s\n",
+                     m->name, s->bulk_modulus, s->shear_modulus, pd_influence_name(s->influence));
+    else
+        p += sprintf(p, "model %s\nc %.17g\n", m->name, s->c);
+    for (int k = 0; k < s->nellipsoids; k++)
+        p += sprintf(p, "ellipsoid %.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", s->ellipsoid[k].u[0],
+                     s->ellipsoid[k].u[1], s->ellipsoid[k].u[2], s->ellipsoid[k].a,
+                     s->ellipsoid[k].b, s->ellipsoid[k].roll);
+    for (const pd_model_param *q = m->params; q && q->option; q++)
+        p += sprintf(p, "%s %.17g\n", q->option, *(const double *)((const char *)s + q->offset));
+    if (s->has_failure)
+        p += sprintf(p, "failure %.17g,%.17g\n", s->s00, s->alpha);
+    if (s->has_contact)
+        p += sprintf(p, "contact\ncontact-skin %.17g\n", s->contact_skin);
+    if (s->has_indenter)
+        p += sprintf(p, "indenter sphere,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
+                     s->ind_center[0], s->ind_center[1], s->ind_center[2], s->ind_radius, s->ind_k,
+                     s->ind_velocity[0], s->ind_velocity[1], s->ind_velocity[2]);
+    if (s->has_projectile)
+        p += sprintf(p,
+                     "projectile sphere,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
+                     s->proj_center[0], s->proj_center[1], s->proj_center[2], s->proj_radius,
+                     s->proj_mass, s->proj_velocity[0], s->proj_velocity[1], s->proj_velocity[2],
+                     s->proj_k);
+    for (int k = 0; k < s->nlaws; k++) { /* K= resolved to c */
+        const pd_bond_law *l = &s->laws[k];
+        if (l->a == l->b)
+            p += sprintf(p, "material %d,c=%.17g", (int)l->a, l->c);
+        else
+            p += sprintf(p, "interface %d,%d,c=%.17g", (int)l->a, (int)l->b, l->c);
+        p += l->s00 > 0 ? sprintf(p, ",s00=%.17g\n", l->s00) : sprintf(p, "\n");
+    }
+    if (s->has_fibre) {
+        p += sprintf(p, "fibre %.17g,%.17g,%.17g,%.17g,%.17g", s->fibre_g[0], s->fibre_g[1],
+                     s->fibre_g[2], s->fibre_c[0], s->fibre_c[1]);
+        p += s->fibre_s00[0] > 0
+                 ? sprintf(p, ",%.17g,%.17g\n", s->fibre_s00[0], s->fibre_s00[1])
+                 : sprintf(p, "\n");
+    }
+    p += sprintf(p, "dt %.17g\nsteps %lld\nevery %lld\n", s->dt, (long long)s->steps,
+                 (long long)s->every);
+    if (s->fields)
+        p += sprintf(p, "fields %s%s%s\n", s->fields & PD_FIELD_ENERGY ? "energy" : "",
+                     s->fields == (PD_FIELD_ENERGY | PD_FIELD_STRESS) ? "," : "",
+                     s->fields & PD_FIELD_STRESS ? "stress" : "");
+    p += sprintf(p, "lost-margin %.17g\n", s->lost_margin);
+    if (s->dt > s->dt_stable)
+        p += sprintf(p, "force-dt\n");
+    if (s->bond_list)
+        p += sprintf(p, "bond-list\n");
+    for (int k = 0; k < s->nbc; k++) {
+        p += sprintf(p, "%s %s,%c,%s\n", pd_bc_option(s->bc[k].kind), s->bc[k].set,
+                     'x' + s->bc[k].axis, prof[k]);
+        free(prof[k]);
+    }
+    free(prof);
+    return t;
+}
+
