@@ -19,10 +19,12 @@ setup() {
     OMP_NUM_THREADS=1 run ./stream 8 2
     assert_success
     assert_line --index 2 "threads 1"
-    # both rates finite and within physical sense: 1e8..1e13 B/s, 1e8..1e14 flop/s
+    # both rates positive and finite, and below what no machine reaches (1e13
+    # B/s, 1e14 flop/s: a timer gone wrong); no lower bound, a slow or busy
+    # machine is no failure (make bench measures speed, the tests do not)
     echo "$output" | awk '
         $1 == "triad_bytes_per_s" { b = $2 } $1 == "fma_flops_per_s" { f = $2 }
-        END { exit !(b > 1e8 && b < 1e13 && f > 1e8 && f < 1e14) }'
+        END { exit !(b > 0 && b < 1e13 && f > 0 && f < 1e14) }'
 }
 
 @test "share/stream.c: bad arguments are usage errors" {

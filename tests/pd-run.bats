@@ -611,21 +611,116 @@ print('ok')" t1.h5
     done
 }
 
-@test "SIGKILL at 20 random moments: the output is either absent or readable with whole frames" {
+# The SIGKILL tests kill pd-run at moments drawn from a fixed seed, so that a
+# failure can be repeated: PD_KILL_SEED=N draws others.  A moment is a
+# fraction of the time the uninterrupted run took after publishing its file,
+# counted from the moment the killed run's file appears under its final name
+# (pd-run publishes it once its frames are laid out): a slow machine or
+# AddressSanitizer (SANITIZE=1) stretches the moments with the run.
+KILL_SEED=${PD_KILL_SEED:-42}
+KILLS=5 # kills per test, at least KILLS_LANDED of them before the run ends
+KILLS_LANDED=3
+PUBLISH_TIMEOUT=120 # s
+
+# kill_fractions SEED N: N fractions of the run in [0.05, 0.7), one a line,
+# the same for a SEED on every machine (Python's Mersenne Twister).
+kill_fractions() {
+    "$PY" -c "import random, sys
+r = random.Random(int(sys.argv[1]))
+for _ in range(int(sys.argv[2])):
+    print('%.3f' % r.uniform(0.05, 0.7))" "$1" "$2"
+}
+
+# await_publish PID FILE: wait until FILE exists, at most PUBLISH_TIMEOUT
+# seconds; fail naming it when the process PID ends first or time runs out.
+await_publish() {
+    local pid=$1 file=$2 deadline=$((SECONDS + PUBLISH_TIMEOUT))
+    until [ -e "$file" ]; do
+        if ! kill -0 "$pid" 2>/dev/null && [ ! -e "$file" ]; then
+            echo "pd-run (pid $pid) ended without publishing $file" >&2
+            return 1
+        fi
+        if [ "$SECONDS" -ge "$deadline" ]; then
+            echo "$file did not appear within $PUBLISH_TIMEOUT s" >&2
+            return 1
+        fi
+        sleep 0.01
+    done
+}
+
+# run_after_publish FILE PD-RUN-ARG...: run pd-run writing FILE and print the
+# seconds it ran after publishing FILE; fail when it fails.
+run_after_publish() {
+    local file=$1 pid t0
+    shift
+    pd-run "$@" &
+    pid=$!
+    await_publish "$pid" "$file" || return 1
+    t0=$EPOCHREALTIME
+    wait "$pid" || { echo "the uninterrupted pd-run $* failed" >&2; return 1; }
+    awk -v a="$t0" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.3f\n", b - a }'
+}
+
+# kill_after_publish FILE DELAY PD-RUN-ARG...: start pd-run writing FILE,
+# SIGKILL it DELAY seconds after FILE appears, and set KILL_STATUS to its exit
+# status (137 when the kill landed before the run ended, 0 when it did not).
+kill_after_publish() {
+    local file=$1 delay=$2 pid
+    shift 2
+    pd-run "$@" &
+    pid=$!
+    if ! await_publish "$pid" "$file"; then
+        kill -9 "$pid" 2>/dev/null || true
+        wait "$pid" || true
+        return 1
+    fi
+    sleep "$delay"
+    kill -9 "$pid" 2>/dev/null || true
+    KILL_STATUS=0
+    wait "$pid" || KILL_STATUS=$?
+    if [ "$KILL_STATUS" -ne 0 ] && [ "$KILL_STATUS" -ne 137 ]; then
+        echo "pd-run $* failed before the kill (exit $KILL_STATUS)" >&2
+        return 1
+    fi
+}
+
+# kill_delays SECONDS: the delays of the seeded fractions of a run of SECONDS
+# after publishing, into DELAYS, printed (shown on failure) with the seed.
+kill_delays() {
+    local fractions
+    mapfile -t fractions < <(kill_fractions "$KILL_SEED" "$KILLS")
+    mapfile -t DELAYS < <(printf '%s\n' "${fractions[@]}" | awk -v t="$1" '{ printf "%.3f\n", $1 * t }')
+    [ "${#DELAYS[@]}" -eq "$KILLS" ]
+    echo "kill seed $KILL_SEED (PD_KILL_SEED): the run took $1 s after publishing;" \
+        "kills at ${fractions[*]} of it: ${DELAYS[*]} s after publishing"
+}
+
+# assert_kills_landed N: at least KILLS_LANDED of the kills came before the
+# run ended (a kill after it checked nothing).
+assert_kills_landed() {
+    echo "$1 of $KILLS kills landed before the run ended"
+    if [ "$1" -lt "$KILLS_LANDED" ]; then
+        echo "only $1 of $KILLS kills landed before the run ended (at least $KILLS_LANDED wanted)" >&2
+        return 1
+    fi
+}
+
+@test "a run killed by SIGKILL at 5 seeded moments after it is published reads with whole frames" {
     make_block
     py "
 import numpy as np
 with h5py.File('model.h5') as f:
     print(len(f['particles/id']))" >/dev/null
-    for k in $(seq 20); do
-        rm -f k.h5
-        pd-run "${RUN_OPTS[@]}" --steps 3000 --every 20 --threads 1 -q model.h5 -o k.h5 &
-        pid=$!
-        sleep "$(awk -v s="$RANDOM" 'BEGIN { srand(s); printf "%.3f", rand() * 1.5 }')"
-        kill -9 "$pid" 2>/dev/null || true
-        wait "$pid" || true
-        rm -f .k.h5.tmp.* # a kill before the file was published leaves its temporary
-        [ -e k.h5 ] || continue
+    local opts=("${RUN_OPTS[@]}" --steps 3000 --every 20 --threads 1 -q model.h5 -o k.h5)
+    took=$(run_after_publish k.h5 "${opts[@]}")
+    kill_delays "$took"
+    landed=0
+    for k in $(seq "$KILLS"); do
+        rm -f k.h5 .k.h5.tmp.*
+        kill_after_publish k.h5 "${DELAYS[k - 1]}" "${opts[@]}"
+        echo "kill $k, ${DELAYS[k - 1]} s after publishing: pd-run exit $KILL_STATUS"
+        rm -f .k.h5.tmp.* # the published file has no temporary left
+        [ -e k.h5 ]
         # every pd reader takes it, and lists only whole frames
         run -0 pd-damage -n k.h5
         run -0 pd-crack-tip k.h5
@@ -640,7 +735,9 @@ with h5py.File(sys.argv[1]) as f:
         assert np.isfinite(g['displacement'][:]).all() and np.isfinite(g['velocity'][:]).all()
     d = f['frames'][max(f['frames'], key=lambda n: f['frames'][n].attrs['step'])]
     print(len(steps), 'frames')" k.h5
+        if [ "$KILL_STATUS" -eq 137 ]; then landed=$((landed + 1)); fi
     done
+    assert_kills_landed "$landed"
 }
 
 @test "a run that goes non-finite stops naming the step, keeps the frames before" {
@@ -713,26 +810,29 @@ with h5py.File(sys.argv[1]) as f:
     assert_no_temp .
 }
 
-@test "--restart after SIGKILL goes on from the last complete frame to the uninterrupted result" {
+@test "--restart of a run killed by SIGKILL goes on from the last complete frame to the uninterrupted result" {
     make_block
-    pd-run "${RUN_OPTS[@]}" --steps 3000 --every 100 --threads 2 -q model.h5 -o full.h5
-    for k in 1 2 3; do
+    took=$(run_after_publish full.h5 "${RUN_OPTS[@]}" --steps 3000 --every 100 --threads 2 -q \
+        model.h5 -o full.h5)
+    kill_delays "$took"
+    landed=0
+    for k in $(seq "$KILLS"); do
         rm -f k.h5 .k.h5.tmp.*
-        pd-run "${RUN_OPTS[@]}" --steps 3000 --every 100 --threads 2 -q model.h5 -o k.h5 &
-        pid=$!
-        sleep "0.$((3 * k))"
-        kill -9 "$pid" 2>/dev/null || true
-        wait "$pid" || true
+        kill_after_publish k.h5 "${DELAYS[k - 1]}" "${RUN_OPTS[@]}" --steps 3000 --every 100 \
+            --threads 2 -q model.h5 -o k.h5
         rm -f .k.h5.tmp.*
-        [ -e k.h5 ] || continue
+        [ -e k.h5 ]
         last=$(py "
 with h5py.File(sys.argv[1]) as f:
     done = [g.attrs['step'] for g in f['frames'].values() if g.attrs['complete'] == 1]
     print(max(done) if done else -1)" k.h5)
-        [ "$last" -ge 0 ] || continue
+        echo "kill $k, ${DELAYS[k - 1]} s after publishing: pd-run exit $KILL_STATUS, last complete frame $last"
+        [ "$last" -ge 0 ] || continue # killed before its first frame: nothing to go on from
         run -0 pd-run --restart k.h5 --steps $((3000 - last)) --threads 1 -q
         same_frame full.h5 k.h5 3000
+        if [ "$KILL_STATUS" -eq 137 ]; then landed=$((landed + 1)); fi
     done
+    assert_kills_landed "$landed"
 }
 
 @test "--restart refuses what would change the scene, and needs --steps" {

@@ -1,11 +1,12 @@
 #!/usr/bin/env bats
-# 2-D plates: pd-lattice --dimension 2 --thickness H, the file's
-# /particles@thickness and its checks, pd-bonds on a plate (families in the
-# plane, partial volumes, sorting, a pre-crack through the thickness), the
-# plane-stress constants of pd-run (c = 9E/(pi H delta^3), s0 =
-# sqrt(4 pi G0/(9 E delta))), a plate through the whole pipeline, and the
-# energy balance of an elastic plate.  The plate is 20 mm square, 0.5 mm
-# spacing (1681 particles), 1 mm thick, steel-like (seed 004 section 5).
+# tests/plate.bats -- 2-D plates, which have no program of their own:
+# pd-lattice --dimension 2 --thickness H, the file's /particles@thickness and
+# its checks, pd-bonds on a plate (families in the plane, partial volumes,
+# sorting, a pre-crack through the thickness), the plane-stress constants of
+# pd-run (c = 9E/(pi H delta^3), s0 = sqrt(4 pi G0/(9 E delta))), a plate
+# through the whole pipeline, and the energy balance of an elastic plate.
+# The plate is 20 mm square, 0.5 mm spacing (1681 particles), 1 mm thick,
+# steel-like (seed 004 section 5).
 
 load test_helper
 
