@@ -854,7 +854,12 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
                          const uint64_t *intact, int64_t nbonds, const pd_frame_fields *ff);
 /* Number of complete frames and their names in step order (none, from a
  * run killed before its first frame, is not an error; no /frames is);
- * caller frees with pd_frames_free_list. */
+ * caller frees with pd_frames_free_list.  Every reader of frames goes
+ * through it, so it checks them (PD_ERR_FORMAT, one line naming the file
+ * and the frame): in that order steps are non-negative and strictly
+ * increasing, times finite and non-decreasing, and each time is
+ * step x dt (the /scene dt, positive and finite) to 1e-9 relative:
+ * |time - step dt| <= 1e-9 max(step, 1) dt (pd-run writes step * dt). */
 pd_status pd_list_frames(const pd_file *f, int64_t *nframes, char ***names);
 void pd_frames_free_list(int64_t nframes, char **names);
 pd_status pd_read_frame_info(const pd_file *f, const char *name, pd_frame_info *fi);

@@ -119,8 +119,90 @@ refused_by_run() {
         "'no-bonds.h5' has no damage data: no /bonds (run pd-bonds first)"
 }
 
+# refused_with_restart FILE MESSAGE: pd-run --restart too, on a copy,
+# with -o and in place: exit 1 with exactly this line, no output written
+# and the run left as it was.
+refused_with_restart() {
+    refused "$@" || return 1
+    local dir=$BATS_TEST_TMPDIR/restart
+    mkdir -p "$dir" && cp "$1" "$dir/" || return 1
+    (
+        cd "$dir" || exit 1
+        run --separate-stderr pd-run --restart "$1" --steps 1 -q -o r.h5
+        [ "$status" -eq 1 ] && [ "$stderr" = "pd-run: error: $2" ] && [ ! -e r.h5 ] ||
+            { echo "pd-run --restart -o: $status: $stderr"; exit 1; }
+        cmp "$1" "$FIXTURES/$1" || exit 1
+        run --separate-stderr pd-run --restart "$1" --steps 1 -q
+        [ "$status" -eq 1 ] && [ "$stderr" = "pd-run: error: $2" ] ||
+            { echo "pd-run --restart: $status: $stderr"; exit 1; }
+        cmp "$1" "$FIXTURES/$1" || exit 1
+        assert_no_temp .
+        [ "$(ls -A)" = "$1" ] || { echo "left behind: $(ls -A)"; exit 1; }
+    )
+}
+
 @test "a frame without its step" {
-    refused frame-no-step.h5 "'frame-no-step.h5': frame '00000001' has no step attribute"
+    refused_with_restart frame-no-step.h5 "'frame-no-step.h5': frame '00000001' has no step attribute"
+}
+
+# Frame attributes: for the complete frames in step order, steps are
+# non-negative and strictly increasing, times finite, non-decreasing and
+# step x dt (/scene dt) to 1e-9 relative.
+
+@test "a frame without its time" {
+    refused_with_restart frame-no-time.h5 "'frame-no-time.h5': frame '00000001' has no time attribute"
+}
+
+@test "a frame whose time is a string" {
+    refused_with_restart frame-time-string.h5 "'frame-time-string.h5': frame '00000001': attribute 'time' has the wrong type or shape"
+}
+
+@test "a frame whose time is NaN" {
+    refused_with_restart frame-time-nan.h5 "'frame-time-nan.h5': frame '00000001' has time nan; times must be finite"
+}
+
+@test "a frame whose time is +inf" {
+    refused_with_restart frame-time-inf.h5 "'frame-time-inf.h5': frame '00000001' has time inf; times must be finite"
+}
+
+@test "a frame with a negative step" {
+    refused_with_restart frame-step-negative.h5 "'frame-step-negative.h5': frame '00000001' has step -5; steps must be non-negative"
+}
+
+@test "two frames with the same step" {
+    refused_with_restart frame-step-duplicate.h5 "'frame-step-duplicate.h5': frame '00000001' has step 0, as frame '00000000' does; steps must be strictly increasing"
+}
+
+@test "a frame whose time is before the previous frame's" {
+    refused_with_restart frame-time-decreasing.h5 "'frame-time-decreasing.h5': frame '00000001' has time -0.001, before frame '00000000' (time 0); times must not decrease"
+}
+
+@test "a frame whose time is not step x dt" {
+    refused_with_restart frame-time-dt.h5 "'frame-time-dt.h5': frame '00000001' has time 0.0015, not step x dt = 1 x 0.001 = 0.001 (/scene dt)"
+}
+
+@test "a run whose /scene dt is NaN" {
+    refused_with_restart scene-dt-nan.h5 "'scene-dt-nan.h5': /scene has dt nan; dt must be positive and finite"
+}
+
+@test "frame times within the tolerance of step x dt are read; beyond it refused" {
+    cd "$BATS_TEST_TMPDIR"
+    # the valid run of the corpus: frame-time-dt.h5 with its time put back
+    for rel in 5e-10 -5e-10 2e-9; do
+        cp "$FIXTURES/frame-time-dt.h5" t.h5
+        py "
+with h5py.File(sys.argv[1], 'a') as f:
+    dt = f['scene'].attrs['dt']
+    f['frames/00000001'].attrs['time'] = dt * (1 + float(sys.argv[2]))" t.h5 $rel
+        if [ $rel = 2e-9 ]; then
+            run --separate-stderr pd-damage -n t.h5
+            [ "$status" -eq 1 ]
+            [[ "$stderr" == "pd-damage: error: 't.h5': frame '00000001' has time 0.001000000002, not step x dt = 1 x 0.001 = 0.001 (/scene dt)" ]]
+        else
+            run -0 pd-damage -n t.h5
+            run -0 pd-crack-tip t.h5
+        fi
+    done
 }
 
 @test "a frame whose state is too short" {

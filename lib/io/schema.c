@@ -800,6 +800,7 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
 
 typedef struct {
     int64_t step;
+    double time; /* s */
     char *name;
 } frame_entry;
 
@@ -819,15 +820,29 @@ static herr_t collect_frame(hid_t g, const char *name, const H5L_info_t *info, v
         fl->st = pd_fail(PD_ERR_FORMAT, "'%s': /frames/%s is not a group", fl->file, name);
         return 1;
     }
+    /* step, complete (when there), and of a complete frame its time; attr
+     * names the one that failed */
     int64_t step, complete = 1;
-    pd_status s = pd_h5_read_attr_int(fg, "step", &step);
-    if (s == PD_OK && pd_h5_has_attr(fg, "complete"))
-        s = pd_h5_read_attr_int(fg, "complete", &complete);
+    double time = 0;
+    const char *attr = "step";
+    pd_status s = pd_h5_read_attr_int(fg, attr, &step);
+    if (s == PD_OK && pd_h5_has_attr(fg, "complete")) {
+        attr = "complete";
+        s = pd_h5_read_attr_int(fg, attr, &complete);
+    }
+    if (s == PD_OK && complete == 1) {
+        attr = "time";
+        s = pd_h5_read_attr_double(fg, attr, &time);
+    }
+    const int missing = s != PD_OK && !pd_h5_has_attr(fg, attr);
     H5Gclose(fg);
     if (s == PD_OK && complete != 1)
         return 0; /* laid out, not (yet) written: not a frame */
     if (s != PD_OK) {
-        fl->st = pd_fail(PD_ERR_FORMAT, "'%s': frame '%s' has no step attribute", fl->file, name);
+        fl->st = missing ? pd_fail(PD_ERR_FORMAT, "'%s': frame '%s' has no %s attribute", fl->file,
+                                   name, attr)
+                         : pd_fail(PD_ERR_FORMAT, "'%s': frame '%s': %s", fl->file, name,
+                                   pd_errmsg());
         return 1;
     }
     if (fl->n == fl->cap) {
@@ -841,15 +856,71 @@ static herr_t collect_frame(hid_t g, const char *name, const H5L_info_t *info, v
         fl->cap = cap;
     }
     fl->v[fl->n].step = step;
-    fl->v[fl->n].name = strdup(name);
+    fl->v[fl->n].time = time;
+    if ((fl->v[fl->n].name = strdup(name)) == NULL) {
+        fl->st = pd_fail(PD_ERR_NOMEM, "out of memory listing frames");
+        return 1;
+    }
     fl->n++;
     return 0;
 }
 
+/* By step, then by name (so that of two frames with one step the same
+ * one is reported, whatever qsort does). */
 static int cmp_frame(const void *a, const void *b)
 {
     const frame_entry *x = a, *y = b;
-    return (x->step > y->step) - (x->step < y->step);
+    if (x->step != y->step)
+        return (x->step > y->step) - (x->step < y->step);
+    return strcmp(x->name, y->name);
+}
+
+/* How far a frame's time may lie from step x dt, relative to step x dt
+ * (to dt at step 0): pd-run writes (double)step * dt exactly; this leaves
+ * room for a time summed step by step over some 10^6 steps. */
+#define FRAME_TIME_RTOL 1e-9
+
+/* The rule of complete frames, in step order v[0..n): steps non-negative
+ * and strictly increasing, times finite, non-decreasing and step x dt
+ * (the /scene dt) to FRAME_TIME_RTOL. */
+static pd_status check_frames(const pd_file *f, const frame_entry *v, int64_t n)
+{
+    double dt;
+    if (!pd_h5_has_link(f->fid, "/scene"))
+        return pd_fail(PD_ERR_FORMAT, "'%s' has frames but no /scene (its dt)", f->name);
+    hid_t g = H5Gopen2(f->fid, "/scene", H5P_DEFAULT);
+    if (g < 0)
+        return pd_fail(PD_ERR_FORMAT, "'%s': /scene is not a group", f->name);
+    pd_status s = pd_h5_read_attr_double(g, "dt", &dt);
+    H5Gclose(g);
+    if (s != PD_OK)
+        return pd_fail(PD_ERR_FORMAT, "'%s': /scene: %s", f->name, pd_errmsg());
+    if (!(isfinite(dt) && dt > 0))
+        return pd_fail(PD_ERR_FORMAT, "'%s': /scene has dt %.10g; dt must be positive and finite",
+                       f->name, dt);
+    for (int64_t k = 0; k < n; k++) {
+        const frame_entry *e = &v[k], *prev = k ? &v[k - 1] : NULL;
+        const double want = (double)e->step * dt;
+        if (e->step < 0)
+            return pd_fail(PD_ERR_FORMAT, "'%s': frame '%s' has step %lld; steps must be "
+                           "non-negative", f->name, e->name, (long long)e->step);
+        if (prev && e->step <= prev->step)
+            return pd_fail(PD_ERR_FORMAT, "'%s': frame '%s' has step %lld, as frame '%s' does; "
+                           "steps must be strictly increasing", f->name, e->name,
+                           (long long)e->step, prev->name);
+        if (!isfinite(e->time))
+            return pd_fail(PD_ERR_FORMAT, "'%s': frame '%s' has time %g; times must be finite",
+                           f->name, e->name, e->time);
+        if (prev && e->time < prev->time)
+            return pd_fail(PD_ERR_FORMAT, "'%s': frame '%s' has time %.10g, before frame '%s' "
+                           "(time %.10g); times must not decrease", f->name, e->name, e->time,
+                           prev->name, prev->time);
+        if (!(fabs(e->time - want) <= FRAME_TIME_RTOL * (e->step > 0 ? want : dt)))
+            return pd_fail(PD_ERR_FORMAT, "'%s': frame '%s' has time %.10g, not step x dt = "
+                           "%lld x %.10g = %.10g (/scene dt)", f->name, e->name, e->time,
+                           (long long)e->step, dt, want);
+    }
+    return PD_OK;
 }
 
 pd_status pd_list_frames(const pd_file *f, int64_t *nframes, char ***names)
@@ -874,12 +945,13 @@ pd_status pd_list_frames(const pd_file *f, int64_t *nframes, char ***names)
         return PD_OK;
     }
     qsort(fl.v, (size_t)fl.n, sizeof *fl.v, cmp_frame);
-    char **out = malloc((size_t)fl.n * sizeof *out);
+    pd_status s = check_frames(f, fl.v, fl.n);
+    char **out = s == PD_OK ? malloc((size_t)fl.n * sizeof *out) : NULL;
     if (out == NULL) {
         for (int64_t k = 0; k < fl.n; k++)
             free(fl.v[k].name);
         free(fl.v);
-        return pd_fail(PD_ERR_NOMEM, "out of memory");
+        return s == PD_OK ? pd_fail(PD_ERR_NOMEM, "out of memory") : s;
     }
     for (int64_t k = 0; k < fl.n; k++)
         out[k] = fl.v[k].name;
