@@ -814,173 +814,150 @@ static void release(struct held *h)
         free_bc(h->opts);
 }
 
-int main(int argc, char **argv)
+/* The options: the scene file's (or a restart's run's) first, then the
+ * command line's.  Returns 0 or the exit status. */
+static int options(int argc, char **argv, struct options *o)
 {
-    pd_h5_debug(0); /* before any file is opened (a --restart reads its scene) */
-    struct held h;
-    memset(&h, 0, sizeof h);
-    h.cmdline = pd_join_argv(argc, argv);
     int nargc = 0;
     char **nargv = NULL;
+    memset(o, 0, sizeof *o);
     int rc = expand_scene(argc, argv, &nargc, &nargv);
-    if (rc) {
-        free(h.cmdline);
+    if (rc)
         return rc;
-    }
-    struct options o;
-    rc = parse_options(nargc, nargv, &o);
+    rc = parse_options(nargc, nargv, o);
     free(nargv);
-    if (rc == 0 && o.restart) { /* the steps to add must be said */
+    if (rc == 0 && o->restart) { /* the steps to add must be said */
         int given = 0;
         for (int k = 1; k < argc; k++)
             given |= strcmp(argv[k], "--steps") == 0 || strncmp(argv[k], "--steps=", 8) == 0;
         if (!given)
             rc = usage_error("--restart needs --steps N, the steps to add", NULL);
     }
-    if (rc) {
-        free_bc(&o);
-        free(h.cmdline);
-        return rc;
-    }
-    h.opts = &o;
-    pd_h5_debug(o.debug);
-    remove_temps_on_signal();
-    if (o.spec.sc.threads > 0)
-        omp_set_num_threads(o.spec.sc.threads);
-    o.spec.sc.threads = omp_get_max_threads();
-    const int restart = o.restart != NULL;
+    return rc;
+}
 
-    /* a restart updates the run (through a copy renamed over it) */
-    pd_status s = restart ? pd_file_update(o.restart, o.output, &h.in)
-                          : pd_file_open(o.input, &h.in);
-    if (s == PD_OK)
-        s = pd_read_particles(h.in, &h.p);
-    if (s == PD_OK)
-        s = pd_read_bonds(h.in, h.p, &h.b);
-    if (s == PD_OK)
-        s = pd_read_sets(h.in, h.p, &h.sets);
-    if (s != PD_OK) {
-        if (restart)
-            pd_file_abort(h.in);
-        else
-            pd_file_close(h.in);
-        h.in = NULL;
-        release(&h);
-        return fail();
-    }
-    pd_particles *p = h.p;
-    pd_bonds *b = h.b;
-    pd_scene *sc = &o.spec.sc;
-    sc->nbc = o.nbc;
-    sc->bc = o.bc;
-    sc->sets = h.sets;
-    if (pd_scene_resolve(&o.spec, p, b, o.input) != PD_OK) {
-        if (restart)
-            pd_file_abort(h.in), h.in = NULL;
-        release(&h);
-        return fail();
-    }
-    int64_t first = 0; /* the step the run starts from */
-    if (restart) {
-        s = pd_run_file_load(h.in, p, b, &first, &h.r, h.v0, &h.bits0);
-        sc->steps += first; /* --steps N more */
-    }
-    int64_t nsteps = sc->steps - first;
-    int64_t status_every = o.has_status ? o.status_every : (nsteps >= 10 ? nsteps / 10 : 1);
-
-    if (s == PD_OK)
-        s = pd_sim_new(p, b, sc, &h.sim);
-    if (s == PD_OK && restart)
-        s = pd_sim_restore(h.sim, first, &h.r, h.v0, h.bits0);
-    h.text = pd_scene_text(sc);
-    if (s == PD_OK && restart)
-        h.out = h.in; /* the same file goes on */
-    else if (s == PD_OK)
-        s = pd_file_create(o.output, &h.out);
-    if (s == PD_OK)
-        s = pd_run_file_start(h.out, restart ? NULL : h.in, p, b, h.sets, sc,
-                              pd_sim_effects(h.sim), h.cmdline ? h.cmdline : PROG,
-                              h.text ? h.text : "", first);
-    if (!restart) {
-        pd_file_close(h.in);
-        h.in = NULL;
-    }
-    if (s != PD_OK) {
-        pd_file_abort(h.out ? h.out : h.in); /* h.in: a restart's copy */
-        h.in = h.out = NULL;
-        release(&h);
-        return fail();
-    }
-    pd_sim *sim = h.sim;
-    pd_file *out = h.out;
-    int tty = isatty(STDERR_FILENO) && !o.quiet;
-    if (!o.quiet)
-        fprintf(stderr,
-                PROG ": %lld particles, %lld bonds; effects: %s\n" PROG
-                     ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
-                (long long)p->n, (long long)(b->count / 2), pd_sim_effects(sim), sc->dt,
-                sc->dt_stable, (long long)nsteps, restart ? " more" : "");
-    if (!o.quiet && pd_sim_stencil(sim) > 0)
+/* The log of the run's set-up: sizes, effects, dt, the kernel, the
+ * constants and where they come from, the boundary conditions. */
+static void log_scene(const struct options *o, const struct held *h, int64_t first,
+                      int64_t nsteps)
+{
+    const pd_particles *p = h->p;
+    const pd_scene *sc = &o->spec.sc;
+    const pd_sim *sim = h->sim;
+    fprintf(stderr,
+            PROG ": %lld particles, %lld bonds; effects: %s\n" PROG
+                 ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
+            (long long)p->n, (long long)(h->b->count / 2), pd_sim_effects(sim), sc->dt,
+            sc->dt_stable, (long long)nsteps, o->restart ? " more" : "");
+    if (pd_sim_stencil(sim) > 0)
         fprintf(stderr, PROG ": bonds walked as a lattice stencil of %d offsets%s%s\n",
                 pd_sim_stencil(sim), pd_sim_stencil_tiles(sim) ? " in AVX-512 tiles" : "",
                 sc->has_contact ? ", with the contact of its pairs" : "");
-    if (!o.quiet)
-        log_constants(p, sc, &o);
-    for (int k = 0; k < o.nbc && !o.quiet; k++) {
-        const pd_set *set = pd_sets_find(h.sets, o.bc[k].set);
-        char *prof = pd_profile_text(&o.bc[k].profile);
+    log_constants(p, sc, o);
+    for (int k = 0; k < o->nbc; k++) {
+        const pd_set *set = pd_sets_find(h->sets, o->bc[k].set);
+        char *prof = pd_profile_text(&o->bc[k].profile);
         fprintf(stderr, PROG ": --%s %s,%c,%s on %lld particles (%s)\n",
-                pd_bc_option(o.bc[k].kind), o.bc[k].set, 'x' + o.bc[k].axis,
+                pd_bc_option(o->bc[k].kind), o->bc[k].set, 'x' + o->bc[k].axis,
                 prof ? prof : "?", (long long)(set ? set->n : 0),
-                o.bc[k].kind == PD_BC_VELOCITY       ? "velocity held, m/s"
-                : o.bc[k].kind == PD_BC_DISPLACEMENT ? "displacement held, m"
-                                                     : "force density, N/m^3");
+                o->bc[k].kind == PD_BC_VELOCITY       ? "velocity held, m/s"
+                : o->bc[k].kind == PD_BC_DISPLACEMENT ? "displacement held, m"
+                                                      : "force density, N/m^3");
         free(prof);
     }
-    if (!o.quiet && sc->model == PD_MODEL_LPS)
-        fprintf(stderr,
-                PROG ": model lps (seed 000 eqs. 3-4, Algorithms 2-4): K %g Pa, G %g Pa, "
-                     "influence %s; contact stiffness from c = 18K/(pi delta^4)\n",
-                sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence));
-    if (!o.quiet && sc->nellipsoids > 0)
+    char text[512];
+    if (pd_model_describe(pd_model_of(sc->model), sc, text, sizeof text))
+        fprintf(stderr, PROG ": %s\n", text);
+    if (sc->nellipsoids > 0)
         fprintf(stderr, PROG ": anisotropic influence (seed 002 eq. 13): omega times the largest "
                              "distance to %d ellipsoid%s\n",
                 sc->nellipsoids, sc->nellipsoids > 1 ? "s" : "");
-    if (!o.quiet && sc->model == PD_MODEL_VES)
-        fprintf(stderr,
-                PROG ": model ves (Mitchell SAND2011-8064, as LAMMPS peri/ves): K %g Pa, G %g "
-                     "Pa, influence %s, lambda %g, tau %g s; contact stiffness from c = "
-                     "18K/(pi delta^4)\n",
-                sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence),
-                sc->ves_lambda, sc->ves_tau);
-    if (!o.quiet && sc->model == PD_MODEL_EPS)
-        fprintf(stderr,
-                PROG ": model eps (Mitchell SAND2011-3166, a corrected plastic update; see "
-                     "pd-run(1)): K %g Pa, G %g Pa, influence %s, yield stress %g Pa; contact "
-                     "stiffness from c = 18K/(pi delta^4)\n",
-                sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence),
-                sc->yield_stress);
-    if (!o.quiet && sc->has_projectile && !restart)
+    if (sc->has_projectile && !o->restart)
         fprintf(stderr,
                 PROG ": projectile: mass %g kg, radius %g m, stiffness K %.6g N/m^5%s\n",
                 sc->proj_mass, sc->proj_radius, sc->proj_k,
-                o.spec.has_proj_k ? "" : " (default: 2 K p = the largest bond stiffness sum of "
-                                    "seed 004 eq. 46 at p = spacing/4)");
-    if (!o.quiet && restart)
-        fprintf(stderr, PROG ": going on from step %lld of '%s'\n", (long long)first, o.restart);
+                o->spec.has_proj_k ? "" : " (default: 2 K p = the largest bond stiffness sum of "
+                                          "seed 004 eq. 46 at p = spacing/4)");
+    if (o->restart)
+        fprintf(stderr, PROG ": going on from step %lld of '%s'\n", (long long)first, o->restart);
+}
 
-    double t_output = 0, t_start = pd_wtime(), t_shown = 0;
+/* Read the body (a restart: the run and its last frame), resolve the
+ * scene, set up the run and its file (published before the first step).
+ * Returns 0, or the exit status after printing the error. */
+static int start(struct options *o, struct held *h, int64_t *first)
+{
+    const int restart = o->restart != NULL;
+    /* a restart updates the run (through a copy renamed over it) */
+    pd_status s = restart ? pd_file_update(o->restart, o->output, &h->in)
+                          : pd_file_open(o->input, &h->in);
+    if (s == PD_OK)
+        s = pd_read_particles(h->in, &h->p);
+    if (s == PD_OK)
+        s = pd_read_bonds(h->in, h->p, &h->b);
+    if (s == PD_OK)
+        s = pd_read_sets(h->in, h->p, &h->sets);
+    pd_scene *sc = &o->spec.sc;
+    sc->nbc = o->nbc;
+    sc->bc = o->bc;
+    sc->sets = h->sets;
+    if (s == PD_OK)
+        s = pd_scene_resolve(&o->spec, h->p, h->b, o->input);
+    if (s == PD_OK && restart) {
+        s = pd_run_file_load(h->in, h->p, h->b, first, &h->r, h->v0, &h->bits0);
+        sc->steps += *first; /* --steps N more */
+    }
+    if (s == PD_OK)
+        s = pd_sim_new(h->p, h->b, sc, &h->sim);
+    if (s == PD_OK && restart)
+        s = pd_sim_restore(h->sim, *first, &h->r, h->v0, h->bits0);
+    if (s == PD_OK && (h->text = pd_scene_text(sc)) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the scene's text");
+    if (s == PD_OK && restart)
+        h->out = h->in; /* the same file goes on */
+    else if (s == PD_OK)
+        s = pd_file_create(o->output, &h->out);
+    if (s == PD_OK)
+        s = pd_run_file_start(h->out, restart ? NULL : h->in, h->p, h->b, h->sets, sc,
+                              pd_sim_effects(h->sim), h->cmdline ? h->cmdline : PROG, h->text,
+                              *first);
     if (!restart) {
+        pd_file_close(h->in);
+        h->in = NULL;
+    }
+    if (s != PD_OK) {
+        if (h->out)
+            pd_file_abort(h->out);
+        else if (h->in) /* a restart's copy */
+            pd_file_abort(h->in);
+        h->in = h->out = NULL;
+        return fail();
+    }
+    return 0;
+}
+
+/* The steps from first + 1, with frames, status lines and the progress
+ * bar; the file stays open. */
+static pd_status run_steps(const struct options *o, struct held *h, int64_t first, double *t_output)
+{
+    const pd_scene *sc = &o->spec.sc;
+    pd_sim *sim = h->sim;
+    const int64_t nsteps = sc->steps - first;
+    const int64_t status_every = o->has_status ? o->status_every : (nsteps >= 10 ? nsteps / 10 : 1);
+    const int tty = isatty(STDERR_FILENO) && !o->quiet;
+    double t_start = pd_wtime(), t_shown = 0;
+    pd_status s = PD_OK;
+    if (!o->restart) {
         s = pd_sim_setup(sim);
         if (s == PD_OK && sc->every > 0)
-            s = timed_frame(out, p, b, sim, sc->fields, &t_output, NULL);
+            s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, NULL);
     }
     int64_t lost = pd_sim_lost(sim);
     for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
         s = pd_sim_step(sim);
         if (s != PD_OK)
             break;
-        if (lost == 0 && pd_sim_lost(sim) > 0 && !o.quiet) /* the first; then counts */
+        if (lost == 0 && pd_sim_lost(sim) > 0 && !o->quiet) /* the first; then counts */
             fprintf(stderr,
                     "%s" PROG ": step %lld: %lld particles lost (farther than %g m outside the "
                     "body's box): their bonds broken, at rest from now on\n",
@@ -992,13 +969,13 @@ int main(int argc, char **argv)
         pd_energy e;
         int known = 0;
         if ((sc->every > 0 && n % sc->every == 0) || n == sc->steps) {
-            s = timed_frame(out, p, b, sim, sc->fields, &t_output, &e);
+            s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, &e);
             known = s == PD_OK;
         }
-        if (((n - first) % status_every == 0 || n == sc->steps) && !o.quiet) {
+        if (((n - first) % status_every == 0 || n == sc->steps) && !o->quiet) {
             double t0 = pd_wtime(); /* its energy pass is output's time */
             status_line(sim, sc->steps, tty, known ? &e : NULL);
-            t_output += pd_wtime() - t0;
+            *t_output += pd_wtime() - t0;
         }
         if (tty) {
             double now = pd_wtime();
@@ -1008,28 +985,64 @@ int main(int argc, char **argv)
             }
         }
     }
-    if (s == PD_OK && !restart && sc->steps == 0 && sc->every == 0)
-        s = timed_frame(out, p, b, sim, sc->fields, &t_output, NULL);
-    double wall = pd_wtime() - t_start;
+    if (s == PD_OK && !o->restart && sc->steps == 0 && sc->every == 0)
+        s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, NULL);
     if (tty)
         fputc('\n', stderr);
-    if (s == PD_OK) {
-        s = pd_file_close(out);
-    } else if (s == PD_ERR_UNSTABLE) {
-        /* a run that went non-finite keeps the frames written before */
-        pd_status c = pd_file_close(out);
+    return s;
+}
+
+/* Close the run file: a run that went non-finite keeps the frames written
+ * before; any other failure leaves nothing under the final name. */
+static pd_status finish(struct held *h, pd_status s)
+{
+    if (s == PD_OK || s == PD_ERR_UNSTABLE) {
+        pd_status c = pd_file_close(h->out);
         if (c != PD_OK)
             s = c;
     } else
-        pd_file_abort(out);
-    h.in = h.out = NULL;
+        pd_file_abort(h->out);
+    h->in = h->out = NULL;
+    return s;
+}
+
+int main(int argc, char **argv)
+{
+    pd_h5_debug(0); /* before any file is opened (a --restart reads its scene) */
+    struct held h;
+    memset(&h, 0, sizeof h);
+    struct options o;
+    h.cmdline = pd_join_argv(argc, argv);
+    h.opts = &o;
+    int rc = options(argc, argv, &o);
+    if (rc) {
+        release(&h);
+        return rc;
+    }
+    pd_h5_debug(o.debug);
+    remove_temps_on_signal();
+    if (o.spec.sc.threads > 0)
+        omp_set_num_threads(o.spec.sc.threads);
+    o.spec.sc.threads = omp_get_max_threads();
+    int64_t first = 0; /* the step the run starts from */
+    if ((rc = start(&o, &h, &first))) {
+        release(&h);
+        return rc;
+    }
+    const int64_t nsteps = o.spec.sc.steps - first;
+    if (!o.quiet)
+        log_scene(&o, &h, first, nsteps);
+    double t_output = 0, t0 = pd_wtime();
+    pd_status s = run_steps(&o, &h, first, &t_output);
+    const double wall = pd_wtime() - t0;
+    s = finish(&h, s);
     if (s == PD_OK && !o.quiet)
         fprintf(stderr, PROG ": %lld steps in %.3f s (%.3g bond updates/s), contact list builds %lld\n",
                 (long long)nsteps, wall,
-                wall > 0 ? (double)b->count * (double)nsteps / wall : 0.0,
-                (long long)pd_sim_contact_builds(sim));
+                wall > 0 ? (double)h.b->count * (double)nsteps / wall : 0.0,
+                (long long)pd_sim_contact_builds(h.sim));
     if (s == PD_OK && o.timing)
-        print_timing(sim, wall, t_output);
+        print_timing(h.sim, wall, t_output);
     release(&h);
     return s == PD_OK ? 0 : fail();
 }

@@ -362,6 +362,10 @@ typedef struct {
     double yield_stress;   /* EPS: the yield stress Y, Pa                  */
 } pd_scene;
 
+/* A line on the model and the scene's constants of it for a run's log,
+ * into text (len bytes); 0 when it has nothing to say. */
+int pd_model_describe(const pd_model *m, const pd_scene *s, char *text, size_t len);
+
 /* ---------------------------------------------------------------- run */
 
 typedef struct pd_sim pd_sim;

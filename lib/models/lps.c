@@ -1040,18 +1040,47 @@ static const pd_model_param ves_params[] = {
 static const pd_model_param eps_params[] = {
     {"yield-stress", "yield_stress", offsetof(pd_scene, yield_stress)}, {NULL, NULL, 0}};
 
+static void lps_describe(const pd_scene *sc, char *text, size_t len)
+{
+    snprintf(text, len,
+             "model lps (seed 000 eqs. 3-4, Algorithms 2-4): K %g Pa, G %g Pa, influence %s; "
+             "contact stiffness from c = 18K/(pi delta^4)",
+             sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence));
+}
+
+static void ves_describe(const pd_scene *sc, char *text, size_t len)
+{
+    snprintf(text, len,
+             "model ves (Mitchell SAND2011-8064, as LAMMPS peri/ves): K %g Pa, G %g Pa, "
+             "influence %s, lambda %g, tau %g s; contact stiffness from c = 18K/(pi delta^4)",
+             sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence),
+             sc->ves_lambda, sc->ves_tau);
+}
+
+static void eps_describe(const pd_scene *sc, char *text, size_t len)
+{
+    snprintf(text, len,
+             "model eps (Mitchell SAND2011-3166, a corrected plastic update; see pd-run(1)): K "
+             "%g Pa, G %g Pa, influence %s, yield stress %g Pa; contact stiffness from c = "
+             "18K/(pi delta^4)",
+             sc->bulk_modulus, sc->shear_modulus, pd_influence_name(sc->influence),
+             sc->yield_stress);
+}
+
 const pd_model pd_model_lps = {
     .name = "lps", .kind = PD_MODEL_LPS, .state_based = 1, .force = &pd_effect_lps,
     .force_failure = &pd_effect_lps_failure, .stable_dt = pd_lps_stable_dt,
     .stencil = lps_stencil, .needs = lps_needs, .takes = lps_takes,
-    .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS};
+    .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .describe = lps_describe};
 const pd_model pd_model_ves = {
     .name = "ves", .kind = PD_MODEL_VES, .state_based = 1, .force = &pd_effect_ves,
     .force_failure = &pd_effect_ves_failure, .stable_dt = pd_lps_stable_dt,
     .stencil = no_stencil, .history_width = 2, .needs = ves_needs, .takes = lps_takes,
-    .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .params = ves_params};
+    .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .params = ves_params,
+    .describe = ves_describe};
 const pd_model pd_model_eps = {
     .name = "eps", .kind = PD_MODEL_EPS, .state_based = 1, .force = &pd_effect_eps,
     .force_failure = &pd_effect_eps_failure, .stable_dt = pd_lps_stable_dt,
     .stencil = no_stencil, .history_width = 1, .needs = eps_needs, .takes = lps_takes,
-    .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .params = eps_params};
+    .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .params = eps_params,
+    .describe = eps_describe};

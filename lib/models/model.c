@@ -51,6 +51,14 @@ int pd_model_history_width(const pd_model *m)
     return m->history_width;
 }
 
+int pd_model_describe(const pd_model *m, const pd_scene *s, char *text, size_t len)
+{
+    if (m->describe == NULL || len == 0)
+        return 0;
+    m->describe(s, text, len);
+    return 1;
+}
+
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
 {
     return pd_model_of(s->model)->stable_dt(p, b, s);

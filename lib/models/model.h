@@ -42,6 +42,9 @@ struct pd_model {
     unsigned fields;         /* the PD_FIELD_* it can write into frames      */
     const pd_model_param *params; /* its own numbers (option, attribute),
                                      ended by a NULL option; NULL: none    */
+    /* One line on the model and its constants for a run's log (NULL:
+     * nothing to say beyond the moduli). */
+    void (*describe)(const pd_scene *s, char *text, size_t len);
 };
 
 /* The models' descriptors (their files) and the table over them. */
