@@ -918,9 +918,9 @@ static int start(struct options *o, struct held *h, int64_t *first)
     else if (s == PD_OK)
         s = pd_file_create(o->output, &h->out);
     if (s == PD_OK)
-        s = pd_run_file_start(h->out, restart ? NULL : h->in, h->p, h->b, h->sets, sc,
-                              pd_sim_effects(h->sim), h->cmdline ? h->cmdline : PROG, h->text,
-                              *first);
+        s = pd_run_file_start(h->out, restart, h->in, h->p, h->b, h->sets, sc,
+                              pd_sim_effects(h->sim), h->cmdline ? h->cmdline : PROG,
+                              h->text, *first);
     if (!restart) {
         pd_file_close(h->in);
         h->in = NULL;

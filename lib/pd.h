@@ -828,17 +828,17 @@ pd_status pd_plan_restart_projectile(pd_file *f);
  * directed bonds, in both restart slots (nothing when it is there). */
 pd_status pd_plan_restart_history(pd_file *f, int64_t nbonds, int width);
 void pd_restart_free(pd_restart *r);
-/* A run's file (lib/io/runfile.c).  Start it: a new run (from: the model
- * file it reads, for the header's history) gets the header, the particles,
- * bonds and sets, the scene (`effects`, the scene's text) and every frame
- * and restart slot laid out (frames from step 0); a restart (from NULL:
- * `out` is the run file itself, updated through a copy) drops unfinished
- * frames, appends `cmdline` to the history and lays out the frames after
- * step `first`.  Then the file is published. */
-pd_status pd_run_file_start(pd_file *out, const pd_file *from, const pd_particles *p,
-                            const pd_bonds *b, const pd_sets *sets, const pd_scene *sc,
-                            const char *effects, const char *cmdline, const char *text,
-                            int64_t first);
+/* A run's file (lib/io/runfile.c).  Start it: a new run gets the header
+ * (its history from `from`, the model file it read, or none when NULL),
+ * the particles, bonds and sets, the scene (`effects`, the scene's text)
+ * and every frame and restart slot laid out (frames from step 0); a
+ * `restart` (`out` is the run file itself, updated through a copy) drops
+ * unfinished frames, appends `cmdline` to the history and lays out the
+ * frames after step `first`.  Then the file is published. */
+pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
+                            const pd_particles *p, const pd_bonds *b, const pd_sets *sets,
+                            const pd_scene *sc, const char *effects, const char *cmdline,
+                            const char *text, int64_t first);
 /* The state at the last complete frame of a run: its step, the restart
  * slot (pd_restart_free), the frame's velocities and bond states
  * (malloc'ed), for pd_sim_restore. */

@@ -71,13 +71,13 @@ pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b,
 }
 
 
-pd_status pd_run_file_start(pd_file *out, const pd_file *from, const pd_particles *p,
-                            const pd_bonds *b, const pd_sets *sets, const pd_scene *sc,
-                            const char *effects, const char *cmdline, const char *text,
-                            int64_t first)
+pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
+                            const pd_particles *p, const pd_bonds *b, const pd_sets *sets,
+                            const pd_scene *sc, const char *effects, const char *cmdline,
+                            const char *text, int64_t first)
 {
     pd_status s;
-    if (from == NULL) {
+    if (restart) {
         /* the same file goes on: unfinished frames out, the scene and the
          * history say what was added */
         s = pd_drop_incomplete_frames(out);
@@ -98,7 +98,7 @@ pd_status pd_run_file_start(pd_file *out, const pd_file *from, const pd_particle
      * killed at any moment leaves it readable with its complete frames */
     if (s == PD_OK)
         s = plan_frames(out, p, b, sc, sc->fields | (sc->has_projectile ? PD_FRAME_PROJECTILE : 0),
-                        first, from != NULL);
+                        first, !restart);
     if (s == PD_OK)
         s = pd_plan_restart(out, p->n, sc->has_failure, sc->has_contact);
     if (s == PD_OK && sc->has_projectile)
