@@ -88,6 +88,8 @@ void pd_grid_free(pd_grid *G)
     free(G->dc);
     free(G->nu);
     free(G->omega);
+    free(G->theta_m);
+    free(G->inv_m);
     free(G->lookup);
     for (int d = 0; d < 3; d++) {
         free(G->lc[d]);
@@ -223,7 +225,7 @@ static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
                 G->off[k][a] = d[a];
             G->len[k] = len[q];
             G->inv_len[k] = 1.0 / len[q];
-            G->w[k] = nu[q]; /* times c V below */
+            G->nu[k] = nu[q]; /* w = c V nu below, with the volume */
             G->dc[k] = fmin(PD_CONTACT_REF_FRAC * len[q], PD_CONTACT_RADIUS_FAC * 2.0 * p->radius[0]);
             k++;
         }
@@ -512,8 +514,7 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
         ok = G->omega ? ok : -1;
         for (int k = 0; k < G->nk && ok > 0; k++) {
             G->omega[k] = pd_lps_influence(sc->influence, G->len[k], b->horizon);
-            G->nu[k] = G->w[k];
-            G->w[k] = sc->c * V * G->w[k]; /* c V nu, as pd_half_weights */
+            G->w[k] = sc->c * V * G->nu[k]; /* c V nu, as pd_half_weights */
         }
         G->kc = PD_CONTACT_SCALE * sc->c / b->horizon * V;
         size_t words = (size_t)n * G->words;
@@ -524,10 +525,10 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
         G->released = calloc((size_t)G->nblocks, sizeof(double));
         if (!G->mask || (sc->has_contact && !G->cmask) || !G->breaks || !G->released)
             ok = -1;
-        if (lps && ok > 0) { /* a = theta/m and b = 1/m of pd_grid_lps */
-            G->y[0] = malloc((size_t)n * sizeof(double));
-            G->y[1] = malloc((size_t)n * sizeof(double));
-            ok = G->y[0] && G->y[1] ? ok : -1;
+        if (lps && ok > 0) { /* theta/m and 1/m of pd_grid_lps */
+            G->theta_m = malloc((size_t)n * sizeof(double));
+            G->inv_m = malloc((size_t)n * sizeof(double));
+            ok = G->theta_m && G->inv_m ? ok : -1;
         }
         if (G->perm && ok > 0) {
             for (int d = 0; d < 3; d++) {

@@ -34,6 +34,12 @@
 #define GRID_SAFE 16     /* shifts below this take the two-pass loop      */
 #define GRID_TILE 16     /* particles of a tile (runs at least this long) */
 
+/* Units: lengths in m, volumes in m^3, c in N/m^6 (seed 000's micromodulus),
+ * force densities in N/m^3; "grid index" g is a particle's place in grid
+ * order (pd_grid.perm maps it to the particle's index i in the file). */
+
+/* A segment: the bonds at offset k of the particles g in [lo, hi), each
+ * with the partner g + shift (grid indices). */
 typedef struct {
     int64_t lo, hi; /* first particles g of the segment, grid order      */
     int64_t shift;  /* partner g + shift                                  */
@@ -43,41 +49,68 @@ typedef struct {
 /* A run: particles [start, start + len) consecutive along the inner axis,
  * whose segments are seg[seg0, next run's seg0). */
 typedef struct {
-    int64_t start, len, seg0;
+    int64_t start;  /* grid index of its first particle                   */
+    int64_t len;    /* its particles                                      */
+    int64_t seg0;   /* its first segment                                  */
 } grid_run;
 
+/* The bonds a block broke in this step (grid indices, in the order found). */
 typedef struct {
-    int64_t n, cap;
+    int64_t n, cap; /* entries used, allocated                            */
     int64_t *g;     /* grid index of the first end                        */
     int32_t *k;     /* offset                                             */
     int64_t *j;     /* grid index of the partner                          */
 } grid_breaks;
 
 struct pd_grid {
-    int64_t n;
-    int nk, words;       /* half-stencil offsets, mask words per particle  */
-    int reach;           /* largest |d| component of the stencil           */
-    int (*off)[3];       /* nk offsets, (inner, mid, outer)                */
-    double *len, *inv_len, *w, *dc;
-    double *nu, *omega;  /* per offset: nu, and LPS's omega(|xi|)         */
+    int64_t n;           /* particles                                      */
+    int nk;              /* half-stencil offsets k                         */
+    int words;           /* 64-bit mask words per particle, (nk + 63) / 64 */
+    int reach;           /* largest |d| component of the stencil, lattice
+                            spacings                                       */
+    int (*off)[3];       /* nk offsets d, (inner, mid, outer), spacings    */
+    /* per offset k (nk each): */
+    double *len;         /* reference bond length |xi_k|, m                */
+    double *inv_len;     /* 1 / |xi_k|, 1/m                                */
+    double *nu;          /* partial-volume factor nu_k, dimensionless      */
+    double *w;           /* c V nu_k (as pd_half_weights): force density
+                            per unit stretch, N/m^3                        */
+    double *dc;          /* contact distance d_k = min(0.9 |xi_k|,
+                            1.35 (r + r)), m (seed 000 eq. 15)             */
+    double *omega;       /* LPS's influence omega(|xi_k|), omega's unit
+                            (pd_lps_influence: 1, 1/m or dimensionless)    */
     int16_t *lookup;     /* (2 reach + 1)^3: k for d, -1 - k for -d, or
                             INT16_MIN: not a stencil offset                */
     int axis[3];         /* inner, mid, outer: 0, 1, 2 for x, y, z         */
-    int32_t *lc[3];      /* lattice coordinates of particle i (sim order)  */
+    int32_t *lc[3];      /* lattice coordinates of particle i (sim order),
+                            spacings                                       */
     int64_t *perm;       /* g -> i, NULL when grid order is sim order      */
-    uint64_t *mask;      /* words per particle: bond intact                */
-    uint64_t *cmask;     /* words per particle: contact pair (NULL: none)  */
-    grid_seg *seg;
-    int64_t nseg;
+    uint64_t *mask;      /* words per particle (grid order): bit k set
+                            while the bond at offset k is intact           */
+    uint64_t *cmask;     /* words per particle: bit k set for a contact
+                            pair at offset k (NULL: no contact)            */
+    grid_seg *seg;       /* the segments, run by run (tile order within)   */
+    int64_t nseg;        /* segments                                       */
     grid_run *run;       /* the runs and a last one with start n, seg0 nseg */
-    int64_t nblocks;
-    int64_t *block_run;  /* nblocks + 1                                    */
+    int64_t nblocks;     /* blocks of outer planes                         */
+    int64_t *block_run;  /* nblocks + 1: block b holds the runs
+                            [block_run[b], block_run[b + 1])               */
     double *block_at;    /* nblocks: where a block's middle particle falls
                             among those of its parity, in [0, 1)           */
-    grid_breaks *breaks; /* per block                                      */
-    double *released;    /* per block                                      */
-    double kc;           /* (c_S / delta) V: contact force per overlap     */
-    double *y[3], *f[3], *s0, *s0n; /* grid-order copies (perm only)       */
+    grid_breaks *breaks; /* per block: the bonds broken this step          */
+    double *released;    /* per block: their elastic energy, J             */
+    double kc;           /* (c_S / delta) V: contact force density per
+                            metre of overlap, N/m^4 (seed 000 eq. 14)      */
+    /* grid-order copies, through perm only (PMB; NULL in lattice order): */
+    double *y[3];        /* positions, m                                   */
+    double *f[3];        /* force densities, N/m^3                         */
+    double *s0;          /* critical stretch of the previous step          */
+    double *s0n;         /* new critical stretch, being computed           */
+    /* LPS's per-particle factors of the pair force (pd_grid_lps; lattice
+     * order, NULL for PMB), m the weighted volume (m^5 times omega's unit,
+     * lib/models/lps.c): */
+    double *theta_m;     /* theta_i / m_i, 1/m^5 over omega's unit         */
+    double *inv_m;       /* 1 / m_i, 1/m^5 over omega's unit               */
     uint64_t epoch;      /* of the half bonds the masks were built from    */
     int tile;            /* PMB walks runs as tiles (AVX-512)              */
     const double *s0n_ready; /* the s0 array the last step's end filled with

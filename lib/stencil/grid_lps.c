@@ -55,9 +55,10 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
 
 /* The pair force of bond g-j (Algorithm 2), its force on g and -it on j,
  * and with failure the test and the new s0 of both ends (as seg_bonds).
- * With a = theta/m and b = 1/m of each particle (computed once a step) and
- * per offset c1 = (3K - 5G) V nu omega |xi| and c2 = 15 G V nu omega,
- *   t = c1 (a_g + a_j) + c2 (b_g + b_j) e,
+ * With ta = theta/m and tb = 1/m of each particle (pd_grid.theta_m and
+ * inv_m, computed once a step) and per offset c1 = (3K - 5G) V nu omega
+ * |xi| and c2 = 15 G V nu omega,
+ *   t = c1 (ta_g + ta_j) + c2 (tb_g + tb_j) e,
  * force_row's t with its products regrouped (equal to rounding). */
 #define GRID_LPS_BODY                                                                          \
     do {                                                                                       \
@@ -133,7 +134,7 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
 GRID_LPS_BLOCK(lps_force_block_0, 0)
 GRID_LPS_BLOCK(lps_force_block_1, 1)
 
-pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, int failure,
+pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode failure,
                       void (*mark)(void *ctx, int64_t i, int64_t j), void *ctx)
 {
     pd_grid *G = sim->grid;
@@ -144,7 +145,7 @@ pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, int failure,
             return G->status;
     }
     const double V = sim->p->volume[0];
-    const double dil = (3.0 * sim->sc.bulk_modulus) - (5.0 * sim->sc.shear_modulus);
+    const double dil = PD_LPS_PAIR_FACTOR(sim->sc.bulk_modulus, sim->sc.shear_modulus);
     grid_arrays A = {.y0 = sim->y[0], .y1 = sim->y[1], .y2 = sim->y[2], .f0 = sim->f[0],
                      .f1 = sim->f[1], .f2 = sim->f[2], .s0 = sim->s0, .s0n = sim->s0_new,
                      .s00 = sim->sc.s00, .alpha = sim->sc.alpha};
@@ -158,10 +159,10 @@ pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, int failure,
             if (grid_mine(G, blk))
                 lps_theta_block(G, blk, &A, theta, V);
     }
-    double *ta = G->y[0], *tb = G->y[1]; /* scratch of the lattice order */
+    double *ta = G->theta_m, *tb = G->inv_m;
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++) {
-        theta[i] = m[i] != 0.0 ? (3.0 / m[i]) * theta[i] : 0.0;
+        theta[i] = m[i] != 0.0 ? (PD_LPS_DILATATION / m[i]) * theta[i] : 0.0;
         ta[i] = m[i] != 0.0 ? theta[i] / m[i] : 0.0;
         tb[i] = m[i] != 0.0 ? 1.0 / m[i] : 0.0;
         if (failure)

@@ -346,7 +346,7 @@ static const grid_block_fn grid_blocks[8] = {grid_block_000, grid_block_001, gri
                                              grid_block_011, grid_block_100, grid_block_101,
                                              grid_block_110, grid_block_111};
 
-pd_status pd_grid_pmb(pd_sim *sim, int failure)
+pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
 {
     pd_grid *G = sim->grid;
     const int64_t n = G->n;
