@@ -108,7 +108,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
-    o->threshold = 0.3;
+    o->threshold = PD_DAMAGE_THRESHOLD;
     o->window = 2;
     int c, status = 0, has_distance = 0;
     int64_t k;

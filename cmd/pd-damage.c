@@ -61,7 +61,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
-    o->threshold = 0.3;
+    o->threshold = PD_DAMAGE_THRESHOLD;
     int c, status = 0;
     while ((c = next_option(argc, argv, "o:nqhV", longopts, usage, &o->debug, &status)) != -1) {
         switch (c) {

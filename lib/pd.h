@@ -60,6 +60,14 @@ void pd_h5_debug(int on);
 #define PD_PMB_NU_3D 0.25          /* PMB's Poisson ratio in 3-D (seed 000)     */
 #define PD_PMB_NU_2D (1.0 / 3.0)   /* PMB's Poisson ratio in 2-D (seed 000)     */
 #define PD_LPS_SHEAR_FACTOR 15.0   /* alpha = 15 G / m (seed 000 eq. 3)         */
+#define PD_LPS_DILATATION 3.0      /* theta_i = (3 / m_i) sum_j omega |xi| e
+                                      nu V_j (seed 000 Algorithm 4)            */
+/* The factor (3K - 5G) of LPS's pair force t_ij, Pa (seed 000 Algorithm
+ * 2), K the bulk and G the shear modulus: (3 K) - (5 G), in that order. */
+#define PD_LPS_PAIR_FACTOR(K, G) ((3.0 * (K)) - (5.0 * (G)))
+#define PD_DAMAGE_THRESHOLD 0.3    /* phi_0: a particle with damage above it
+                                      is on the crack (seed 004, crack growth
+                                      of Fig. 7: phi_0 = 0.3)                  */
 
 /* Numerical guards of a run (not from the seeds: pd's own choices). */
 #define PD_LOST_MARGIN_FAC 10.0 /* lost beyond 10 box edges outside the body */

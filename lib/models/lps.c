@@ -350,7 +350,7 @@ static double theta_row(const pd_sim *sim, const lps_state *st, const uint64_t *
         const double e = extension(sim, i, k, d, &r);
         sum += weight(st, b, k) * b->length[k] * e * V[b->neighbor[k]] * b->vfactor[k];
     }
-    return st->m[i] != 0.0 ? (3.0 / st->m[i]) * sum : 0.0;
+    return st->m[i] != 0.0 ? (PD_LPS_DILATATION / st->m[i]) * sum : 0.0;
 }
 
 /* W_i of VES over the bonds intact in `bits`, theta_i = th, J/m^3, with
@@ -481,13 +481,13 @@ static void eps_flow_row(const pd_sim *sim, lps_state *st, int64_t i)
 
 /* The force density on i (Algorithm 2) from theta of this step, and with
  * `failure` the breaking test (into st->kill) and s0_new[i]. */
-static void force_row(pd_sim *sim, lps_state *st, int64_t i, int failure)
+static void force_row(pd_sim *sim, lps_state *st, int64_t i, pd_bond_mode failure)
 {
     const pd_bonds *b = sim->b;
     const uint64_t *bits = sim->intact; /* fresh: lps_kernel */
     const double *V = sim->p->volume, *m = st->m, *theta = st->theta;
     const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
-    const double dil = (3.0 * K) - (5.0 * G), s00 = sim->sc.s00, alpha = sim->sc.alpha;
+    const double dil = PD_LPS_PAIR_FACTOR(K, G), s00 = sim->sc.s00, alpha = sim->sc.alpha;
     const double s0i = failure ? sim->s0[i] : 0;
     double fx = 0, fy = 0, fz = 0, s0_new = -INFINITY, d[3], r;
     int broke = 0;
@@ -641,16 +641,17 @@ static double theta_fast(const pd_sim *sim, const lps_state *st, const uint64_t 
     double sum = 0;
     for (int64_t q = 0; q < cnt; q++)
         sum += tt[q];
-    return st->m[i] != 0.0 ? (3.0 / st->m[i]) * sum : 0.0;
+    return st->m[i] != 0.0 ? (PD_LPS_DILATATION / st->m[i]) * sum : 0.0;
 }
 
 /* force_row of LPS with the terms of force_terms; buf: a thread's scratch. */
-static void force_fast(pd_sim *sim, lps_state *st, int64_t i, int failure, double *buf)
+static void force_fast(pd_sim *sim, lps_state *st, int64_t i, pd_bond_mode failure,
+                       double *buf)
 {
     const pd_bonds *b = sim->b;
     const int64_t k0 = b->offset[i], cnt = b->offset[i + 1] - k0, F = st->family;
     const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
-    const double dil = (3.0 * K) - (5.0 * G);
+    const double dil = PD_LPS_PAIR_FACTOR(K, G);
     const double *om = row_weights(st, b, k0, cnt, buf);
     double *tx = buf + F, *ty = buf + 2 * F, *tz = buf + 3 * F, *sv = buf + 4 * F,
            *kq = buf + 5 * F;
@@ -756,7 +757,7 @@ static void mark_break(void *ctx, int64_t i, int64_t j)
     c->count++;
 }
 
-static pd_status lps_kernel(pd_sim *sim, lps_state *st, int failure)
+static pd_status lps_kernel(pd_sim *sim, lps_state *st, pd_bond_mode failure)
 {
     const uint64_t *bits = pd_sim_intact(sim); /* sim->intact, up to date */
     if (sim->grid && st->model == PD_MODEL_LPS) { /* the lattice stencil (lib/grid.c) */
@@ -799,14 +800,14 @@ static pd_status lps_kernel(pd_sim *sim, lps_state *st, int failure)
 
 static pd_status lps_force(pd_sim *sim, void *state)
 {
-    return lps_kernel(sim, state, 0);
+    return lps_kernel(sim, state, PD_BONDS_ELASTIC);
 }
 
 static pd_status lps_failure_force(pd_sim *sim, void *state)
 {
     if (sim->setup) /* step 0: forces only; s0 stays +inf */
-        return lps_kernel(sim, state, 0);
-    pd_status st = lps_kernel(sim, state, 1);
+        return lps_kernel(sim, state, PD_BONDS_ELASTIC);
+    pd_status st = lps_kernel(sim, state, PD_BONDS_FAILURE);
     if (st != PD_OK)
         return st;
     double *t = sim->s0;
@@ -835,7 +836,7 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
     const uint64_t *bits = pd_sim_intact(sim);
     const double *V = sim->p->volume, *m = st->m;
     const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
-    const double dil = (3.0 * K) - (5.0 * G);
+    const double dil = PD_LPS_PAIR_FACTOR(K, G);
     double *const *x = sim->p->x;
     double *theta = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
     if (theta == NULL) /* no stress rather than a wrong one */

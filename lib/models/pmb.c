@@ -88,11 +88,11 @@ static double bond_energy(const pd_sim *sim, int64_t i, int64_t k)
 }
 
 /* The forces of the half bonds of row i (and with `failure` their breaking
- * test and the new s0 of both ends; failure 2: each bond's threshold times
+ * test and the new s0 of both ends; PD_BONDS_FAILURE_LAWS: each bond's threshold times
  * its kfail, lib/materials.c), branch-free so that the arithmetic
  * vectorizes; the scatter to the partners j is a plain loop. */
 static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i,
-                                                          const int failure, double *released)
+                                                          const pd_bond_mode failure, double *released)
 {
     pd_half_bonds *h = &sim->half;
     const double s00 = sim->sc.s00, alpha = sim->sc.alpha;
@@ -129,7 +129,7 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
             gy[q] = fj * dy;
             gz[q] = fj * dz;
             if (failure) { /* ternaries, not fmin/fmax: they vectorize */
-                const double thr = failure == 2 ? kf[k] * (s0i_old < s0[j] ? s0i_old : s0[j])
+                const double thr = failure == PD_BONDS_FAILURE_LAWS ? kf[k] * (s0i_old < s0[j] ? s0i_old : s0[j])
                                                 : s0i_old < s0[j] ? s0i_old : s0[j];
                 brk[q] = s > thr ? mu[q] : 0.0;
                 t[q] = mu[q] > 0 ? s00 - alpha * s : -INFINITY;
@@ -166,14 +166,14 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
 PD_VECTOR_CLONES static void pmb_block_elastic(pd_sim *sim, int64_t lo, int64_t hi)
 {
     for (int64_t i = lo; i < hi; i++)
-        pmb_row(sim, i, 0, NULL);
+        pmb_row(sim, i, PD_BONDS_ELASTIC, NULL);
 }
 
 PD_VECTOR_CLONES static void pmb_block_failure(pd_sim *sim, int64_t lo, int64_t hi,
                                                double *released)
 {
     for (int64_t i = lo; i < hi; i++)
-        pmb_row(sim, i, 1, released);
+        pmb_row(sim, i, PD_BONDS_FAILURE, released);
 }
 
 /* The same with each bond's own critical stretch (h->kfail). */
@@ -181,10 +181,10 @@ PD_VECTOR_CLONES static void pmb_block_failure_laws(pd_sim *sim, int64_t lo, int
                                                     double *released)
 {
     for (int64_t i = lo; i < hi; i++)
-        pmb_row(sim, i, 2, released);
+        pmb_row(sim, i, PD_BONDS_FAILURE_LAWS, released);
 }
 
-static void pmb_kernel(pd_sim *sim, int failure)
+static void pmb_kernel(pd_sim *sim, pd_bond_mode failure)
 {
     const pd_half_bonds *h = &sim->half;
     /* failure's bookkeeping outside the fused loop (the s0_new reset and
@@ -228,8 +228,8 @@ static pd_status pmb_force(pd_sim *sim, void *state)
 {
     (void)state;
     if (sim->grid)
-        return pd_grid_pmb(sim, 0);
-    pmb_kernel(sim, 0);
+        return pd_grid_pmb(sim, PD_BONDS_ELASTIC);
+    pmb_kernel(sim, PD_BONDS_ELASTIC);
     return PD_OK;
 }
 
@@ -240,16 +240,16 @@ static pd_status pmb_failure_force(pd_sim *sim, void *state)
         /* the initial state: forces only; s0 stays +inf (seed 000,
          * "Breaking Bonds": no bond breaks before the second step) */
         if (sim->grid)
-            return pd_grid_pmb(sim, 0);
-        pmb_kernel(sim, 0);
+            return pd_grid_pmb(sim, PD_BONDS_ELASTIC);
+        pmb_kernel(sim, PD_BONDS_ELASTIC);
         return PD_OK;
     }
     if (sim->grid) {
-        pd_status st = pd_grid_pmb(sim, 1);
+        pd_status st = pd_grid_pmb(sim, PD_BONDS_FAILURE);
         if (st != PD_OK)
             return st;
     } else
-        pmb_kernel(sim, 1);
+        pmb_kernel(sim, PD_BONDS_FAILURE);
     double *t = sim->s0;
     sim->s0 = sim->s0_new;
     sim->s0_new = t;

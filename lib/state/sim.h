@@ -52,6 +52,17 @@ enum { PD_PHASE_SETUP, PD_PHASE_KICK1, PD_PHASE_DRIFT, PD_PHASE_KICK2 };
 
 typedef struct pd_grid pd_grid; /* lib/stencil/ */
 
+/* What a bond kernel does besides the forces (pd_grid_pmb, pd_grid_lps and
+ * the bond lists' kernels of lib/models/). */
+typedef enum {
+    PD_BONDS_ELASTIC = 0,    /* forces only: no bond breaks               */
+    PD_BONDS_FAILURE = 1,    /* and the breaking test against min(s0_i,
+                                s0_j) and the new s0 (seed 000 eqs. 8-9) */
+    PD_BONDS_FAILURE_LAWS = 2 /* the same, each bond's threshold times its
+                                kfail (lib/models/materials.c; the bond
+                                list of PMB only)                        */
+} pd_bond_mode;
+
 /* Hot loops are compiled for AVX-512, AVX2 and the baseline, picked at run
  * time (GCC function multiversioning), so one binary runs anywhere. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(PD_NO_CLONES)

@@ -22,7 +22,7 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out);
 void pd_grid_free(pd_grid *g);
 /* The PMB forces (and with `failure` the breaking test and s0), and the
  * contact forces of the stencil pairs when the scene has contact. */
-pd_status pd_grid_pmb(pd_sim *sim, int failure);
+pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure);
 /* Half-stencil offsets (0: no grid); are its rows walked in AVX-512
  * tiles; does the kernel take the contact of the stencil pairs; is i-j a
  * stencil pair. */
@@ -43,7 +43,7 @@ int pd_grid_pair(const pd_grid *g, int64_t i, int64_t j);
  * forces of Algorithm 2 and with failure the test and s0_new; each broken
  * bond i-j (i < j) goes to mark(ctx, i, j), its stencil bit already
  * cleared. */
-pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, int failure,
+pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode failure,
                       void (*mark)(void *ctx, int64_t i, int64_t j), void *ctx);
 /* The bonds' elastic energy, J, added to e[i]. */
 void pd_grid_pmb_energy(const pd_sim *sim, double *e);

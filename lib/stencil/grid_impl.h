@@ -1,0 +1,228 @@
+/*
+ * grid_impl.h -- internal to lib/stencil/: the stencil's data (struct
+ * pd_grid and its parts) and the helpers that more than one of its files
+ * needs.  grid.c explains the stencil and builds it; grid_pmb.c,
+ * grid_energy.c and grid_lps.c walk it.  The layers above see only
+ * grid.h.
+ */
+#ifndef PD_GRID_IMPL_H
+#define PD_GRID_IMPL_H
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "stencil/grid.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+/* The tile kernel of PMB is written for AVX-512 (x86-64, GCC or clang),
+ * taken when the processor has it; any other build or processor walks the
+ * segments alone. */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(PD_NO_CLONES)
+#define PD_GRID_AVX512 1
+#include <immintrin.h>
+#else
+#define PD_GRID_AVX512 0
+#endif
+
+#define GRID_NU_TOL 1e-9 /* nu of one offset equal to this, relatively    */
+#define GRID_CHUNK 256   /* particles per vector pass of a segment        */
+#define GRID_SAFE 16     /* shifts below this take the two-pass loop      */
+#define GRID_TILE 16     /* particles of a tile (runs at least this long) */
+
+/* Units: lengths in m, volumes in m^3, c in N/m^6 (seed 000's micromodulus),
+ * force densities in N/m^3; "grid index" g is a particle's place in grid
+ * order (pd_grid.perm maps it to the particle's index i in the file). */
+
+/* A segment: the bonds at offset k of the particles g in [lo, hi), each
+ * with the partner g + shift (grid indices). */
+typedef struct {
+    int64_t lo, hi; /* first particles g of the segment, grid order      */
+    int64_t shift;  /* partner g + shift                                  */
+    int32_t k;      /* half-stencil offset                                */
+} grid_seg;
+
+/* A run: particles [start, start + len) consecutive along the inner axis,
+ * whose segments are seg[seg0, next run's seg0). */
+typedef struct {
+    int64_t start;  /* grid index of its first particle                   */
+    int64_t len;    /* its particles                                      */
+    int64_t seg0;   /* its first segment                                  */
+} grid_run;
+
+/* The bonds a block broke in this step (grid indices, in the order found). */
+typedef struct {
+    int64_t n, cap; /* entries used, allocated                            */
+    int64_t *g;     /* grid index of the first end                        */
+    int32_t *k;     /* offset                                             */
+    int64_t *j;     /* grid index of the partner                          */
+} grid_breaks;
+
+struct pd_grid {
+    int64_t n;           /* particles                                      */
+    int nk;              /* half-stencil offsets k                         */
+    int words;           /* 64-bit mask words per particle, (nk + 63) / 64 */
+    int reach;           /* largest |d| component of the stencil, lattice
+                            spacings                                       */
+    int (*off)[3];       /* nk offsets d, (inner, mid, outer), spacings    */
+    /* per offset k (nk each): */
+    double *len;         /* reference bond length |xi_k|, m                */
+    double *inv_len;     /* 1 / |xi_k|, 1/m                                */
+    double *nu;          /* partial-volume factor nu_k, dimensionless      */
+    double *w;           /* c V nu_k (as pd_half_weights): force density
+                            per unit stretch, N/m^3                        */
+    double *dc;          /* contact distance d_k = min(0.9 |xi_k|,
+                            1.35 (r + r)), m (seed 000 eq. 15)             */
+    double *omega;       /* LPS's influence omega(|xi_k|), omega's unit
+                            (pd_lps_influence: 1, 1/m or dimensionless)    */
+    int16_t *lookup;     /* (2 reach + 1)^3: k for d, -1 - k for -d, or
+                            INT16_MIN: not a stencil offset                */
+    int axis[3];         /* inner, mid, outer: 0, 1, 2 for x, y, z         */
+    int32_t *lc[3];      /* lattice coordinates of particle i (sim order),
+                            spacings                                       */
+    int64_t *perm;       /* g -> i, NULL when grid order is sim order      */
+    uint64_t *mask;      /* words per particle (grid order): bit k set
+                            while the bond at offset k is intact           */
+    uint64_t *cmask;     /* words per particle: bit k set for a contact
+                            pair at offset k (NULL: no contact)            */
+    grid_seg *seg;       /* the segments, run by run (tile order within)   */
+    int64_t nseg;        /* segments                                       */
+    grid_run *run;       /* the runs and a last one with start n, seg0 nseg */
+    int64_t nblocks;     /* blocks of outer planes                         */
+    int64_t *block_run;  /* nblocks + 1: block b holds the runs
+                            [block_run[b], block_run[b + 1])               */
+    double *block_at;    /* nblocks: where a block's middle particle falls
+                            among those of its parity, in [0, 1)           */
+    grid_breaks *breaks; /* per block: the bonds broken this step          */
+    double *released;    /* per block: their elastic energy, J             */
+    double kc;           /* (c_S / delta) V: contact force density per
+                            metre of overlap, N/m^4 (seed 000 eq. 14)      */
+    /* grid-order copies, through perm only (PMB; NULL in lattice order): */
+    double *y[3];        /* positions, m                                   */
+    double *f[3];        /* force densities, N/m^3                         */
+    double *s0;          /* critical stretch of the previous step          */
+    double *s0n;         /* new critical stretch, being computed           */
+    /* LPS's per-particle factors of the pair force (pd_grid_lps; lattice
+     * order, NULL for PMB), m the weighted volume (m^5 times omega's unit,
+     * lib/models/lps.c): */
+    double *theta_m;     /* theta_i / m_i, 1/m^5 over omega's unit         */
+    double *inv_m;       /* 1 / m_i, 1/m^5 over omega's unit               */
+    uint64_t epoch;      /* of the half bonds the masks were built from    */
+    int tile;            /* PMB walks runs as tiles (AVX-512)              */
+    const double *s0n_ready; /* the s0 array the last step's end filled with
+                            -inf for the next one's new s0 (PMB, lattice
+                            order)                                         */
+    double gap;          /* the shortest lattice distance not in the
+                            stencil, less the sites' tolerance, m          */
+    int status;          /* PD_OK, or the error a parallel pass met        */
+};
+
+/* The arrays a force kernel walks, in grid order: the particles' own
+ * (lattice order) or pd_grid's copies (through perm). */
+typedef struct {
+    const double *y0, *y1, *y2, *s0;
+    double *f0, *f1, *f2, *s0n;
+    double s00, alpha;
+} grid_arrays;
+
+/* The first segment and the first particle of block blk (blk = nblocks:
+ * one past the last). */
+static inline int64_t block_seg0(const pd_grid *G, int64_t blk)
+{
+    return G->run[G->block_run[blk]].seg0;
+}
+
+static inline int64_t block_start(const pd_grid *G, int64_t blk)
+{
+    return G->run[G->block_run[blk]].start;
+}
+
+/* Is block blk (of the phase being walked) the calling thread's?  Each
+ * thread takes a contiguous run of the phase's blocks holding about its
+ * share of the particles, the same in every pass of every step: a thread
+ * then finds in its own caches what it touched in the pass before, and
+ * lib/sim.c's passes over the particles split them the same way (static
+ * halves).  A block handed to whichever thread is free would move its
+ * data between the cores' caches every step (measured: the bond pass 10%
+ * and the integration 30% slower on 2 threads).  Called inside a parallel
+ * region. */
+static inline int grid_mine(const pd_grid *G, int64_t blk)
+{
+#ifdef _OPENMP
+    const int T = omp_get_num_threads(), t = omp_get_thread_num();
+    int owner = (int)(G->block_at[blk] * T);
+    return (owner < T ? owner : T - 1) == t;
+#else
+    (void)G;
+    (void)blk;
+    return 1;
+#endif
+}
+
+/* Rebuild the masks from the half bonds' bits (grid.c); the kernels call
+ * it when the half bonds' epoch has moved on. */
+void pd_grid_sync(pd_sim *sim, pd_grid *G);
+
+/* The two helpers of the force kernels (grid_pmb.c and grid_lps.c) are
+ * plain static functions, not inline ones, as they were when the kernels
+ * shared one file: the compiler then keeps them out of line as before, and
+ * the kernels compile to the same instructions.  (unused: grid.c and
+ * grid_energy.c do not call them.) */
+
+/* The broken bond g-j at offset k into a block's list (PMB and LPS):
+ * 0, or -1 when out of memory. */
+static __attribute__((unused)) int record_break(grid_breaks *bl, int64_t g, int32_t k, int64_t j)
+{
+    if (bl->n == bl->cap) {
+        int64_t cap = bl->cap ? 2 * bl->cap : 64;
+        int64_t *ng = realloc(bl->g, (size_t)cap * sizeof(int64_t));
+        if (ng)
+            bl->g = ng;
+        int32_t *nk = realloc(bl->k, (size_t)cap * sizeof(int32_t));
+        if (nk)
+            bl->k = nk;
+        int64_t *nj = realloc(bl->j, (size_t)cap * sizeof(int64_t));
+        if (nj)
+            bl->j = nj;
+        if (!ng || !nk || !nj)
+            return -1;
+        bl->cap = cap;
+    }
+    bl->g[bl->n] = g;
+    bl->k[bl->n] = k;
+    bl->j[bl->n] = j;
+    bl->n++;
+    return 0;
+}
+
+/* The contact forces of the pairs of a segment's chunk [c0, c0 + m) that
+ * are closer than d_k (seed 000 eqs. 13-15), both ends. */
+static __attribute__((unused)) void seg_contact(pd_grid *G, const grid_seg *sg,
+                                                const grid_arrays *A, int64_t c0, int64_t m,
+                                                int W)
+{
+    const int k = sg->k;
+    const uint64_t bit = UINT64_C(1) << (k & 63);
+    const double dc = G->dc[k], kc = G->kc;
+    const double *y0 = A->y0, *y1 = A->y1, *y2 = A->y2;
+    for (int64_t q = 0; q < m; q++) {
+        const int64_t g = c0 + q, j = g + sg->shift;
+        const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
+        const double r = sqrt(dx * dx + dy * dy + dz * dz);
+        if (!(r < dc) || !(r > 0.0) || !(G->cmask[g * W + (k >> 6)] & bit))
+            continue;
+        const double fs = kc * (r - dc) / r;
+        A->f0[g] += fs * dx;
+        A->f1[g] += fs * dy;
+        A->f2[g] += fs * dz;
+        A->f0[j] -= fs * dx;
+        A->f1[j] -= fs * dy;
+        A->f2[j] -= fs * dz;
+    }
+}
+
+#endif

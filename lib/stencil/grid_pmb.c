@@ -1,0 +1,464 @@
+/*
+ * grid_pmb.c -- the PMB kernels of the stencil (grid.c explains it): the
+ * walk of a segment (seg_bonds), the AVX-512 tiles of the long runs
+ * (tile_run), the failure bookkeeping (the broken bonds into the half
+ * bonds, their released energy, the new s0) and pd_grid_pmb, which picks
+ * a variant per step.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+
+#include "stencil/grid_impl.h"
+
+/* The elastic energy of bond i-j at offset k, J: 1/2 c s^2 |xi| nu V V
+ * (lib/pmb.c's bond_energy with the offset's |xi| and c V nu). */
+static double bond_energy(const pd_sim *sim, const pd_grid *G, int64_t i, int64_t j, int k)
+{
+    const double dx = sim->y[0][j] - sim->y[0][i], dy = sim->y[1][j] - sim->y[1][i],
+                 dz = sim->y[2][j] - sim->y[2][i];
+    double dr = sqrt(dx * dx + dy * dy + dz * dz) - G->len[k];
+    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+    const double s = dr * G->inv_len[k];
+    return 0.5 * s * s * G->len[k] * G->w[k] * sim->p->volume[0];
+}
+
+/* The bond from the particle at (xg, yg, zg) to the one at (xj, yj, zj),
+ * with mask word mw: its state mu (0 or 1, bit `bit`), vector d = y_j -
+ * y_g, length r, stretch s (0 below eps_machine of extension, seed 000)
+ * and force per unit length fs (f_g += fs d; 0 when r = 0), for the offset
+ * of L, iL and w.  Every PMB loop of the stencil takes it, so that a bond
+ * recomputed in another loop comes out bit for bit the same. */
+#define GRID_PMB_PAIR(mw, xg, yg, zg, xj, yj, zj)                                              \
+    const double mu = ((mw) & bit) ? 1.0 : 0.0;                                                \
+    const double dx = (xj) - (xg), dy = (yj) - (yg), dz = (zj) - (zg);                         \
+    const double r = sqrt(dx * dx + dy * dy + dz * dz);                                        \
+    double dr = r - L;                                                                         \
+    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;                                                   \
+    const double s = dr * iL;                                                                  \
+    const double fb = w * s * mu;                                                              \
+    const double fs = r > 0.0 ? fb / r : 0.0
+
+/* The bond of lane q of a segment's chunk (particle g = c0 + q, partner j
+ * = g + shift); near counts the pairs closer than d_k.  Both loops of
+ * seg_bonds share it. */
+#define GRID_PMB_BOND                                                                          \
+    const int64_t g = c0 + q, j = g + shift;                                                   \
+    GRID_PMB_PAIR(mask[g * W], y0[g], y1[g], y2[g], y0[j], y1[j], y2[j]);                      \
+    if (contact)                                                                               \
+        near += r < dc ? 1.0 : 0.0
+
+/* The bonds (and contacts) of one segment.  `fused`: one pass that updates
+ * both ends as it goes (the shift is at least GRID_SAFE, so the two ends of
+ * the lanes of one vector never overlap); otherwise the forces go to
+ * scratch first and the two ends are updated in two loops.  Runs shorter
+ * than a tile take it. */
+static inline __attribute__((always_inline)) int
+seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failure,
+          const int contact, const int one_word, grid_breaks *bl)
+{
+    const int k = sg->k, W = one_word ? 1 : G->words, word = k >> 6;
+    const uint64_t bit = UINT64_C(1) << (k & 63);
+    const int64_t shift = sg->shift;
+    const double L = G->len[k], iL = G->inv_len[k], w = G->w[k], dc = G->dc[k];
+    const double s00 = A->s00, alpha = A->alpha;
+    const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
+    const double *restrict s0 = A->s0;
+    double *f0 = A->f0, *f1 = A->f1, *f2 = A->f2, *s0n = A->s0n;
+    const uint64_t *restrict mask = G->mask + word;
+    double brk[GRID_CHUNK], gx[GRID_CHUNK], gy[GRID_CHUNK], gz[GRID_CHUNK], t[GRID_CHUNK];
+    const int fused = shift >= GRID_SAFE;
+    for (int64_t c0 = sg->lo; c0 < sg->hi; c0 += GRID_CHUNK) {
+        const int64_t m = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;
+        double nbreak = 0, near = 0;
+        if (fused) {
+#pragma omp simd reduction(+ : nbreak, near) safelen(GRID_SAFE)
+            for (int64_t q = 0; q < m; q++) {
+                GRID_PMB_BOND;
+                f0[g] += fs * dx;
+                f1[g] += fs * dy;
+                f2[g] += fs * dz;
+                f0[j] -= fs * dx;
+                f1[j] -= fs * dy;
+                f2[j] -= fs * dz;
+                if (failure) {
+                    const double thr = s0[g] < s0[j] ? s0[g] : s0[j];
+                    const double b = s > thr ? mu : 0.0;
+                    const double tt = mu > 0 ? s00 - alpha * s : -INFINITY;
+                    s0n[g] = tt > s0n[g] ? tt : s0n[g];
+                    s0n[j] = tt > s0n[j] ? tt : s0n[j];
+                    brk[q] = b;
+                    nbreak += b;
+                }
+            }
+        } else {
+            for (int64_t q = 0; q < m; q++) {
+                GRID_PMB_BOND;
+                gx[q] = fs * dx;
+                gy[q] = fs * dy;
+                gz[q] = fs * dz;
+                if (failure) {
+                    const double thr = s0[g] < s0[j] ? s0[g] : s0[j];
+                    brk[q] = s > thr ? mu : 0.0;
+                    t[q] = mu > 0 ? s00 - alpha * s : -INFINITY;
+                    nbreak += brk[q];
+                }
+            }
+            for (int64_t q = 0; q < m; q++) {
+                f0[c0 + q] += gx[q];
+                f1[c0 + q] += gy[q];
+                f2[c0 + q] += gz[q];
+                if (failure)
+                    s0n[c0 + q] = t[q] > s0n[c0 + q] ? t[q] : s0n[c0 + q];
+            }
+            for (int64_t q = 0; q < m; q++) {
+                const int64_t j = c0 + q + shift;
+                f0[j] -= gx[q];
+                f1[j] -= gy[q];
+                f2[j] -= gz[q];
+                if (failure)
+                    s0n[j] = t[q] > s0n[j] ? t[q] : s0n[j];
+            }
+        }
+        /* contact: pairs closer than d_k are rare (a compression of 10%
+         * and more), so the bond pass only counts them, and a second pass
+         * over the chunk adds their forces when there are any */
+        if (contact && near > 0)
+            seg_contact(G, sg, A, c0, m, W);
+        if (failure && nbreak > 0)
+            for (int64_t q = 0; q < m; q++)
+                if (brk[q] > 0) {
+                    G->mask[(c0 + q) * W + word] &= ~bit;
+                    if (record_break(bl, c0 + q, k, c0 + q + shift))
+                        return -1;
+                }
+    }
+    return 0;
+}
+
+#if PD_GRID_AVX512
+/* The broken bonds of a tile's segment: its bonds recomputed one by one
+ * (bit for bit the vector loop's) and those with s > min(s0_g, s0_j)
+ * cleared and recorded.  Breaks are rare: the vector loop only counts
+ * them. */
+static int tile_breaks(pd_grid *G, const grid_seg *sg, const grid_arrays *A, int64_t lo,
+                       int64_t hi, int W, grid_breaks *bl)
+{
+    const int k = sg->k, word = k >> 6;
+    const uint64_t bit = UINT64_C(1) << (k & 63);
+    const double L = G->len[k], iL = G->inv_len[k], w = G->w[k];
+    for (int64_t g = lo; g < hi; g++) {
+        const int64_t j = g + sg->shift;
+        GRID_PMB_PAIR(G->mask[g * W + word], A->y0[g], A->y1[g], A->y2[g], A->y0[j], A->y1[j],
+                      A->y2[j]);
+        (void)fs;
+        const double thr = A->s0[g] < A->s0[j] ? A->s0[g] : A->s0[j];
+        if (mu > 0 && s > thr) {
+            G->mask[g * W + word] &= ~bit;
+            if (record_break(bl, g, k, j))
+                return -1;
+        }
+    }
+    return 0;
+}
+
+/* One half (8 lanes) of a tile against one segment: GRID_PMB_PAIR in
+ * AVX-512, operation for operation (no fused multiply-adds: tile_breaks
+ * must find the same stretches), for the lanes of `act`; the others load
+ * nothing and store nothing.  `all`: every lane is active (plain loads and
+ * stores).  Returns the lanes closer than d_k (contact) and, through brk,
+ * the lanes whose bond breaks. */
+#define TILE_HALF(h, all)                                                                      \
+    do {                                                                                       \
+        const __mmask8 act = (__mmask8)(acts >> (8 * (h)));                                    \
+        const __m512i mw = _mm512_loadu_si512((const void *)(M + 8 * (h)));                    \
+        const __mmask8 kmu = _mm512_mask_test_epi64_mask(act, mw, vbit);                       \
+        const __m512d xj = (all) ? _mm512_loadu_pd(Y0 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi0[h], act, Y0 + 8 * (h));            \
+        const __m512d yj = (all) ? _mm512_loadu_pd(Y1 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi1[h], act, Y1 + 8 * (h));            \
+        const __m512d zj = (all) ? _mm512_loadu_pd(Y2 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi2[h], act, Y2 + 8 * (h));            \
+        const __m512d dx = _mm512_sub_pd(xj, yi0[h]), dy = _mm512_sub_pd(yj, yi1[h]),          \
+                      dz = _mm512_sub_pd(zj, yi2[h]);                                          \
+        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(                                        \
+            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz))); \
+        __m512d dr = _mm512_sub_pd(r, vL);                                                     \
+        dr = _mm512_mask_mov_pd(dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), vnz, _CMP_LT_OQ),    \
+                                zero);                                                         \
+        const __m512d s = _mm512_mul_pd(dr, viL);                                              \
+        const __m512d fb = _mm512_maskz_mul_pd(kmu, _mm512_mul_pd(vw, s), one);                \
+        const __m512d fs =                                                                     \
+            _mm512_maskz_div_pd(_mm512_cmp_pd_mask(r, zero, _CMP_GT_OQ), fb, r);               \
+        const __m512d gx = _mm512_mul_pd(fs, dx), gy = _mm512_mul_pd(fs, dy),                  \
+                      gz = _mm512_mul_pd(fs, dz);                                              \
+        ax[h] = _mm512_add_pd(ax[h], gx);                                                      \
+        ay[h] = _mm512_add_pd(ay[h], gy);                                                      \
+        az[h] = _mm512_add_pd(az[h], gz);                                                      \
+        if (all) {                                                                             \
+            _mm512_storeu_pd(F0 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F0 + 8 * (h)), gx));  \
+            _mm512_storeu_pd(F1 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F1 + 8 * (h)), gy));  \
+            _mm512_storeu_pd(F2 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F2 + 8 * (h)), gz));  \
+        } else {                                                                               \
+            _mm512_mask_storeu_pd(F0 + 8 * (h), act,                                           \
+                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F0 + 8 * (h)), gx)); \
+            _mm512_mask_storeu_pd(F1 + 8 * (h), act,                                           \
+                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F1 + 8 * (h)), gy)); \
+            _mm512_mask_storeu_pd(F2 + 8 * (h), act,                                           \
+                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F2 + 8 * (h)), gz)); \
+        }                                                                                      \
+        if (contact)                                                                           \
+            near |= _mm512_mask_cmp_pd_mask(act, r, vdc, _CMP_LT_OQ);                          \
+        if (failure) {                                                                         \
+            const __m512d sj = (all) ? _mm512_loadu_pd(S0 + 8 * (h))                           \
+                                     : _mm512_mask_loadu_pd(si[h], act, S0 + 8 * (h));         \
+            const __m512d thr = _mm512_min_pd(si[h], sj);                                      \
+            brk |= _mm512_mask_cmp_pd_mask(kmu, s, thr, _CMP_GT_OQ);                           \
+            const __m512d tt =                                                                 \
+                _mm512_mask_sub_pd(ninf, kmu, vs00, _mm512_mul_pd(valpha, s));                 \
+            sm[h] = _mm512_max_pd(tt, sm[h]);                                                  \
+            const __m512d sn = (all) ? _mm512_loadu_pd(SN + 8 * (h))                           \
+                                     : _mm512_maskz_loadu_pd(act, SN + 8 * (h));               \
+            _mm512_mask_storeu_pd(SN + 8 * (h), act, _mm512_max_pd(tt, sn));                   \
+        }                                                                                      \
+    } while (0)
+
+/* The bonds (and contacts) of a run at least a tile long (one mask word
+ * per particle), a tile of 16 consecutive particles at a time (the last
+ * one moved back to end with the run; its lanes of the tile before are
+ * left out).  A tile walks the run's segments (in tile order) with its own
+ * positions, forces and new s0 in registers, so that a bond loads and
+ * stores only its partner's: half the memory traffic of seg_bonds. */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) int
+tile_run(pd_grid *G, const grid_run *R, const grid_arrays *A, const int failure,
+         const int contact, grid_breaks *bl)
+{
+    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+    const __m512d ninf = _mm512_set1_pd(-INFINITY), vnz = _mm512_set1_pd(PD_NEAR_ZERO);
+    const __m512d vs00 = _mm512_set1_pd(A->s00), valpha = _mm512_set1_pd(A->alpha);
+    for (int64_t t = 0; t < R->len; t += GRID_TILE) {
+        const int64_t g0 = R->start + (t + GRID_TILE <= R->len ? t : R->len - GRID_TILE);
+        const int64_t own = R->start + t; /* the lanes before are the last tile's */
+        __m512d yi0[2], yi1[2], yi2[2], si[2], ax[2], ay[2], az[2], sm[2];
+        for (int h = 0; h < 2; h++) {
+            yi0[h] = _mm512_loadu_pd(A->y0 + g0 + 8 * h);
+            yi1[h] = _mm512_loadu_pd(A->y1 + g0 + 8 * h);
+            yi2[h] = _mm512_loadu_pd(A->y2 + g0 + 8 * h);
+            si[h] = failure ? _mm512_loadu_pd(A->s0 + g0 + 8 * h) : zero;
+            ax[h] = ay[h] = az[h] = zero;
+            sm[h] = ninf;
+        }
+        for (int64_t q = R->seg0; q < R[1].seg0; q++) {
+            const grid_seg *sg = &G->seg[q];
+            const int64_t lo = sg->lo > own ? sg->lo : own;
+            const int64_t hi = sg->hi < g0 + GRID_TILE ? sg->hi : g0 + GRID_TILE;
+            if (lo >= hi)
+                continue;
+            const int k = sg->k;
+            const __m512i vbit = _mm512_set1_epi64((long long)(UINT64_C(1) << k));
+            const __m512d vL = _mm512_set1_pd(G->len[k]), viL = _mm512_set1_pd(G->inv_len[k]);
+            const __m512d vw = _mm512_set1_pd(G->w[k]), vdc = _mm512_set1_pd(G->dc[k]);
+            const int64_t j0 = g0 + sg->shift;
+            const uint64_t *M = G->mask + g0;
+            const double *Y0 = A->y0 + j0, *Y1 = A->y1 + j0, *Y2 = A->y2 + j0;
+            const double *S0 = failure ? A->s0 + j0 : NULL;
+            double *F0 = A->f0 + j0, *F1 = A->f1 + j0, *F2 = A->f2 + j0;
+            double *SN = failure ? A->s0n + j0 : NULL;
+            const uint32_t acts = (uint32_t)(((UINT64_C(1) << (hi - g0)) - 1) &
+                                             ~((UINT64_C(1) << (lo - g0)) - 1));
+            __mmask8 near = 0, brk = 0;
+            if (acts == 0xffff) {
+                TILE_HALF(0, 1);
+                TILE_HALF(1, 1);
+            } else {
+                TILE_HALF(0, 0);
+                TILE_HALF(1, 0);
+            }
+            if (contact && near)
+                seg_contact(G, sg, A, lo, hi - lo, 1);
+            if (failure && brk && tile_breaks(G, sg, A, lo, hi, 1, bl))
+                return -1;
+        }
+        double tx[GRID_TILE], ty[GRID_TILE], tz[GRID_TILE], ts[GRID_TILE];
+        for (int h = 0; h < 2; h++) {
+            _mm512_storeu_pd(tx + 8 * h, ax[h]);
+            _mm512_storeu_pd(ty + 8 * h, ay[h]);
+            _mm512_storeu_pd(tz + 8 * h, az[h]);
+            _mm512_storeu_pd(ts + 8 * h, sm[h]);
+        }
+        for (int64_t g = own; g < g0 + GRID_TILE; g++) {
+            A->f0[g] += tx[g - g0];
+            A->f1[g] += ty[g - g0];
+            A->f2[g] += tz[g - g0];
+            if (failure)
+                A->s0n[g] = ts[g - g0] > A->s0n[g] ? ts[g - g0] : A->s0n[g];
+        }
+    }
+    return 0;
+}
+
+/* The AVX-512 variants: runs at least a tile long take tile_run, shorter
+ * ones seg_bonds. */
+#define GRID_TILE_BLOCK(name, failure, contact)                                                \
+    __attribute__((target("avx512f"))) static int name(pd_grid *G, int64_t blk,                \
+                                                       const grid_arrays *A)                   \
+    {                                                                                          \
+        for (int64_t r = G->block_run[blk]; r < G->block_run[blk + 1]; r++) {                  \
+            const grid_run *R = &G->run[r];                                                    \
+            if (R->len >= GRID_TILE) {                                                         \
+                if (tile_run(G, R, A, failure, contact, &G->breaks[blk]))                      \
+                    return -1;                                                                 \
+            } else                                                                             \
+                for (int64_t s = R->seg0; s < R[1].seg0; s++)                                  \
+                    if (seg_bonds(G, &G->seg[s], A, failure, contact, 1, &G->breaks[blk]))     \
+                        return -1;                                                             \
+        }                                                                                      \
+        return 0;                                                                              \
+    }
+GRID_TILE_BLOCK(grid_tile_00, 0, 0)
+GRID_TILE_BLOCK(grid_tile_01, 0, 1)
+GRID_TILE_BLOCK(grid_tile_10, 1, 0)
+GRID_TILE_BLOCK(grid_tile_11, 1, 1)
+#endif
+
+/* The kernel's variants: with or without failure and contact, and with
+ * one mask word per particle (up to 64 offsets, delta < 3.3 h: the
+ * words load as one vector) or more. */
+#define GRID_BLOCK(name, failure, contact, one_word)                                          \
+    PD_VECTOR_CLONES static int name(pd_grid *G, int64_t blk, const grid_arrays *A)          \
+    {                                                                                         \
+        for (int64_t s = block_seg0(G, blk); s < block_seg0(G, blk + 1); s++)                 \
+            if (seg_bonds(G, &G->seg[s], A, failure, contact, one_word, &G->breaks[blk]))     \
+                return -1;                                                                    \
+        return 0;                                                                             \
+    }
+GRID_BLOCK(grid_block_000, 0, 0, 0)
+GRID_BLOCK(grid_block_010, 0, 1, 0)
+GRID_BLOCK(grid_block_100, 1, 0, 0)
+GRID_BLOCK(grid_block_110, 1, 1, 0)
+GRID_BLOCK(grid_block_001, 0, 0, 1)
+GRID_BLOCK(grid_block_011, 0, 1, 1)
+GRID_BLOCK(grid_block_101, 1, 0, 1)
+GRID_BLOCK(grid_block_111, 1, 1, 1)
+
+typedef int (*grid_block_fn)(pd_grid *, int64_t, const grid_arrays *);
+static const grid_block_fn grid_blocks[8] = {grid_block_000, grid_block_001, grid_block_010,
+                                             grid_block_011, grid_block_100, grid_block_101,
+                                             grid_block_110, grid_block_111};
+
+pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
+{
+    pd_grid *G = sim->grid;
+    const int64_t n = G->n;
+    if (G->epoch != sim->half.epoch) {
+        pd_grid_sync(sim, G);
+        if (G->status != PD_OK)
+            return G->status;
+    }
+    double tf = pd_wtime();
+    grid_arrays A = {.s00 = sim->sc.s00, .alpha = sim->sc.alpha};
+    const int64_t *perm = G->perm;
+    if (perm) {
+#pragma omp parallel for schedule(static)
+        for (int64_t g = 0; g < n; g++) {
+            const int64_t i = perm[g];
+            for (int d = 0; d < 3; d++) {
+                G->y[d][g] = sim->y[d][i];
+                G->f[d][g] = 0;
+            }
+            if (failure) {
+                G->s0[g] = sim->s0[i];
+                G->s0n[g] = -INFINITY;
+            }
+        }
+        A.y0 = G->y[0], A.y1 = G->y[1], A.y2 = G->y[2];
+        A.f0 = G->f[0], A.f1 = G->f[1], A.f2 = G->f[2];
+        A.s0 = G->s0, A.s0n = G->s0n;
+    } else {
+        A.y0 = sim->y[0], A.y1 = sim->y[1], A.y2 = sim->y[2];
+        A.f0 = sim->f[0], A.f1 = sim->f[1], A.f2 = sim->f[2];
+        A.s0 = sim->s0, A.s0n = sim->s0_new;
+        if (failure && sim->s0_new != G->s0n_ready) /* else the last step's end did */
+#pragma omp parallel for schedule(static)
+            for (int64_t g = 0; g < n; g++)
+                sim->s0_new[g] = -INFINITY;
+    }
+    tf = pd_wtime() - tf;
+    const int contact = G->cmask != NULL;
+    grid_block_fn fn = grid_blocks[4 * (failure != 0) + 2 * contact + (G->words == 1)];
+#if PD_GRID_AVX512
+    static const grid_block_fn tiles[4] = {grid_tile_00, grid_tile_01, grid_tile_10, grid_tile_11};
+    if (G->tile)
+        fn = tiles[2 * (failure != 0) + contact];
+#endif
+    int bad = 0;
+    for (int64_t blk = 0; blk < G->nblocks; blk++)
+        G->breaks[blk].n = 0;
+    for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel reduction(| : bad)
+        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
+            if (grid_mine(G, blk))
+                bad |= fn(G, blk, &A) != 0;
+    }
+    if (bad)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the broken bonds of a step");
+    double t0 = pd_wtime();
+    if (perm) {
+#pragma omp parallel for schedule(static)
+        for (int64_t g = 0; g < n; g++) {
+            const int64_t i = perm[g];
+            for (int d = 0; d < 3; d++)
+                sim->f[d][i] += G->f[d][g];
+            if (failure)
+                sim->s0_new[i] = G->s0n[g];
+        }
+    }
+    if (failure) {
+        if (perm)
+#pragma omp parallel for schedule(static)
+            for (int64_t i = 0; i < n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
+                if (sim->s0_new[i] == -INFINITY)
+                    sim->s0_new[i] = DBL_MAX;
+        /* the broken bonds into the half bonds, and their energy: per block,
+         * summed in block order (the same at any thread count).  In lattice
+         * order a block's bonds are half bonds of its own rows, whose bits
+         * other blocks than its neighbours never share: even blocks, then
+         * odd ones, in parallel; through a permutation, one by one.  In
+         * lattice order a block also finishes the new s0 of its particles
+         * (no intact bond: +inf, DBL_MAX as LAMMPS) and fills the old s0,
+         * which the step is done with and which becomes the next step's
+         * new s0, with -inf: two passes over the particles fewer. */
+        for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel if (!perm)
+            for (int64_t blk = phase; blk < G->nblocks; blk += 2) {
+                if (!grid_mine(G, blk))
+                    continue;
+                if (!perm)
+                    for (int64_t i = block_start(G, blk); i < block_start(G, blk + 1); i++) {
+                        sim->s0_new[i] = sim->s0_new[i] == -INFINITY ? DBL_MAX : sim->s0_new[i];
+                        sim->s0[i] = -INFINITY;
+                    }
+                const grid_breaks *bl = &G->breaks[blk];
+                double rel = 0;
+                for (int64_t e = 0; e < bl->n; e++) {
+                    int64_t i = perm ? perm[bl->g[e]] : bl->g[e];
+                    int64_t j = perm ? perm[bl->j[e]] : bl->j[e];
+                    int64_t q = pd_half_find(&sim->half, i < j ? i : j, i < j ? j : i);
+                    if (q < 0)
+                        continue; /* cannot be: the masks came from the half bonds */
+                    pd_bond_break(sim->half.intact, q);
+                    rel += bond_energy(sim, G, i, j, bl->k[e]);
+                }
+                G->released[blk] = rel;
+            }
+        }
+        for (int64_t blk = 0; blk < G->nblocks; blk++)
+            sim->released += G->released[blk];
+        /* the caller swaps s0 and s0_new (lib/pmb.c) */
+        G->s0n_ready = perm ? NULL : sim->s0;
+    }
+    tf += pd_wtime() - t0;
+    sim->timers[PD_T_FAILURE] += tf;
+    sim->timers[PD_T_BONDS] -= tf;
+    return PD_OK;
+}
