@@ -11,7 +11,7 @@
  *
  * Pre-cracks (--crack): every bond whose reference segment crosses a given
  * planar crack is created broken (mu = 0, seed 004) and marked in
- * /bonds/precrack; lib/crack.c holds the geometry and its conventions.
+ * /bonds/precrack; lib/bonds/crack.c holds the geometry and its conventions.
  */
 #include <getopt.h>
 #include <math.h>

@@ -6,15 +6,15 @@
  * eqs. 5-7), with, only when declared: bond failure by critical stretch
  * (eqs. 8-9), short-range contact (eqs. 13-15) and a moving spherical
  * indenter (LAMMPS fix indent), a projectile the body pushes back
- * (lib/projectile.c, seed 004 section 6), and boundary conditions on the
+ * (lib/effects/projectile.c, seed 004 section 6), and boundary conditions on the
  * particle sets of pd-lattice --set (seed 004 §2: body forces and
  * prescribed velocity or displacement in a layer).  The time step defaults to the stable step
  * of seed 004 eq. 46 times a safety factor; a larger --dt is refused.
  * Writes the model, the resolved scene (/scene) and frames (/frames).
  * A 2-D plate (/particles dimension 2) takes the plane-stress constants of
- * lib/plate.c: its --bulk-modulus is the 2-D bulk modulus.
+ * lib/models/plate.c: its --bulk-modulus is the 2-D bulk modulus.
  * --material, --interface and --fibre give bonds their own PMB constants
- * (lib/materials.c, seed 004 eq. 10).
+ * (lib/models/materials.c, seed 004 eq. 10).
  */
 #include <getopt.h>
 #include <math.h>

@@ -214,7 +214,7 @@ void pd_damage_no_precrack(const pd_particles *p, const pd_bonds *b, const uint6
  * but not pre-cracked. */
 int64_t pd_bits_count_broken_except(const uint64_t *bits, const uint64_t *skip, int64_t count);
 
-/* A planar pre-crack (lib/crack.c): the closed parallelogram
+/* A planar pre-crack (lib/bonds/crack.c): the closed parallelogram
  *   C = { P + u A + v B : u, v in [0, 1] },  normal n = A x B,
  * or, with `through`, a segment in the x-y plane from (P_x, P_y) to
  * (P_x + A_x, P_y + A_y) extended through the whole thickness along z: when
@@ -325,7 +325,7 @@ typedef struct {
     double alpha;          /* s0 = s00 - alpha s_min (seed 000 eq. 9)       */
     int has_contact;
     int bond_list;         /* walk the bond list even on a lattice (pd-run
-                              --bond-list; lib/grid.c)                     */
+                              --bond-list; lib/stencil/grid.c)                     */
     double contact_skin;   /* m                                            */
     int has_indenter;
     double ind_center[3];  /* centre at t = 0, m                            */
@@ -360,7 +360,7 @@ typedef struct {
                               0: isotropic                               */
     pd_ellipsoid ellipsoid[PD_ELLIPSOID_MAX];
     int nlaws;             /* PMB bond laws of materials and interfaces    */
-    const struct pd_bond_law *laws; /* (lib/materials.c; may be NULL)     */
+    const struct pd_bond_law *laws; /* (lib/models/materials.c; may be NULL)     */
     int has_fibre;         /* seed 004 eq. 10 for the scene's own bonds    */
     double fibre_g[3];     /* fibre direction g (any length)               */
     double fibre_c[2];     /* c of the fibre and of the matrix, N/m^6      */
@@ -399,7 +399,7 @@ double pd_pmb_c_from_bulk(double bulk_modulus, double horizon);
  * c = 18 K / (pi delta^4) this is sqrt(5 G0 / (9 K delta))). */
 double pd_pmb_s0_from_energy(double g0, double c, double horizon);
 
-/* 2-D plates, plane stress (lib/plate.c; the derivations in pd-run(1)).
+/* 2-D plates, plane stress (lib/models/plate.c; the derivations in pd-run(1)).
  * Matching the strain energy density of an isotropic in-plane stretch,
  * c pi H delta^3 eps^2 / 6 = 2 K eps^2, gives
  *   c = 12 K / (pi H delta^3) = 9 E / (pi H delta^3)    (nu = 1/3)
@@ -419,7 +419,7 @@ double pd_pmb_s0_for(const pd_particles *p, double g0, double c, double horizon)
 
 /* ---------------------------------------------------------------- materials */
 
-/* A PMB bond law (lib/materials.c, pd-run --material and --interface): the
+/* A PMB bond law (lib/models/materials.c, pd-run --material and --interface): the
  * micromodulus and critical stretch parameter of the bonds between
  * particles of materials a and b (a == b: the bonds inside material a). */
 typedef struct pd_bond_law {
@@ -450,14 +450,14 @@ int64_t pd_material_paint(pd_particles *p, const pd_region *r, int32_t id);
 /* Stable step of seed 004 eq. 46 for the bonds of the scene's model. */
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s);
 
-/* LPS (lib/lps.c).  The influence function omega(|xi|) for a horizon. */
+/* LPS (lib/models/lps.c).  The influence function omega(|xi|) for a horizon. */
 double pd_lps_influence(pd_influence w, double length, double horizon);
 /* The weighted volume of every particle, m_i = sum_j omega |xi|^2 nu_ij V_j
  * over the reference family (seed 000 eq. 4, Algorithm 3), into m (n). */
 void pd_lps_weighted_volume(const pd_particles *p, const pd_bonds *b, pd_influence w,
                             double *m);
 /* The stable step of the LPS model (the analogue of seed 004 eq. 46; see
- * lib/lps.c); pd_stable_dt calls it for PD_MODEL_LPS. */
+ * lib/models/lps.c); pd_stable_dt calls it for PD_MODEL_LPS. */
 double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s);
 /* Name of an influence function ("1/r", "1", "gaussian"), and back (-1:
  * unknown). */
@@ -468,11 +468,11 @@ int pd_influence_parse(const char *name);
  * (PD_ERR_INVALID otherwise). */
 pd_status pd_sim_dilatation(const pd_sim *sim, double *theta);
 /* The run's bond history (VES: 2 values per directed bond, EPS: 1; see
- * lib/lps.c),
+ * lib/models/lps.c),
  * NULL and *width 0 when its model keeps none. */
 double *pd_sim_bond_history(const pd_sim *sim, int *width);
 
-/* The ellipsoidal influence function (lib/influence.c, seed 002 eqs. 6-13).
+/* The ellipsoidal influence function (lib/bonds/influence.c, seed 002 eqs. 6-13).
  * pd_ellipsoid_parse reads "UX,UY,UZ,A,B,ROLL" and calls pd_ellipsoid_init,
  * which checks u != 0, a, b in (0, 1] and builds M^-1 (PD_ERR_INVALID).
  * pd_ellipsoid_distance is eq. 13 for a direction of any nonzero length:
@@ -530,7 +530,7 @@ pd_status pd_sim_step(pd_sim *sim);
 /* Names of the active effects, e.g. "pmb+failure contact indenter". */
 const char *pd_sim_effects(const pd_sim *sim);
 /* The PMB bonds' kernel: the half-stencil offsets of the lattice kernel
- * (lib/grid.c), or 0 when the bond list is walked; whether the stencil
+ * (lib/stencil/grid.c), or 0 when the bond list is walked; whether the stencil
  * walks its rows in AVX-512 tiles. */
 int pd_sim_stencil(const pd_sim *sim);
 int pd_sim_stencil_tiles(const pd_sim *sim);
@@ -628,7 +628,7 @@ const uint64_t *pd_sim_intact(const pd_sim *sim);
 
 /* ---------------------------------------------------------------- sets */
 
-/* Named particle sets (lib/sets.c), stored by global id so that they
+/* Named particle sets (lib/base/sets.c), stored by global id so that they
  * survive the reordering of rows (pd-bonds' spatial sort): /sets/NAME, an
  * int64 dataset of ascending ids (man 5 pd-h5). */
 #define PD_SET_NAME_MAX 64 /* bytes of a set name, with the NUL */
@@ -668,7 +668,7 @@ pd_status pd_write_sets(pd_file *f, const pd_sets *s);
 
 /* ---------------------------------------------------------------- profiles */
 
-/* A function of time g(t) (lib/profile.c) with its exact integral
+/* A function of time g(t) (lib/base/profile.c) with its exact integral
  * G(t) = int_0^t g and its derivative g'(t) where g is smooth (the right
  * derivative at a corner; 0 at a jump).  Forms:
  *   V                        constant V
@@ -705,7 +705,7 @@ char *pd_profile_text(const pd_profile *g);
 
 /* ---------------------------------------------------------------- boundary conditions */
 
-/* A boundary condition on a particle set (lib/bc.c), given to a run in
+/* A boundary condition on a particle set (lib/effects/bc.c), given to a run in
  * pd_scene.bc.  For the particles of the set, along `axis`:
  *   PD_BC_VELOCITY      y = x + G(t) and v = g(t), held exactly
  *   PD_BC_DISPLACEMENT  y = x + g(t) and v = g'(t), held exactly
@@ -725,7 +725,7 @@ typedef struct pd_bc {
 pd_status pd_bc_parse(pd_bc_kind kind, const char *spec, pd_bc *bc);
 /* The option that gives a condition, e.g. "velocity-bc". */
 const char *pd_bc_option(pd_bc_kind kind);
-/* The projectile (pd_scene.has_projectile, lib/projectile.c): a rigid
+/* The projectile (pd_scene.has_projectile, lib/effects/projectile.c): a rigid
  * sphere of mass M that pushes the particles inside it with the indenter's
  * force density K (R - r)^2 and feels the reaction F = -sum V_i f_i.
  * The default K makes the penalty's tangent stiffness 2 K p at a

@@ -496,7 +496,7 @@ if ! skip roofline; then
     tb=$(pd_row full.log bonds)
     { [ -n "$bw" ] && [ -n "$fl" ] && [ -n "$tb" ]; } || die "cannot read stream.out or the bonds row of full.log"
     echo
-    # which kernel ran: the lattice stencil (lib/grid.c) or the bond list
+    # which kernel ran: the lattice stencil (lib/stencil/grid.c) or the bond list
     stencil=0
     grep -q 'bonds walked as a lattice stencil' full.log && stencil=1
     echo "roofline of the PMB bond kernel (with failure$([ $stencil = 1 ] && echo ', the lattice stencil with the contact of its pairs'), $THREADS threads:"

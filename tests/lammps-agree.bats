@@ -262,7 +262,7 @@ run_lps() {
 # viscous fraction lambda and the relaxation time tau.  tau = 40 steps, so
 # the back extension moves a lot within the run (decay exp(-1/40) per
 # step), and lambda = 0.5 weighs both branches alike.  VES's stable step
-# is smaller than LPS's (see lib/lps.c), hence dt = 5e-8 s; the sphere
+# is smaller than LPS's (see lib/models/lps.c), hence dt = 5e-8 s; the sphere
 # goes twice as fast to reach the same depth as the LPS scenes.
 VES_DT=5e-8
 VES=(--ves-lambda 0.5 --ves-tau 2e-6)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bats
 # Several materials and fibres: pd-lattice --material-region gives the
 # particles of a region their material id; pd-run --material, --interface
-# and --fibre give bonds their own PMB constants (lib/materials.c).  A weak
+# and --fibre give bonds their own PMB constants (lib/models/materials.c).  A weak
 # interface cracks under a pull along the interface and nowhere else; a
 # law equal to the scene's reproduces the plain run bit for bit; results do
 # not depend on the thread count; a restart goes on bit for bit; the scene

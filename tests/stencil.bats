@@ -1,6 +1,6 @@
 #!/usr/bin/env bats
 # stencil.bats -- the PMB bonds of a body on a lattice walked as a stencil
-# (lib/grid.c): when pd-run takes it, and that it gives the bond list's run
+# (lib/stencil/grid.c): when pd-run takes it, and that it gives the bond list's run
 # (pd-run --bond-list) to rounding -- the same bonds broken, the same
 # displacements to 1e-9 of the largest, the same energies -- with failure,
 # contact (of the stencil pairs and of the list), the indenter, lost

@@ -25,7 +25,7 @@ typedef struct {
                           in this step, J (summed in block order)        */
     int64_t *cursor;   /* scratch of pd_half_expand                      */
     double *kfail;     /* per bond s00_bond / s00: the bond breaks at
-                          kfail min(s0_i, s0_j) (lib/materials.c); NULL:
+                          kfail min(s0_i, s0_j) (lib/models/materials.c); NULL:
                           all 1, the kernel of old                       */
     uint64_t epoch;    /* bumped when `intact` is changed from outside the
                           kernels (a restart, a lost particle)           */

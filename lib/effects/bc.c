@@ -14,7 +14,7 @@
  *     velocity-bc:      y = x + G(t), v = g(t)
  *     displacement-bc:  y = x + g(t), v = g'(t)
  *   (P(t) = the prescribed offset, U(t) = the prescribed velocity).  In the
- *   step (lib/sim.c): after the first half kick v = (P_{n+1} - P_n)/dt (so
+ *   step (lib/run/sim.c): after the first half kick v = (P_{n+1} - P_n)/dt (so
  *   that the drift lands on it), after the drift y = x + P_{n+1} exactly,
  *   after the second half kick v = U_{n+1}.  The body's forces f on a held
  *   component are then balanced by the reaction R_i = V_i (rho_i a_i - f_i).

@@ -77,7 +77,7 @@ static int64_t candidates(const pd_sim *sim, const pd_cells *c, double reach2, i
     double *const *y = sim->y;
     if (sim->lost && sim->lost[i]) /* out of the body for good: no contact */
         return 0;
-    /* the stencil pairs' contact is the lattice kernel's (lib/grid.c) */
+    /* the stencil pairs' contact is the lattice kernel's (lib/stencil/grid.c) */
     const pd_grid *grid = pd_grid_contact(sim->grid) ? sim->grid : NULL;
     double yi[3] = {y[0][i], y[1][i], y[2][i]};
     int64_t cells[27];

@@ -11,7 +11,7 @@
  * r = |y_i - c| < R, with the force density K (R - r)^2 (y_i - c)/r (LAMMPS
  * fix indent; K in N/m^5), lost particles left out: adds to sim->f and
  * returns in F the sum of V_i f_i, N, summed in fixed chunks (the same at
- * any thread count).  The indenter and the projectile (lib/indenter.c). */
+ * any thread count).  The indenter and the projectile (lib/effects/indenter.c). */
 void pd_sphere_push(pd_sim *sim, const double c[3], double R, double K, double F[3]);
 /* Its penalty energy V_i K (R - r)^3 / 3, J, added to e[i]. */
 void pd_sphere_energy(const pd_sim *sim, const double c[3], double R, double K, double *e);

@@ -3,14 +3,14 @@
  * (pd-run --projectile; seed 004 §6, the Hertzian cone crack: a sphere of
  * given mass and velocity that slows, stops and rebounds).
  *
- * The force law on the particles is the indenter's (lib/indenter.c): every
+ * The force law on the particles is the indenter's (lib/effects/indenter.c): every
  * particle inside the sphere, r = |y_i - X| < R, feels the force density
  *   f_i += K (R - r)^2 (y_i - X) / r,                       N/m^3,
  * and the sphere, of mass M, feels the reaction
  *   F = - sum_i V_i f_i,                                    N,
  * so that the particles and the sphere together exchange no momentum with
  * the outside.  The sphere moves by velocity Verlet with the particles'
- * step (lib/sim.c pd_sim_step): half kick V += dt/(2M) F, drift
+ * step (lib/run/sim.c pd_sim_step): half kick V += dt/(2M) F, drift
  * X += dt V together with the particles, forces at the new positions, half
  * kick.  Its penalty energy sum V_i K (R - r)^3 / 3 is contact energy and
  * 1/2 M |V|^2 its own term of the balance (pd_energy.projectile); it does

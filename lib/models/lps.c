@@ -36,7 +36,7 @@
  * the step's positions as the bonds go.
  *
  * The influence omega may also depend on the bond's direction (the
- * ellipsoids of lib/influence.c, seed 002): omega[k] is then the bond's
+ * ellipsoids of lib/bonds/influence.c, seed 002): omega[k] is then the bond's
  * own weight, the same in m and in every sum below.
  * VES, the viscoelastic solid (--model ves; Mitchell, SAND2011-8064, as
  * LAMMPS peri/ves).  The deviatoric extension of directed bond i-j,
@@ -160,7 +160,7 @@ static inline double weight(const lps_state *st, const pd_bonds *b, int64_t k)
 }
 
 /* The weight of every directed bond, omega[k] = omega(|xi|) d(xi/|xi|)
- * (lib/influence.c: d = 1 without ellipsoids), and m_i from it (Algorithm
+ * (lib/bonds/influence.c: d = 1 without ellipsoids), and m_i from it (Algorithm
  * 3, in pd_lps_weighted_volume's order of products); omega NULL: m only. */
 static void bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
                          double *omega, double *m)
@@ -760,7 +760,7 @@ static void mark_break(void *ctx, int64_t i, int64_t j)
 static pd_status lps_kernel(pd_sim *sim, lps_state *st, pd_bond_mode failure)
 {
     const uint64_t *bits = pd_sim_intact(sim); /* sim->intact, up to date */
-    if (sim->grid && st->model == PD_MODEL_LPS) { /* the lattice stencil (lib/grid.c) */
+    if (sim->grid && st->model == PD_MODEL_LPS) { /* the lattice stencil (lib/stencil/grid.c) */
         stencil_marks c = {sim, st, 0};
         pd_status s = pd_grid_lps(sim, st->m, st->theta, failure, mark_break, &c);
         if (s == PD_OK && c.count > 0)

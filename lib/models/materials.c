@@ -22,7 +22,7 @@
  * (The mix is computed as x_m + beta^2 (x_f - x_m): exactly x_m when the two
  * are equal.)
  *
- * The run keeps c in the half bonds' weights w = c V nu (lib/pmb.c), so a
+ * The run keeps c in the half bonds' weights w = c V nu (lib/models/pmb.c), so a
  * bond's own c costs the force kernel nothing: pd_half_laws scales the
  * weights of pd_half_weights by c_bond / c, so that a bond whose c is the
  * scene's keeps its weight bit for bit.  Its own s00 enters the

@@ -51,10 +51,10 @@ struct pd_model {
 extern const pd_model pd_model_pmb, pd_model_lps, pd_model_ves, pd_model_eps;
 
 /* The PMB bond stiffness sum of seed 004 eq. 46 of particle i,
- * sum_p V_p nu c / |xi| over its family, N/m^4 per unit volume (lib/pmb.c). */
+ * sum_p V_p nu c / |xi| over its family, N/m^4 per unit volume (lib/models/pmb.c). */
 double pd_bond_stiffness(const pd_particles *p, const pd_bonds *b, double c, int64_t i);
 
-/* Per-bond laws (lib/materials.c): w_ij and w_ji with each bond's own c,
+/* Per-bond laws (lib/models/materials.c): w_ij and w_ji with each bond's own c,
  * and kfail when the scene has failure; for pd_scene_has_laws only. */
 pd_status pd_half_laws(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
                        pd_half_bonds *h);

@@ -89,7 +89,7 @@ static double bond_energy(const pd_sim *sim, int64_t i, int64_t k)
 
 /* The forces of the half bonds of row i (and with `failure` their breaking
  * test and the new s0 of both ends; PD_BONDS_FAILURE_LAWS: each bond's threshold times
- * its kfail, lib/materials.c), branch-free so that the arithmetic
+ * its kfail, lib/models/materials.c), branch-free so that the arithmetic
  * vectorizes; the scatter to the partners j is a plain loop. */
 static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i,
                                                           const pd_bond_mode failure, double *released)
@@ -319,7 +319,7 @@ static void pmb_stress_uniform(const pd_sim *sim, void *state, double *out)
     }
 }
 
-/* The same two with each bond's own c (lib/materials.c), apart so that a
+/* The same two with each bond's own c (lib/models/materials.c), apart so that a
  * scene without laws keeps the loops above bit for bit. */
 static void pmb_energy_laws(const pd_sim *sim, double *e)
 {

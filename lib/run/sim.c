@@ -276,7 +276,7 @@ PD_VECTOR_CLONES static int half_kick_block(pd_sim *sim, int64_t lo, int64_t hi)
 
 /* The calling thread's share of n particles in a parallel region: equal
  * contiguous parts, as OpenMP's static schedule cuts a loop (the lattice
- * stencil's blocks are split over the threads likewise, lib/grid.c), so
+ * stencil's blocks are split over the threads likewise, lib/stencil/grid.c), so
  * that a thread walks what it touched in the pass before. */
 static void my_share(int64_t n, int64_t *lo, int64_t *hi)
 {

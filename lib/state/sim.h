@@ -72,46 +72,57 @@ typedef enum {
 #define PD_VECTOR_CLONES
 #endif
 
+/* The state of a run.  Every per-particle array has n entries in the
+ * rows of p (local indices; p->id holds the global ids). */
 struct pd_sim {
-    const pd_particles *p;
-    const pd_bonds *b;
-    pd_scene sc;
-    const struct pd_model *model; /* the scene's (lib/models/)            */
-    int64_t n;
+    const pd_particles *p;        /* the body (reference configuration), not owned */
+    const pd_bonds *b;            /* its directed families, not owned           */
+    pd_scene sc;                  /* the resolved scene, SI units (pd.h)        */
+    const struct pd_model *model; /* the scene's model (lib/models/)            */
+    int64_t n;                    /* particles, = p->n                          */
     double *y[3];       /* current positions, m                          */
     double *v[3];       /* velocities, m/s                               */
     double *f[3];       /* force densities, N/m^3                        */
-    pd_half_bonds half; /* the bonds as the kernel walks them             */
-    pd_grid *grid;      /* the same as a lattice stencil, or NULL         */
-    uint64_t *intact;   /* directed bond state bits mu (1 = intact), kept
-                           up to date from `half` on demand              */
-    int intact_stale;   /* `intact` lags behind half.intact              */
-    double *s0;         /* critical stretch of the previous step (eq. 9) */
-    double *s0_new;     /* being computed in this step                   */
-    int64_t step;
-    double time;        /* s                                             */
+    pd_half_bonds half; /* the bonds as the kernels walk them: each once,
+                           with its state bit (lib/bonds/half.c)         */
+    pd_grid *grid;      /* the same bonds as a lattice stencil
+                           (lib/stencil/), or NULL                       */
+    uint64_t *intact;   /* directed bond state bits mu (1 = intact), in
+                           the order of b; kept up to date from `half`
+                           on demand (pd_sim_intact)                     */
+    int intact_stale;   /* 1: `intact` lags behind half.intact           */
+    double *s0;         /* critical stretch of the previous step (seed
+                           000 eq. 9), dimensionless; NULL without
+                           failure                                       */
+    double *s0_new;     /* the same, being computed in this step         */
+    int64_t step;       /* steps taken                                   */
+    double time;        /* step * sc.dt, s                               */
     double power;       /* power put in by the effects at this step's
                            force evaluation, W                           */
     double work;        /* its time integral (trapezoidal), J            */
     double released;    /* energy of the bonds broken so far, J          */
     double energy0;     /* kinetic + elastic + contact at step 0, J      */
     double box_lo[3];   /* a particle outside [box_lo, box_hi] is lost, m */
-    double box_hi[3];
-    uint8_t *lost;      /* n flags, NULL until the first loss            */
-    int64_t nlost;
+    double box_hi[3];   /* m                                             */
+    uint8_t *lost;      /* n flags (1: lost), NULL until the first loss  */
+    int64_t nlost;      /* lost particles so far                         */
     double lost_energy; /* kinetic energy of the lost particles, J       */
     int setup;          /* 1 while computing the forces of the initial state */
-    const pd_effect *effects[PD_MAX_EFFECTS];
-    void *state[PD_MAX_EFFECTS];
-    int neffects;
-    char names[256];
-    double timers[PD_T_COUNT];
-    int64_t contact_builds;
-    int constrained;    /* some effect has a constrain hook              */
-    int f_zeroed;       /* the drift pass has zeroed f for the next forces */
-    /* the projectile (lib/projectile.c), a rigid sphere of mass
+    const pd_effect *effects[PD_MAX_EFFECTS]; /* the step's table: the
+                           model's force first, then the declared
+                           effects (lib/effects/effects.c's order)       */
+    void *state[PD_MAX_EFFECTS]; /* each effect's own state, or NULL     */
+    int neffects;       /* entries of effects[] and state[]              */
+    char names[256];    /* the effects' names, space-separated (the log,
+                           /scene@effects)                               */
+    double timers[PD_T_COUNT]; /* wall time per pd_timer, s               */
+    int64_t contact_builds;    /* contact list builds so far             */
+    int constrained;    /* 1: some effect has a constrain hook           */
+    int f_zeroed;       /* 1: the drift pass has zeroed f for the next
+                           forces                                        */
+    /* the projectile (lib/effects/projectile.c), a rigid sphere of mass
      * sc.proj_mass, integrated with the particles                     */
-    int has_projectile;
+    int has_projectile; /* 1: the scene has one                          */
     double proj_x[3];   /* centre, m                                     */
     double proj_v[3];   /* velocity, m/s                                 */
     double proj_f[3];   /* force on it at the last force evaluation, N   */

@@ -13,7 +13,7 @@
  * weight needs to be stored per bond, only one bit of state.  When pd-run
  * finds a PMB scene, or an LPS one whose influence depends on |xi| alone,
  * on such a body (pd_grid_new checks every condition below; any other
- * scene keeps the bond lists of lib/pmb.c and lib/lps.c), it walks the
+ * scene keeps the bond lists of lib/models/pmb.c and lib/models/lps.c), it walks the
  * bonds as a stencil:
  *
  *   - Lattice coordinates.  Particle i sits at lo + h c_i with integer c_i
@@ -50,23 +50,23 @@
  *     environment, walk the segments alone.
  *   - Threads.  Outer planes are cut into blocks at least as thick as the
  *     stencil's reach, so a block's bonds write only to the block and the
- *     next one; even blocks run in parallel, then odd blocks (lib/pmb.c's
+ *     next one; even blocks run in parallel, then odd blocks (lib/models/pmb.c's
  *     scheme).  Every sum is taken in an order fixed by the blocks: the
  *     result does not depend on the thread count.
  *
- * The arithmetic of a bond is lib/pmb.c's (the stretch, the eps_machine
+ * The arithmetic of a bond is lib/models/pmb.c's (the stretch, the eps_machine
  * guard, the failure test against min(s0_i, s0_j) of the previous step and
  * the new s0 of both ends), with one division by r per bond and the
  * reciprocal of |xi| from the table.  The contact forces of seed 000 eqs.
  * 13-15 between the two ends of every stencil pair, bonded or not, are
- * added in the same pass (their d_ij is d_k); lib/contact.c leaves these
+ * added in the same pass (their d_ij is d_k); lib/effects/contact.c leaves these
  * pairs out of its list, which then holds only pairs that were farther
  * than the horizon apart in the reference configuration.  Sums are rounded
  * in another order than the bond list's, so the two kernels agree to
  * rounding, not bit for bit.
  *
  * The bond state lives in both places: the masks (walked every step) and
- * the half bonds' bits (lib/pmb.c), which the rest of pd-run reads.  A bond
+ * the half bonds' bits (lib/models/pmb.c), which the rest of pd-run reads.  A bond
  * the kernel breaks is cleared in both (and its energy booked as
  * released); a change made to the half bonds from outside (a restart, a
  * lost particle) bumps their epoch and the masks are rebuilt from them.

@@ -14,7 +14,7 @@ typedef enum {
     PD_STENCIL_LPS       /* LPS's dilatation and pair forces                     */
 } pd_stencil_kind;
 
-/* The PMB bonds of a body on a lattice, walked as a stencil (lib/grid.c).
+/* The PMB bonds of a body on a lattice, walked as a stencil (lib/stencil/grid.c).
  * pd_grid_new builds the stencil of `kind` (the model's, lib/models/) and
  * leaves *out NULL when the body or the scene (--bond-list) does not allow
  * it (then the model's bond list serves). */
@@ -29,7 +29,7 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure);
 int pd_grid_offsets(const pd_grid *g);
 int pd_grid_tiles(const pd_grid *g);
 /* The shortest reference distance of a pair that is not a stencil pair,
- * m (lib/contact.c searches only particles that moved enough to close
+ * m (lib/effects/contact.c searches only particles that moved enough to close
  * it). */
 double pd_grid_gap(const pd_grid *g);
 /* The largest damage of a particle (seed 000 eq. 10), counted on the
@@ -38,7 +38,7 @@ double pd_grid_gap(const pd_grid *g);
 int pd_grid_max_damage(const pd_sim *sim, double *max_damage);
 int pd_grid_contact(const pd_grid *g);
 int pd_grid_pair(const pd_grid *g, int64_t i, int64_t j);
-/* LPS on the stencil (lib/lps.c without ellipsoids, particles in lattice
+/* LPS on the stencil (lib/models/lps.c without ellipsoids, particles in lattice
  * order): theta of Algorithm 4 into theta (m: the weighted volumes), the
  * forces of Algorithm 2 and with failure the test and s0_new; each broken
  * bond i-j (i < j) goes to mark(ctx, i, j), its stencil bit already

@@ -10,8 +10,8 @@
 
 /* The energy of the stencil pairs, half of each pair to each end: with
  * `contact`, e_i += 1/4 (c_S/delta) (d_k - r)^2 V_i V_j over the contact
- * pairs closer than d_k (lib/contact.c's), else e_i += 1/4 c s^2 |xi| nu
- * V_i V_j over the intact bonds (lib/pmb.c's pmb_energy).  Even blocks,
+ * pairs closer than d_k (lib/effects/contact.c's), else e_i += 1/4 c s^2 |xi| nu
+ * V_i V_j over the intact bonds (lib/models/pmb.c's pmb_energy).  Even blocks,
  * then odd ones, so that no two threads add to one particle. */
 /* The energy of a pair of squared length r2 and length r, half to each end
  * (0 outside contact with `contact`). */

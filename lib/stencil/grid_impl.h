@@ -145,7 +145,7 @@ static inline int64_t block_start(const pd_grid *G, int64_t blk)
  * thread takes a contiguous run of the phase's blocks holding about its
  * share of the particles, the same in every pass of every step: a thread
  * then finds in its own caches what it touched in the pass before, and
- * lib/sim.c's passes over the particles split them the same way (static
+ * lib/run/sim.c's passes over the particles split them the same way (static
  * halves).  A block handed to whichever thread is free would move its
  * data between the cores' caches every step (measured: the bond pass 10%
  * and the integration 30% slower on 2 threads).  Called inside a parallel

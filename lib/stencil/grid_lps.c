@@ -10,8 +10,8 @@
 
 #include "stencil/grid_impl.h"
 
-/* LPS on the stencil (lib/lps.c; omega a function of |xi|, so per offset;
- * the particles in lattice order, so lib/lps.c's arrays need no copies).
+/* LPS on the stencil (lib/models/lps.c; omega a function of |xi|, so per offset;
+ * the particles in lattice order, so lib/models/lps.c's arrays need no copies).
  * The arithmetic of each bond is lps.c's theta_row and force_row, product
  * for product; each bond is computed once and added to both ends (the pair
  * force t_ij of Algorithm 2 is symmetric: equal volumes, nu_ij = nu_ji). */

@@ -12,7 +12,7 @@
 #include "stencil/grid_impl.h"
 
 /* The elastic energy of bond i-j at offset k, J: 1/2 c s^2 |xi| nu V V
- * (lib/pmb.c's bond_energy with the offset's |xi| and c V nu). */
+ * (lib/models/pmb.c's bond_energy with the offset's |xi| and c V nu). */
 static double bond_energy(const pd_sim *sim, const pd_grid *G, int64_t i, int64_t j, int k)
 {
     const double dx = sim->y[0][j] - sim->y[0][i], dy = sim->y[1][j] - sim->y[1][i],
@@ -454,7 +454,7 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
         }
         for (int64_t blk = 0; blk < G->nblocks; blk++)
             sim->released += G->released[blk];
-        /* the caller swaps s0 and s0_new (lib/pmb.c) */
+        /* the caller swaps s0 and s0_new (lib/models/pmb.c) */
         G->s0n_ready = perm ? NULL : sim->s0;
     }
     tf += pd_wtime() - t0;

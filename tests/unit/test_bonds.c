@@ -1,5 +1,5 @@
 /*
- * test_bonds -- bond families of lib/bonds.c and cell lists of lib/cells.c.
+ * test_bonds -- bond families of lib/bonds/bonds.c and cell lists of lib/base/cells.c.
  *
  * Proves: on a simple cubic lattice with delta = 3.0001 dx an interior
  * particle has exactly 122 partners (the integer points with

@@ -1,5 +1,5 @@
 /*
- * test_crack -- pre-cracks of lib/crack.c: the crossing predicate of a
+ * test_crack -- pre-cracks of lib/bonds/crack.c: the crossing predicate of a
  * reference segment and a parallelogram crack, parsing, and the pre-crack
  * of built bonds.
  *

@@ -1,6 +1,6 @@
 /*
  * test_cracktip -- crack tips, extension, speed and fronts of
- * lib/cracktip.c.
+ * lib/bonds/cracktip.c.
  *
  * Proves: the lower and upper tips are the smallest and largest current
  * coordinate x + u along the axis among particles with damage strictly

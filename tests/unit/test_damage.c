@@ -1,5 +1,5 @@
 /*
- * test_damage -- pd_damage (lib/bonds.c), seed 000 eq. 10 as LAMMPS compute
+ * test_damage -- pd_damage (lib/bonds/bonds.c), seed 000 eq. 10 as LAMMPS compute
  * damage/atom: phi_i = 1 - sum_{j intact} V_j / sum_{j in family} V_j.
  *
  * Proves: damage is 0 with every bond intact and 1 with every bond broken;

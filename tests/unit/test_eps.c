@@ -1,5 +1,5 @@
 /*
- * test_eps -- the elastic-plastic solid (--model eps, lib/lps.c).
+ * test_eps -- the elastic-plastic solid (--model eps, lib/models/lps.c).
  *
  * Proves: below yield EPS is LPS (the same force density to rounding at a
  * deformed, perturbed state, surface particles included: the symmetric

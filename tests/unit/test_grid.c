@@ -1,5 +1,5 @@
 /*
- * test_grid -- the lattice test and lattice order of lib/grid.c, on which
+ * test_grid -- the lattice test and lattice order of lib/stencil/grid.c, on which
  * pd-bonds sorts and pd-run's stencil kernel rests.
  *
  * Proves: a pd-lattice body is on its lattice, with the axes ordered inner

@@ -1,5 +1,5 @@
 /*
- * test_influence -- the ellipsoidal influence function (lib/influence.c,
+ * test_influence -- the ellipsoidal influence function (lib/bonds/influence.c,
  * seed 002 eqs. 6-13) and its use in the LPS model.
  *
  * Proves: the distance of eq. 13 is 1 along u, a along v and b along w

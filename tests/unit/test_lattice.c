@@ -1,5 +1,5 @@
 /*
- * test_lattice -- regions and lattices of lib/region.c and lib/lattice.c.
+ * test_lattice -- regions and lattices of lib/base/region.c and lib/base/lattice.c.
  *
  * Proves: regions are closed sets (a point on a face, on the cylinder's
  * mantle or on the sphere is inside, a point just outward is not); the

@@ -1,5 +1,5 @@
 /*
- * test_lps -- the LPS model (lib/lps.c) against seed 000 eqs. 3-4 and
+ * test_lps -- the LPS model (lib/models/lps.c) against seed 000 eqs. 3-4 and
  * Algorithms 2-4, through the public run interface.
  *
  * Proves: the weighted volume of every particle is its direct sum

@@ -1,5 +1,5 @@
 /*
- * test_materials -- bonds with their own PMB constants (lib/materials.c):
+ * test_materials -- bonds with their own PMB constants (lib/models/materials.c):
  * fibres (seed 004 eq. 10), materials and interfaces, seen through the
  * public run interface.
  *

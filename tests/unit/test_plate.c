@@ -1,6 +1,6 @@
 /*
  * test_plate -- 2-D plates: the square lattice of pd_lattice_make with
- * dimension 2 and the plane-stress PMB constants of lib/plate.c.
+ * dimension 2 and the plane-stress PMB constants of lib/models/plate.c.
  *
  * Proves: a plate's sites are (i dx, j dx, 0) where the regions cut at
  * z = 0 hold them, with volume dx^2 H, radius dx/2, dimension 2 and its

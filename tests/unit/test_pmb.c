@@ -1,5 +1,5 @@
 /*
- * test_pmb -- the PMB bond force (lib/pmb.c) seen through the public run
+ * test_pmb -- the PMB bond force (lib/models/pmb.c) seen through the public run
  * interface, against the formulas of seed 000 (eqs. 5-9) and seed 004.
  *
  * Forces are read off the velocities after one velocity-Verlet step with a

@@ -1,5 +1,5 @@
 /*
- * test_profile.c -- profiles of time (lib/profile.c): values, exact
+ * test_profile.c -- profiles of time (lib/base/profile.c): values, exact
  * integrals and rates against hand-computed ones for each form, the
  * resolved text read back to the same numbers, and bad forms refused.
  */

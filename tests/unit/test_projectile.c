@@ -1,5 +1,5 @@
 /*
- * test_projectile -- the projectile (lib/projectile.c) against the head-on
+ * test_projectile -- the projectile (lib/effects/projectile.c) against the head-on
  * elastic collision of two bodies.
  *
  * Proves: a sphere of mass M at velocity V that hits a free particle of

@@ -1,5 +1,5 @@
 /*
- * test_sim -- the run (lib/sim.c with its effects): velocity Verlet over the
+ * test_sim -- the run (lib/run/sim.c with its effects): velocity Verlet over the
  * PMB bond force, bond failure and contact.
  *
  * Proves: a free body (no indenter, no boundary condition) given random

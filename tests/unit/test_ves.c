@@ -1,5 +1,5 @@
 /*
- * test_ves -- the viscoelastic solid (--model ves, lib/lps.c) under a
+ * test_ves -- the viscoelastic solid (--model ves, lib/models/lps.c) under a
  * held deformation.
  *
  * Proves: under a simple shear gamma held fixed (the force evaluated again
