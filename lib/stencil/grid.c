@@ -157,7 +157,7 @@ static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
                 int d = abs(G->lc[a][b->neighbor[q]] - G->lc[a][i]);
                 reach = d > reach ? d : reach;
             }
-    if (reach > 12) /* (2 reach + 1)^3 half offsets must fit an int16 */
+    if (reach > GRID_REACH_MAX)
         return 0;
     G->reach = reach;
     const int w = 2 * reach + 1;
@@ -271,7 +271,7 @@ static int build_segments(pd_grid *G, const int64_t *inv)
             hi[a] = G->lc[a][i] > hi[a] ? G->lc[a][i] : hi[a];
         }
     const int64_t nmid = (int64_t)hi[1] - lo[1] + 1, nout = (int64_t)hi[2] - lo[2] + 1;
-    if (nmid * nout > 4 * n + 1024) /* a sparse body: rows would be mostly empty */
+    if (nmid * nout > GRID_SPARSE_ROWS * n + GRID_SPARSE_SLACK) /* a sparse body */
         return 0;
     /* coordinates by grid index */
     int32_t *gc[3] = {malloc((size_t)n * 4), malloc((size_t)n * 4), malloc((size_t)n * 4)};

@@ -33,6 +33,11 @@
 #define GRID_CHUNK 256   /* particles per vector pass of a segment        */
 #define GRID_SAFE 16     /* shifts below this take the two-pass loop      */
 #define GRID_TILE 16     /* particles of a tile (runs at least this long) */
+#define GRID_REACH_MAX 12 /* the stencil's reach in spacings at most: the
+                             (2 reach + 1)^3 offsets' table is int16     */
+#define GRID_SPARSE_ROWS 4     /* more rows than this per particle (plus  */
+#define GRID_SPARSE_SLACK 1024 /* these) is a sparse body: rows would be
+                                  mostly empty, the bond lists serve    */
 
 /* Units: lengths in m, volumes in m^3, c in N/m^6 (seed 000's micromodulus),
  * force densities in N/m^3; "grid index" g is a particle's place in grid

@@ -315,10 +315,10 @@ tile_run(pd_grid *G, const grid_run *R, const grid_arrays *A, const int failure,
         }                                                                                      \
         return 0;                                                                              \
     }
-GRID_TILE_BLOCK(grid_tile_00, 0, 0)
-GRID_TILE_BLOCK(grid_tile_01, 0, 1)
-GRID_TILE_BLOCK(grid_tile_10, 1, 0)
-GRID_TILE_BLOCK(grid_tile_11, 1, 1)
+GRID_TILE_BLOCK(grid_tile_00, PD_BONDS_ELASTIC, 0)
+GRID_TILE_BLOCK(grid_tile_01, PD_BONDS_ELASTIC, 1)
+GRID_TILE_BLOCK(grid_tile_10, PD_BONDS_FAILURE, 0)
+GRID_TILE_BLOCK(grid_tile_11, PD_BONDS_FAILURE, 1)
 #endif
 
 /* The kernel's variants: with or without failure and contact, and with
@@ -332,14 +332,14 @@ GRID_TILE_BLOCK(grid_tile_11, 1, 1)
                 return -1;                                                                    \
         return 0;                                                                             \
     }
-GRID_BLOCK(grid_block_000, 0, 0, 0)
-GRID_BLOCK(grid_block_010, 0, 1, 0)
-GRID_BLOCK(grid_block_100, 1, 0, 0)
-GRID_BLOCK(grid_block_110, 1, 1, 0)
-GRID_BLOCK(grid_block_001, 0, 0, 1)
-GRID_BLOCK(grid_block_011, 0, 1, 1)
-GRID_BLOCK(grid_block_101, 1, 0, 1)
-GRID_BLOCK(grid_block_111, 1, 1, 1)
+GRID_BLOCK(grid_block_000, PD_BONDS_ELASTIC, 0, 0)
+GRID_BLOCK(grid_block_010, PD_BONDS_ELASTIC, 1, 0)
+GRID_BLOCK(grid_block_100, PD_BONDS_FAILURE, 0, 0)
+GRID_BLOCK(grid_block_110, PD_BONDS_FAILURE, 1, 0)
+GRID_BLOCK(grid_block_001, PD_BONDS_ELASTIC, 0, 1)
+GRID_BLOCK(grid_block_011, PD_BONDS_ELASTIC, 1, 1)
+GRID_BLOCK(grid_block_101, PD_BONDS_FAILURE, 0, 1)
+GRID_BLOCK(grid_block_111, PD_BONDS_FAILURE, 1, 1)
 
 typedef int (*grid_block_fn)(pd_grid *, int64_t, const grid_arrays *);
 static const grid_block_fn grid_blocks[8] = {grid_block_000, grid_block_001, grid_block_010,
