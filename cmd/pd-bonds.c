@@ -156,13 +156,7 @@ int main(int argc, char **argv)
     if (s == PD_OK)
         s = pd_file_create(o.output, &out);
     if (s == PD_OK)
-        s = pd_write_header(out, in, cmdline ? cmdline : PROG);
-    if (s == PD_OK)
-        s = pd_write_particles(out, p);
-    if (s == PD_OK)
-        s = pd_write_bonds(out, b);
-    if (s == PD_OK)
-        s = pd_write_sets(out, sets);
+        s = pd_write_model(out, in, cmdline ? cmdline : PROG, p, b, sets);
     if (s == PD_OK)
         s = pd_file_close(out);
     else

@@ -301,11 +301,7 @@ int main(int argc, char **argv)
     if (s == PD_OK)
         s = pd_file_create(o.output, &out);
     if (s == PD_OK)
-        s = pd_write_header(out, NULL, cmdline ? cmdline : PROG);
-    if (s == PD_OK)
-        s = pd_write_particles(out, p);
-    if (s == PD_OK)
-        s = pd_write_sets(out, sets);
+        s = pd_write_model(out, NULL, cmdline ? cmdline : PROG, p, NULL, sets);
     if (s == PD_OK)
         s = pd_file_close(out);
     else

@@ -836,6 +836,11 @@ pd_status pd_plan_restart_projectile(pd_file *f);
  * directed bonds, in both restart slots (nothing when it is there). */
 pd_status pd_plan_restart_history(pd_file *f, int64_t nbonds, int width);
 void pd_restart_free(pd_restart *r);
+/* A model file: the header (history from `from`, may be NULL, and
+ * `cmdline`), the particles, the bonds (b may be NULL: a lattice before
+ * pd-bonds) and the sets (may be NULL). */
+pd_status pd_write_model(pd_file *out, const pd_file *from, const char *cmdline,
+                         const pd_particles *p, const pd_bonds *b, const pd_sets *sets);
 /* A run's file (lib/io/runfile.c).  Start it: a new run gets the header
  * (its history from `from`, the model file it read, or none when NULL),
  * the particles, bonds and sets, the scene (`effects`, the scene's text)

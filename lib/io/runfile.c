@@ -71,6 +71,19 @@ pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b,
 }
 
 
+pd_status pd_write_model(pd_file *out, const pd_file *from, const char *cmdline,
+                         const pd_particles *p, const pd_bonds *b, const pd_sets *sets)
+{
+    pd_status s = pd_write_header(out, from, cmdline);
+    if (s == PD_OK)
+        s = pd_write_particles(out, p);
+    if (s == PD_OK && b)
+        s = pd_write_bonds(out, b);
+    if (s == PD_OK)
+        s = pd_write_sets(out, sets);
+    return s;
+}
+
 pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
                             const pd_particles *p, const pd_bonds *b, const pd_sets *sets,
                             const pd_scene *sc, const char *effects, const char *cmdline,
@@ -83,15 +96,8 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
         s = pd_drop_incomplete_frames(out);
         if (s == PD_OK)
             s = pd_append_history(out, cmdline);
-    } else {
-        s = pd_write_header(out, from, cmdline);
-        if (s == PD_OK)
-            s = pd_write_particles(out, p);
-        if (s == PD_OK)
-            s = pd_write_bonds(out, b);
-        if (s == PD_OK)
-            s = pd_write_sets(out, sets);
-    }
+    } else
+        s = pd_write_model(out, from, cmdline, p, b, sets);
     if (s == PD_OK)
         s = pd_write_scene(out, sc, effects, text);
     /* every frame laid out now, then the file under its final name: a run

@@ -905,38 +905,24 @@ static pd_status lps_restore(pd_sim *sim, void *state, const pd_restart *r)
     return PD_OK;
 }
 
-const pd_effect pd_effect_lps = {
-    .name = "lps", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
-    .save = lps_save, .restore = lps_restore};
-const pd_effect pd_effect_lps_failure = {
-    .name = "lps+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
-    .save = lps_save, .restore = lps_restore};
-const pd_effect pd_effect_ves = {
-    .name = "ves", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
-    .save = lps_save, .restore = lps_restore};
-const pd_effect pd_effect_eps = {
-    .name = "eps", .timer = PD_T_BONDS, .init = lps_init, .force = lps_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
-    .save = lps_save, .restore = lps_restore};
-const pd_effect pd_effect_eps_failure = {
-    .name = "eps+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
-    .save = lps_save, .restore = lps_restore};
-const pd_effect pd_effect_ves_failure = {
-    .name = "ves+failure", .timer = PD_T_BONDS, .init = lps_init, .force = lps_failure_force,
-    .free = lps_free, .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress,
-    .save = lps_save, .restore = lps_restore};
+/* The force of a state-based model in the step's table, without and with
+ * failure: the same machinery, told apart by lps_state.model. */
+#define LPS_EFFECT(NAME, FORCE)                                                                    \
+    {.name = NAME, .timer = PD_T_BONDS, .init = lps_init, .force = FORCE, .free = lps_free,       \
+     .energy = lps_energy, .kind = PD_ENERGY_ELASTIC, .stress = lps_stress, .save = lps_save,      \
+     .restore = lps_restore}
+const pd_effect pd_effect_lps = LPS_EFFECT("lps", lps_force);
+const pd_effect pd_effect_lps_failure = LPS_EFFECT("lps+failure", lps_failure_force);
+const pd_effect pd_effect_ves = LPS_EFFECT("ves", lps_force);
+const pd_effect pd_effect_ves_failure = LPS_EFFECT("ves+failure", lps_failure_force);
+const pd_effect pd_effect_eps = LPS_EFFECT("eps", lps_force);
+const pd_effect pd_effect_eps_failure = LPS_EFFECT("eps+failure", lps_failure_force);
 
 /* The state of the run's LPS-family effect, or NULL. */
 static lps_state *lps_of(const pd_sim *sim)
 {
     for (int k = 0; k < sim->neffects; k++)
-        if (sim->effects[k] == &pd_effect_lps || sim->effects[k] == &pd_effect_lps_failure ||
-            sim->effects[k] == &pd_effect_ves || sim->effects[k] == &pd_effect_ves_failure ||
-            sim->effects[k] == &pd_effect_eps || sim->effects[k] == &pd_effect_eps_failure)
+        if (sim->effects[k]->init == lps_init)
             return sim->state[k];
     return NULL;
 }

@@ -105,6 +105,10 @@ pd_status pd_scene_check(pd_scene_spec *o)
         s = need_own(o, m);
     if (s != PD_OK)
         return s;
+    if (o->sc.fields & ~m->fields) /* frame fields the model cannot write */
+        return pd_fail(PD_ERR_INVALID, "--fields %s: --model %s does not write it",
+                       (o->sc.fields & ~m->fields & PD_FIELD_ENERGY) ? "energy" : "stress",
+                       m->name);
     if (o->nlaws > 0 || o->sc.has_fibre) {
         int s00 = o->sc.fibre_s00[0] > 0;
         for (int k = 0; k < o->nlaws; k++)
