@@ -276,10 +276,10 @@ static pd_status lps_init(pd_sim *sim, void **state)
                        (long long)b->count);
     }
 
-    st->model = sim->sc.model == PD_MODEL_VES || sim->sc.model == PD_MODEL_EPS ? sim->sc.model
-                                                                                : PD_MODEL_LPS;
+    st->model = sim->model->kind; /* LPS, VES or EPS (their descriptors, below) */
+    const size_t width = (size_t)sim->model->history_width; /* VES 2, EPS 1 */
     if (st->model == PD_MODEL_EPS) {
-        st->hist = calloc(nb, sizeof(double));
+        st->hist = calloc(width * nb, sizeof(double));
         st->rev = malloc(nb * sizeof(int64_t));
         st->psi0 = malloc(n * sizeof(double));
         st->ratio = malloc(n * sizeof(double));
@@ -295,7 +295,7 @@ static pd_status lps_init(pd_sim *sim, void **state)
         const double c1 = sim->sc.ves_tau / sim->sc.dt;
         st->decay = exp(-1.0 / c1);
         st->beta = 1.0 - c1 * (1.0 - st->decay);
-        if ((st->hist = calloc(2 * nb, sizeof(double))) == NULL) {
+        if ((st->hist = calloc(width * nb, sizeof(double))) == NULL) {
             lps_free(st);
             return pd_fail(PD_ERR_NOMEM, "out of memory for the VES history of %lld bonds",
                            (long long)b->count);
@@ -877,11 +877,11 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
     free(theta);
 }
 
-/* The bond history a restart needs (VES: 2 values per directed bond, EPS:
- * 1; none without bonds). */
+/* The bond history a restart needs: the model's history_width values per
+ * directed bond (VES 2, EPS 1; none without bonds). */
 static double *history_of(const pd_sim *sim, const lps_state *st, int *width)
 {
-    *width = !st || !st->hist || sim->b->count == 0 ? 0 : st->model == PD_MODEL_EPS ? 1 : 2;
+    *width = !st || !st->hist || sim->b->count == 0 ? 0 : sim->model->history_width;
     return *width ? st->hist : NULL;
 }
 
