@@ -2,8 +2,9 @@
 # The layer check of `make check`: lib/ is split into folders, one a layer,
 # listed bottom to top in lib/LAYERS.  A file may call (or read the data
 # of) files of its own layer or of a lower one, never of a higher one, and
-# the files' calls form no circle.  Read from the object files' symbols
-# (nm): what each defines, what each leaves undefined.
+# the files' calls form no circle: read from the object files' symbols
+# (nm), what each defines and what each leaves undefined.  Its #include
+# "LAYER/x.h" lines name only its own layer or lower ones.
 # Usage: sh share/layers.sh [LIBDIR]   (default lib; after `make all`)
 set -eu
 lib=${1:-lib}
@@ -44,6 +45,22 @@ if [ -n "$up" ]; then
     echo "$up" >&2
     fail=1
 fi
+# the headers too: a file includes only headers of its own layer or a
+# lower one (#include "LAYER/x.h")
+rank_of() { echo "$layers" | awk -v l="$1" '$0 == l { print NR }'; }
+for l in $layers; do
+    r=$(rank_of "$l")
+    for f in "$lib/$l"/*.[ch]; do
+        [ -e "$f" ] || continue
+        for inc in $(sed -n 's/^#include "\([a-z_]*\)\/[^"]*"/\1/p' "$f"); do
+            ri=$(rank_of "$inc")
+            if [ -z "$ri" ] || [ "$ri" -gt "$r" ]; then
+                echo "layers: $f ($l) includes a header of $inc, a higher layer" >&2
+                fail=1
+            fi
+        done
+    done
+done
 # no circle among the files (tsort names one when there is)
 awk '{ print $1, $4 }' "$tmp/calls" | sort -u >"$tmp/edges"
 if ! tsort "$tmp/edges" >/dev/null 2>"$tmp/loop"; then
