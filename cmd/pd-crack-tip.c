@@ -67,7 +67,7 @@ static void usage(FILE *out)
             "Options:\n"
             "  -a, --axis x|y|z    direction of crack growth; with --front, the axis of the\n"
             "                      front's distances and extent (default x)\n"
-            "  -t, --threshold D   damage threshold phi_0 in [0,1] (default 0.3)\n"
+            "  -t, --threshold D   damage threshold phi_0 in [0,1] (default %g)\n"
             "  -w, --window K      speed from frames k-K..k+K (default 2)\n"
             "      --front         the crack front (outline of the damaged zone)\n"
             "      --center X,Y,Z  with --front: the centre of the distances, m (default\n"
@@ -79,7 +79,8 @@ static void usage(FILE *out)
             "                      PREFIX.pvd for ParaView (with --front, a front flag)\n"
             "      --debug         print HDF5's own error stack (and gnuplot's messages)\n"
             "  -h, --help          show this help\n"
-            "  -V, --version       show the version\n");
+            "  -V, --version       show the version\n",
+            PD_DAMAGE_THRESHOLD);
 }
 
 static int parse_axis(const char *s, int *axis)

@@ -41,12 +41,13 @@ static void usage(FILE *out)
             "  -o, --output FILE   write the run with damage to FILE ('-' for stdout)\n"
             "  -n, --no-write      only print the table\n"
             "  -q, --quiet         no table\n"
-            "  --threshold D       count particles with damage above D (default 0.3)\n"
+            "  --threshold D       count particles with damage above D (default %g)\n"
             "  --no-precrack       leave the pre-crack (pd-bonds --crack) out: damage and\n"
             "                      broken bonds of the run alone, stored as 'damage_run'\n"
             "      --debug         print HDF5's own error stack\n"
             "  -h, --help          show this help\n"
-            "  -V, --version       show the version\n");
+            "  -V, --version       show the version\n",
+            PD_DAMAGE_THRESHOLD);
 }
 
 static int parse_options(int argc, char **argv, struct options *o)

@@ -447,7 +447,8 @@ pd_status pd_bond_laws_check(const pd_particles *p, const pd_scene *s);
  * --material-region); returns how many. */
 int64_t pd_material_paint(pd_particles *p, const pd_region *r, int32_t id);
 
-/* Stable step of seed 004 eq. 46 for the bonds of the scene's model. */
+/* Stable step of seed 004 eq. 46 for the bonds of the scene's model (its
+ * descriptor's, lib/models/). */
 double pd_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s);
 
 /* LPS (lib/models/lps.c).  The influence function omega(|xi|) for a horizon. */
@@ -456,8 +457,9 @@ double pd_lps_influence(pd_influence w, double length, double horizon);
  * over the reference family (seed 000 eq. 4, Algorithm 3), into m (n). */
 void pd_lps_weighted_volume(const pd_particles *p, const pd_bonds *b, pd_influence w,
                             double *m);
-/* The stable step of the LPS model (the analogue of seed 004 eq. 46; see
- * lib/models/lps.c); pd_stable_dt calls it for PD_MODEL_LPS. */
+/* The stable step of the state-based models LPS, VES and EPS (the analogue
+ * of seed 004 eq. 46; see lib/models/lps.c), their descriptors' and so
+ * pd_stable_dt's for them. */
 double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene *s);
 /* Name of an influence function ("1/r", "1", "gaussian"), and back (-1:
  * unknown). */
