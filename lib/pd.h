@@ -513,7 +513,10 @@ typedef struct {
  * descriptor), the scene's c from laws and fibres, a stiffness given.
  * PD_ERR_INVALID (a usage error) names what is wrong. */
 pd_status pd_scene_check(pd_scene_spec *spec);
-/* Against the body p, b (`body` names it in messages): the laws' c, K from
+/* Against the body p, b (`body` names it in messages), after
+ * pd_scene_check (called again here, so that this one call resolves a
+ * scene; a program calls pd_scene_check first to tell a usage error before
+ * it reads the body): the laws' c, K from
  * E, c from K (3-D or plane stress), s00 from G0, the defaults (contact
  * skin, lost margin, the projectile's K), the stable step of seed 004 eq.
  * 46 and dt (safety x the stable step; a larger --dt without force_dt is

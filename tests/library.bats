@@ -1,7 +1,7 @@
 #!/usr/bin/env bats
 # libpd as a user's own program sees it: examples/library/impact.c sets up
-# and runs a scene through pd.h alone (pd_scene_spec, pd_scene_check,
-# pd_scene_resolve, pd_sim_*, pd_run_file_*).  It builds with -Wall -Wextra
+# and runs a scene through pd.h alone (pd_scene_spec, pd_scene_resolve,
+# pd_sim_*, pd_run_file_*).  It builds with -Wall -Wextra
 # -Werror against lib/libpd.a, writes the run file the pipeline
 # pd-lattice | pd-bonds | pd-run writes for the same scene, bit for bit but
 # for the history (so pd-run holds no physics of its own), keeps the energy

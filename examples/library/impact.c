@@ -69,7 +69,7 @@ int main(int argc, char **argv)
     sc->steps = 200;
     sc->every = 50;
     sc->threads = omp_get_max_threads();
-    if (pd_scene_check(&spec) != PD_OK || pd_scene_resolve(&spec, p, b, "the block") != PD_OK)
+    if (pd_scene_resolve(&spec, p, b, "the block") != PD_OK)
         return fail("the scene");
 
     /* the run and its file: frames laid out, then published */

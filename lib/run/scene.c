@@ -142,13 +142,16 @@ pd_status pd_scene_resolve(pd_scene_spec *o, const pd_particles *p, const pd_bon
                            const char *body)
 {
     pd_scene *sc = &o->sc;
+    pd_status s = pd_scene_check(o); /* (again, for a caller that did not) */
+    if (s != PD_OK)
+        return s;
     const pd_model *m = pd_model_of(sc->model);
     for (int k = 0; k < o->nlaws; k++) /* --material/--interface K=: c for the dimension */
         if (o->law_k[k] > 0)
             o->laws[k].c = pd_pmb_c_for(p, o->law_k[k], b->horizon);
     sc->nlaws = o->nlaws;
     sc->laws = o->laws;
-    pd_status s = pd_scene_has_laws(sc) ? pd_bond_laws_check(p, sc) : PD_OK;
+    s = pd_scene_has_laws(sc) ? pd_bond_laws_check(p, sc) : PD_OK;
     if (s != PD_OK)
         return s;
     if (o->has_e) /* PMB's fixed Poisson ratio: K from E by dimension */
