@@ -38,6 +38,7 @@ struct options {
     const char *output;
     const char *restart; /* --restart RUN.h5: go on from its last frame */
     int quiet, timing, debug;
+    int strict;          /* --strict: a warning about the scene is an error */
     pd_bc bc[MAX_BC]; /* --velocity-bc, --displacement-bc, --body-force */
     int nbc;
 };
@@ -139,11 +140,17 @@ static void usage(FILE *out)
             "Other:\n"
             "  --restart RUN.h5      go on from the last complete frame of RUN.h5 for N\n"
             "                        more steps, with its scene (only --steps, --every,\n"
-            "                        --threads, --status, --timing, -q, -o may be given);\n"
+            "                        --threads, --status, --timing, --strict, -q, -o may\n"
+            "                        be given);\n"
             "                        RUN.h5 is updated unless -o names another file\n"
             "  --scene FILE          read options from FILE ('option value' lines);\n"
             "                        the command line overrides it\n"
             "  --threads N           OpenMP threads (default: all cores)\n"
+            "  --allow-overlap       let a projectile or indenter start inside the body\n"
+            "                        (else an error naming the depth and the particle)\n"
+            "  --strict              a warning about the scene (a value no solid has, a\n"
+            "                        run that ends before first contact, ...) is an\n"
+            "                        error\n"
             "  --bond-list           walk the bonds (pmb, lps) as a list even when the\n"
             "                        body is on a lattice (the lattice stencil kernel\n"
             "                        is the default there; the two agree to rounding)\n"
@@ -304,7 +311,7 @@ static int restart_safe(const char *arg)
 {
     static const char *safe[] = {"--restart", "--steps", "--every", "--threads", "--status",
                                  "--timing",  "-q",      "--quiet", "-o",        "--output",
-                                 "--debug",   NULL};
+                                 "--debug",   "--strict", NULL};
     for (int k = 0; safe[k]; k++) {
         size_t len = strlen(safe[k]);
         if (strncmp(arg, safe[k], len) == 0 && (arg[len] == '\0' || arg[len] == '='))
@@ -396,7 +403,8 @@ static int parse_options(int argc, char **argv, struct options *o)
            OPT_STEPS, OPT_DT, OPT_SAFETY, OPT_FORCE_DT, OPT_EVERY, OPT_THREADS, OPT_STATUS,
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
            OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID, OPT_MATERIAL,
-           OPT_INTERFACE, OPT_FIBRE, OPT_LAMBDA, OPT_TAU, OPT_YIELD, OPT_BONDLIST };
+           OPT_INTERFACE, OPT_FIBRE, OPT_LAMBDA, OPT_TAU, OPT_YIELD, OPT_BONDLIST,
+           OPT_OVERLAP, OPT_STRICT };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -414,6 +422,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"safety", required_argument, 0, OPT_SAFETY},
         {"force-dt", no_argument, 0, OPT_FORCE_DT},
         {"bond-list", no_argument, 0, OPT_BONDLIST},
+        {"allow-overlap", no_argument, 0, OPT_OVERLAP},
+        {"strict", no_argument, 0, OPT_STRICT},
         {"every", required_argument, 0, OPT_EVERY},
         {"threads", required_argument, 0, OPT_THREADS},
         {"status", required_argument, 0, OPT_STATUS},
@@ -573,6 +583,12 @@ static int parse_options(int argc, char **argv, struct options *o)
             break;
         case OPT_BONDLIST:
             o->spec.sc.bond_list = 1;
+            break;
+        case OPT_OVERLAP:
+            o->spec.sc.allow_overlap = 1;
+            break;
+        case OPT_STRICT:
+            o->strict = 1;
             break;
         case OPT_FORCE_DT:
             o->spec.force_dt = 1;
@@ -794,6 +810,7 @@ struct held {
     uint64_t *bits0;
     char *cmdline, *text;
     struct options *opts; /* its profiles */
+    pd_scene_report report; /* a fresh run's scene at t = 0 */
 };
 
 static void release(struct held *h)
@@ -878,8 +895,17 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
                 sc->proj_mass, sc->proj_radius, sc->proj_k,
                 o->spec.has_proj_k ? "" : " (default: 2 K p = the largest bond stiffness sum of "
                                           "seed 004 eq. 46 at p = spacing/4)");
+    for (int k = 0; k < h->report.nwarnings; k++) /* the checks before step 1 */
+        fprintf(stderr, PROG ": warning: %s\n", h->report.warning[k]);
     if (o->restart)
         fprintf(stderr, PROG ": going on from step %lld of '%s'\n", (long long)first, o->restart);
+    else if (isfinite(h->report.contact_time))
+        fprintf(stderr, PROG ": first contact at t = %.3g s (step %lld); %lld frame%s to write\n",
+                h->report.contact_time, (long long)ceil(h->report.contact_time / sc->dt),
+                (long long)h->report.frames, h->report.frames == 1 ? "" : "s");
+    else
+        fprintf(stderr, PROG ": %lld frame%s to write\n", (long long)h->report.frames,
+                h->report.frames == 1 ? "" : "s");
 }
 
 /* Read the body (a restart: the run and its last frame), resolve the
@@ -903,6 +929,10 @@ static int start(struct options *o, struct held *h, int64_t *first)
     sc->sets = h->sets;
     if (s == PD_OK)
         s = pd_scene_resolve(&o->spec, h->p, h->b, o->input);
+    if (s == PD_OK && !restart)
+        s = pd_scene_inspect(&o->spec, h->p, h->b, &h->report);
+    if (s == PD_OK && o->strict && h->report.nwarnings > 0)
+        s = pd_fail(PD_ERR_INVALID, "%s (--strict)", h->report.warning[0]);
     if (s == PD_OK && restart) {
         s = pd_run_file_load(h->in, h->p, h->b, first, &h->r, h->v0, &h->bits0);
         sc->steps += *first; /* --steps N more */

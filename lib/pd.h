@@ -324,6 +324,9 @@ typedef struct {
     double s00;            /* critical stretch parameter s00               */
     double alpha;          /* s0 = s00 - alpha s_min (seed 000 eq. 9)       */
     int has_contact;
+    int allow_overlap;     /* a projectile or indenter may start inside the
+                              body (pd_scene_inspect; pd-run
+                              --allow-overlap)                           */
     int bond_list;         /* walk the bond list even on a lattice (pd-run
                               --bond-list; lib/stencil/grid.c)                     */
     double contact_skin;   /* m                                            */
@@ -523,6 +526,42 @@ pd_status pd_scene_check(pd_scene_spec *spec);
  * refused).  spec->sc is then the scene a run takes (pd_sim_new). */
 pd_status pd_scene_resolve(pd_scene_spec *spec, const pd_particles *p, const pd_bonds *b,
                            const char *body);
+/* What pd_scene_inspect finds in a resolved scene that is valid but
+ * likely wrong, before step 1. */
+#define PD_SCENE_WARNINGS 16 /* warnings kept, at most                     */
+typedef struct {
+    double contact_time; /* s from t = 0 until the projectile or indenter
+                            first touches a particle: INFINITY when it
+                            never does (moving away, or past the body),
+                            NaN when the scene has neither              */
+    int64_t frames;      /* frames the run will write                     */
+    int nwarnings;
+    char warning[PD_SCENE_WARNINGS][256]; /* one line each, no newline     */
+} pd_scene_report;
+
+/* A fresh run's scene (spec resolved by pd_scene_resolve) against its body
+ * at t = 0.  A projectile or indenter that overlaps the body (a particle
+ * deeper than PD_OVERLAP_TOL spacings inside its sphere) is PD_ERR_INVALID,
+ * naming the depth and the particle, unless spec->sc.allow_overlap.  Values
+ * that are valid but implausible get one warning each, naming the likely
+ * mistake (PD_PLAUSIBLE_*: densities and moduli of no solid, a critical
+ * stretch above PD_PLAUSIBLE_S00_MAX, a horizon of fewer than
+ * PD_PLAUSIBLE_M_MIN or more than PD_PLAUSIBLE_M_MAX spacings, a run that
+ * ends before the first contact, a scene in which nothing loads the body). */
+#define PD_OVERLAP_TOL 0.01           /* spacings: touching (to rounding, or a
+                                         hair deeper) is not overlap        */
+#define PD_PLAUSIBLE_DENSITY_MIN 100.0   /* kg/m^3: below any solid (foams
+                                          aside): g/cm^3 meant?            */
+#define PD_PLAUSIBLE_DENSITY_MAX 25000.0 /* kg/m^3: above any solid
+                                          (osmium 22590)                  */
+#define PD_PLAUSIBLE_MODULUS_MIN 1e5  /* Pa: softer than soft rubber's G    */
+#define PD_PLAUSIBLE_MODULUS_MAX 2e12 /* Pa: stiffer than diamond's E      */
+#define PD_PLAUSIBLE_S00_MAX 0.1      /* a bond stretched 10% before it breaks */
+#define PD_PLAUSIBLE_M_MIN 2.0        /* horizon / spacing                   */
+#define PD_PLAUSIBLE_M_MAX 6.0
+pd_status pd_scene_inspect(const pd_scene_spec *spec, const pd_particles *p, const pd_bonds *b,
+                           pd_scene_report *rep);
+
 /* The resolved scene as scene-file lines ("option value"), enough to rerun
  * or restart (/scene/options); malloc'ed, NULL when out of memory. */
 char *pd_scene_text(const pd_scene *s);

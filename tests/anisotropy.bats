@@ -14,7 +14,7 @@ setup() {
 
 G=6e9
 LPS=(--model lps --bulk-modulus "$BULK" --shear-modulus "$G")
-LPS_RUN=("${LPS[@]}" --failure 0.0005,0.25 --contact
+LPS_RUN=("${LPS[@]}" --failure 0.0005,0.25 --contact --allow-overlap
          --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100)
 
 # close A.h5 B.h5 RTOL: every frame dataset and frame attribute of A equals

@@ -12,7 +12,7 @@ setup() {
 }
 
 EPS=(--model eps --bulk-modulus "$BULK" --shear-modulus 6e9 --yield-stress 5e7)
-EPS_RUN=("${EPS[@]}" --failure 0.0005,0.25 --contact
+EPS_RUN=("${EPS[@]}" --failure 0.0005,0.25 --contact --allow-overlap
          --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100)
 
 @test "eps: option errors are usage errors with one clear line" {

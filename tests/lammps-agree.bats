@@ -153,7 +153,7 @@ setup() {
     # step 2, when s0 of step 1 is known
     local d=$BATS_TEST_TMPDIR/first ind=sphere,0,0.0045,0,0.005,1e19,0,0,0
     make_disk "$d"
-    run_pd "$d" run.h5 2 1 --indenter "$ind"
+    run_pd "$d" run.h5 2 1 --indenter "$ind" --allow-overlap
     run_lmp "$d" 2 1 "$ind"
     run -0 py "
 with h5py.File(sys.argv[1]) as h:

@@ -13,7 +13,7 @@ setup() {
 
 G=6e9
 LPS=(--model lps --bulk-modulus "$BULK" --shear-modulus "$G")
-LPS_RUN=("${LPS[@]}" --failure 0.0005,0.25 --contact
+LPS_RUN=("${LPS[@]}" --failure 0.0005,0.25 --contact --allow-overlap
          --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100)
 
 # balance FILE: per complete frame "step total motion", total being
@@ -113,13 +113,13 @@ assert worst <= 1e-3, worst"
     dts=$(py "
 with h5py.File(sys.argv[1]) as f:
     print(repr(f['scene'].attrs['dt_stable']))" ref.h5)
-    run -0 pd-run "${LPS[@]}" -q --indenter "$ind" --dt "$("$PY" -c "print(0.9 * $dts)")" \
+    run -0 pd-run "${LPS[@]}" -q --indenter "$ind" --allow-overlap --dt "$("$PY" -c "print(0.9 * $dts)")" \
         --steps 1000 --every 1000 model.h5 -o ok.h5
     big=$("$PY" -c "print(1.01 * $dts)")
     run -1 --separate-stderr pd-run "${LPS[@]}" --indenter "$ind" --dt "$big" --steps 10 \
         model.h5 -o no.h5
     [[ "$stderr" =~ exceeds\ the\ stable\ time\ step ]]
-    run -1 --separate-stderr pd-run "${LPS[@]}" -q --indenter "$ind" --force-dt \
+    run -1 --separate-stderr pd-run "${LPS[@]}" -q --indenter "$ind" --allow-overlap --force-dt \
         --dt "$("$PY" -c "print(4 * $dts)")" --steps 1000 model.h5 -o blow.h5
     [[ "$stderr" =~ unstable ]]
 }

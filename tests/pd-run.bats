@@ -510,7 +510,7 @@ print('ok')" r.h5
 
 @test "an elastic run (no --failure) breaks no bond, even under the indenter" {
     make_block
-    pd-run -q --bulk-modulus "$BULK" --contact \
+    pd-run -q --bulk-modulus "$BULK" --contact --allow-overlap \
         --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 \
         --steps 50 --every 10 model.h5 -o r.h5
     run -0 py "
@@ -744,7 +744,7 @@ with h5py.File(sys.argv[1]) as f:
     make_block
     # no failure (bonds that break would free the particles) and twenty times
     # the stable step: the indented lattice blows up within a hundred steps
-    run --separate-stderr pd-run --bulk-modulus "$BULK" \
+    run --separate-stderr pd-run --bulk-modulus "$BULK" --allow-overlap \
         --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --dt 5e-6 --force-dt \
         --steps 2000 --every 5 -q model.h5 -o r.h5
     [ "$status" -eq 1 ]

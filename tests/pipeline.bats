@@ -75,6 +75,7 @@ bulk-modulus $BULK
 failure 0.0005,0.25
 contact
 indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100
+allow-overlap
 steps 20
 every 0
 EOF

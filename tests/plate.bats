@@ -268,7 +268,8 @@ with h5py.File(sys.argv[1]) as f:
         pd-lattice -q --dimension 2 --thickness $h --spacing 0.0005 --density 8000 \
             --box -0.005,0.005,-0.005,0.005,0,0 -o p$h.h5
         pd-bonds -q --horizon $DELTA p$h.h5 -o m$h.h5
-        pd-run -q --youngs-modulus $E --indenter sphere,0,0.0069,0,0.002,1e19,0,-10,0 \
+        pd-run -q --youngs-modulus $E --allow-overlap \
+            --indenter sphere,0,0.0069,0,0.002,1e19,0,-10,0 \
             --steps 300 m$h.h5 -o r$h.h5
     done
     py "

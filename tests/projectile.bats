@@ -101,9 +101,9 @@ with h5py.File(sys.argv[1]) as f:
 @test "a very heavy sphere is the indenter at constant velocity" {
     make_block
     local K=1e19 dt=2e-7
-    pd-run -q --bulk-modulus "$BULK" --contact --dt "$dt" \
+    pd-run -q --bulk-modulus "$BULK" --contact --dt "$dt" --allow-overlap \
         --projectile "sphere,0.005,0.005,0.0125,0.003,1e9,0,0,-50,$K" --steps 150 model.h5 -o p.h5
-    pd-run -q --bulk-modulus "$BULK" --contact --dt "$dt" \
+    pd-run -q --bulk-modulus "$BULK" --contact --dt "$dt" --allow-overlap \
         --indenter "sphere,0.005,0.005,0.0125,0.003,$K,0,0,-50" --steps 150 model.h5 -o i.h5
     py "
 with h5py.File(sys.argv[1]) as p, h5py.File(sys.argv[2]) as i:

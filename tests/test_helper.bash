@@ -74,8 +74,8 @@ make_block() {
 
 # The pd-run options of make_run: PMB with failure, contact, and a sphere
 # that starts 0.5 mm deep in the top face and moves down at 100 m/s, which
-# breaks bonds within 50 steps.
-RUN_OPTS=(--bulk-modulus "$BULK" --failure 0.0005,0.25 --contact
+# breaks bonds within 50 steps (--allow-overlap: it means to start inside).
+RUN_OPTS=(--bulk-modulus "$BULK" --failure 0.0005,0.25 --contact --allow-overlap
           --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100)
 
 _pd_build_run() {

@@ -13,6 +13,8 @@
  *     enough to rerun or restart.
  */
 #include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -182,6 +184,131 @@ pd_status pd_scene_resolve(pd_scene_spec *o, const pd_particles *p, const pd_bon
     return PD_OK;
 }
 
+/* ------------------------------------------------------------ before step 1 */
+
+static void warn(pd_scene_report *rep, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void warn(pd_scene_report *rep, const char *fmt, ...)
+{
+    if (rep->nwarnings == PD_SCENE_WARNINGS)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(rep->warning[rep->nwarnings++], sizeof rep->warning[0], fmt, ap);
+    va_end(ap);
+}
+
+/* A sphere of centre c and radius R moving at v against the particles at
+ * t = 0: the deepest particle inside it (*deep, -1: none deeper than tol)
+ * and its depth R - |x - c|, m; and the first time a particle is touched,
+ * |x - (c + v t)| = R, s (INFINITY: never; 0: at once). */
+static double sphere_meets(const pd_particles *p, const double c[3], double R, const double v[3],
+                           double tol, int64_t *deep, double *depth)
+{
+    double first = INFINITY;
+    const double vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    *deep = -1;
+    *depth = tol;
+    for (int64_t i = 0; i < p->n; i++) {
+        const double d[3] = {p->x[0][i] - c[0], p->x[1][i] - c[1], p->x[2][i] - c[2]};
+        const double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        const double in = R - sqrt(dd);
+        if (in > *depth) {
+            *deep = i;
+            *depth = in;
+        }
+        if (in >= 0) { /* touched at once */
+            first = 0;
+            continue;
+        }
+        /* |d - v t|^2 = R^2: t^2 vv - 2 t (d.v) + dd - R^2 = 0, the smaller
+         * root when the sphere comes toward the particle */
+        const double dv = d[0] * v[0] + d[1] * v[1] + d[2] * v[2];
+        const double disc = dv * dv - vv * (dd - R * R);
+        if (vv > 0 && dv > 0 && disc >= 0)
+            first = fmin(first, (dv - sqrt(disc)) / vv);
+    }
+    return first;
+}
+
+/* An overlap at t = 0 is an error; else the time of the first contact. */
+static pd_status sphere_check(const pd_scene_spec *o, const pd_particles *p, const char *what,
+                              const char *option, const double c[3], double R,
+                              const double v[3], pd_scene_report *rep)
+{
+    int64_t deep;
+    double depth;
+    const double t = sphere_meets(p, c, R, v, PD_OVERLAP_TOL * p->spacing, &deep, &depth);
+    if (deep >= 0 && !o->sc.allow_overlap)
+        return pd_fail(PD_ERR_INVALID,
+                       "the %s overlaps the body at t = 0: particle %lld (id %lld) is %.3g m "
+                       "inside it (radius %g m); start it outside, or give --allow-overlap",
+                       what, (long long)deep, (long long)p->id[deep], depth, R);
+    rep->contact_time = isnan(rep->contact_time) ? t : fmin(rep->contact_time, t);
+    const double end = (double)o->sc.steps * o->sc.dt;
+    if (isinf(t))
+        warn(rep, "the %s never touches the body (it moves away from it or past it): check "
+                  "the velocity of --%s", what, option);
+    else if (t > end)
+        warn(rep, "the %s first touches the body at t = %.3g s, after the run ends (%.3g s, "
+                  "%lld steps): more --steps?", what, t, end, (long long)o->sc.steps);
+    return PD_OK;
+}
+
+/* A modulus of no solid: its unit was likely wrong. */
+static void modulus_check(pd_scene_report *rep, const char *name, double v)
+{
+    if (v > 0 && v < PD_PLAUSIBLE_MODULUS_MIN)
+        warn(rep, "%s %g Pa is far below any solid's; GPa or MPa meant? (%g GPa is %g Pa)",
+             name, v, v, v * 1e9);
+    else if (v > PD_PLAUSIBLE_MODULUS_MAX)
+        warn(rep, "%s %g Pa is above any solid's (diamond: about 1.1e12 Pa)", name, v);
+}
+
+pd_status pd_scene_inspect(const pd_scene_spec *o, const pd_particles *p, const pd_bonds *b,
+                           pd_scene_report *rep)
+{
+    const pd_scene *sc = &o->sc;
+    memset(rep, 0, sizeof *rep);
+    rep->contact_time = NAN;
+    pd_status s = PD_OK;
+    if (sc->has_projectile)
+        s = sphere_check(o, p, "projectile", "projectile", sc->proj_center, sc->proj_radius,
+                         sc->proj_velocity, rep);
+    if (s == PD_OK && sc->has_indenter)
+        s = sphere_check(o, p, "indenter", "indenter", sc->ind_center, sc->ind_radius,
+                         sc->ind_velocity, rep);
+    if (s != PD_OK)
+        return s;
+    double rho_lo = INFINITY, rho_hi = 0;
+    for (int64_t i = 0; i < p->n; i++) {
+        rho_lo = fmin(rho_lo, p->density[i]);
+        rho_hi = fmax(rho_hi, p->density[i]);
+    }
+    if (p->n > 0 && rho_lo < PD_PLAUSIBLE_DENSITY_MIN)
+        warn(rep, "density %g kg/m^3 is far below any solid's; g/cm^3 meant? (%g g/cm^3 is "
+                  "%g kg/m^3)", rho_lo, rho_lo, rho_lo * 1000);
+    if (p->n > 0 && rho_hi > PD_PLAUSIBLE_DENSITY_MAX)
+        warn(rep, "density %g kg/m^3 is above any solid's (osmium: 22590 kg/m^3)", rho_hi);
+    if (o->has_k)
+        modulus_check(rep, "bulk modulus", sc->bulk_modulus);
+    if (o->has_e)
+        modulus_check(rep, "Young's modulus", sc->youngs_modulus);
+    if (o->has_g)
+        modulus_check(rep, "shear modulus", sc->shear_modulus);
+    if (sc->has_failure && sc->s00 > PD_PLAUSIBLE_S00_MAX)
+        warn(rep, "critical stretch s00 %g: bonds stretch %.0f%% before they break; a "
+                  "percentage meant as a fraction?", sc->s00, 100 * sc->s00);
+    const double m = b->horizon / p->spacing;
+    if (p->spacing > 0 && (m < PD_PLAUSIBLE_M_MIN || m > PD_PLAUSIBLE_M_MAX))
+        warn(rep, "the horizon is %.3g spacings (%g m over %g m): peridynamic models are "
+                  "calibrated for 2 to 6 (3 is usual)", m, b->horizon, p->spacing);
+    if (!sc->has_projectile && !sc->has_indenter && sc->nbc == 0)
+        warn(rep, "nothing loads the body (no projectile, indenter, boundary condition or "
+                  "body force): it stays at rest");
+    rep->frames = sc->every > 0 ? sc->steps / sc->every + 1 + (sc->steps % sc->every != 0) : 1;
+    return PD_OK;
+}
+
 /* The resolved scene in scene-file form, enough to rerun. */
 char *pd_scene_text(const pd_scene *s)
 {
@@ -258,6 +385,8 @@ char *pd_scene_text(const pd_scene *s)
         p += sprintf(p, "force-dt\n");
     if (s->bond_list)
         p += sprintf(p, "bond-list\n");
+    if (s->allow_overlap)
+        p += sprintf(p, "allow-overlap\n");
     for (int k = 0; k < s->nbc; k++) {
         p += sprintf(p, "%s %s,%c,%s\n", pd_bc_option(s->bc[k].kind), s->bc[k].set,
                      'x' + s->bc[k].axis, prof[k]);

@@ -26,10 +26,11 @@ G=6e9
 BAR=(--spacing $DX --density $RHO --box 0,0.024,0,0.006,0,0.006)
 BAR_SETS=(--set left=box,-1,0.0025,-1,1,-1,1 --set right=box,0.0215,1,-1,1,-1,1
           --set all=box,-1,1,-1,1,-1,1)
-# a stiff sphere 0.5 mm deep in the top face at mid-length, moving down at
-# 200 m/s: it breaks most bonds below it and presses the particles into
-# contact within 20 steps
-INDENTER=(--indenter sphere,0.012,0.003,0.0085,0.003,1e18,0,0,-200)
+# a stiff sphere touching the top face at mid-length (a scene may not start
+# with it inside: pd_scene_inspect), moving down at 200 m/s: 0.5 mm deep
+# after about 11 steps, it breaks most bonds below it and presses the
+# particles into contact within 30 steps
+INDENTER=(--indenter sphere,0.012,0.003,0.009,0.003,1e18,0,0,-200)
 BREAK=(--failure 0.0005,0.25 --contact)
 PMB=(--bulk-modulus $K)
 LPS=(--model lps --bulk-modulus $K --shear-modulus $G)
@@ -136,13 +137,14 @@ scene_fibre() {
 }
 
 # a 2-D plate of 41 x 41 particles (20 mm, 0.5 mm spacing, 1 mm thick) with
-# a pre-crack from its left edge to the centre, opened by a wedge
+# a pre-crack from its left edge to the centre, opened by a wedge that
+# starts touching the left edge
 scene_plate() {
     pd-lattice -q --dimension 2 --thickness 0.001 --spacing 0.0005 --density 8000 \
         --box -0.01,0.01,-0.01,0.01,0,0 -o lattice.h5
     pd-bonds -q --horizon 0.0015001 --crack segment,-0.011,0,0,0 lattice.h5 -o model.h5
     pdrun two --youngs-modulus 192e9 --failure-energy 50 --fields energy,stress \
-        --indenter sphere,-0.0115,0,0,0.002,1e17,200,0,0 --steps 100 --every 25 --threads 2
+        --indenter sphere,-0.012,0,0,0.002,1e17,400,0,0 --steps 100 --every 25 --threads 2
     pd-crack-tip two-damage.h5 >two-tip.txt
     pd-damage --no-precrack two.h5 -o two-noprecrack.h5 >two-noprecrack.txt
 }
@@ -151,11 +153,13 @@ scene_plate() {
 scene_perturbed() {
     pd-lattice -q "${BAR[@]}" --perturb 1e-4 --seed 7 -o lattice.h5
     pd-bonds -q --horizon $DELTA lattice.h5 -o model.h5
-    pdrun one "${PMB[@]}" "${BREAK[@]}" "${INDENTER[@]}" "${FRAMES[@]}" --fields energy,stress \
+    # the indenter 0.1 mm higher: sites stand up to 0.1 mm above the face
+    local above=(--indenter sphere,0.012,0.003,0.0091,0.003,1e18,0,0,-200)
+    pdrun one "${PMB[@]}" "${BREAK[@]}" "${above[@]}" "${FRAMES[@]}" --fields energy,stress \
         --threads 1
-    pdrun two "${PMB[@]}" "${BREAK[@]}" "${INDENTER[@]}" "${FRAMES[@]}" --fields energy,stress \
+    pdrun two "${PMB[@]}" "${BREAK[@]}" "${above[@]}" "${FRAMES[@]}" --fields energy,stress \
         --threads 2
-    pdrun lps "${LPS[@]}" "${BREAK[@]}" "${INDENTER[@]}" "${FRAMES[@]}" --fields stress --threads 1
+    pdrun lps "${LPS[@]}" "${BREAK[@]}" "${above[@]}" "${FRAMES[@]}" --fields stress --threads 1
 }
 
 # restart: 40 steps, then 40 more from the run's last frame
