@@ -43,7 +43,7 @@ with h5py.File(sys.argv[1]) as f:
     # it kicks the block, leaves within a few hundred steps, and the block
     # rings freely (no failure, no contact) for the rest of the run
     run -0 pd-run --bulk-modulus "$BULK" --threads 1 -q \
-        --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,10 \
+        --allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,10 \
         --steps 20000 --every 500 model.h5 -o wave.h5
     run -0 energies wave.h5
     printf '%s\n' "$output" | "$PY" -c "
@@ -86,7 +86,7 @@ assert max(r[5] for r in rows) > 1e-3 * rows[-1][2], 'the block should store str
     pd-lattice -q --spacing 0.0005 --density "$DENSITY" --box 0,0.02,0,0.02,0,0.0025 -o plate.h5
     pd-bonds -q --horizon 0.0015001 plate.h5 -o model.h5
     run --separate-stderr pd-run --bulk-modulus "$BULK" --failure 0.0005,0.25 --contact \
-        --indenter sphere,0.01,0.01,0.0055,0.0025,1e18,0,0,-1000 --lost-margin 0.01 \
+        --allow-overlap --indenter sphere,0.01,0.01,0.0055,0.0025,1e18,0,0,-1000 --lost-margin 0.01 \
         --steps 600 --every 100 --status 100 model.h5 -o imp.h5
     [ "$status" -eq 0 ]
     [[ "$stderr" =~ step\ [0-9]+:\ [0-9]+\ particles\ lost\ \(farther\ than\ 0.01\ m ]]
@@ -149,13 +149,13 @@ with h5py.File(sys.argv[1]) as f:
     make_block
     # twenty times the stable step: unstable from the first steps
     run --separate-stderr pd-run --bulk-modulus "$BULK" --status 1 \
-        --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --dt 5e-6 --force-dt \
+        --allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --dt 5e-6 --force-dt \
         --steps 50 model.h5 -o r.h5
     [ "$status" -eq 1 ]
     [[ "$stderr" =~ warning:\ at\ step\ [0-9]+\ the\ kinetic\ energy\ is\ [0-9.e+]+\ times\ the\ energy\ put\ in ]]
     # and a stable run is never flagged
     run --separate-stderr pd-run --bulk-modulus "$BULK" --status 1 \
-        --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --steps 50 model.h5 -o s.h5
+        --allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --steps 50 model.h5 -o s.h5
     [ "$status" -eq 0 ]
     [[ ! "$stderr" =~ warning ]]
 }
@@ -163,7 +163,7 @@ with h5py.File(sys.argv[1]) as f:
 @test "--fields energy writes the strain energy density, summing to the elastic energy" {
     make_block
     run -0 pd-run --bulk-modulus "$BULK" --fields energy -q \
-        --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-10 \
+        --allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-10 \
         --steps 200 --every 100 model.h5 -o f.h5
     py "
 import numpy as np
@@ -189,7 +189,7 @@ with h5py.File(sys.argv[1]) as f:
     make_block
     # the sphere presses the top face down: compression along z below it
     run -0 pd-run --bulk-modulus "$BULK" --fields energy,stress -q \
-        --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-10 \
+        --allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-10 \
         --steps 200 --every 100 model.h5 -o f.h5
     py "
 import numpy as np
@@ -256,7 +256,7 @@ with h5py.File(sys.argv[1], 'r+') as f:
     [[ "$stderr" =~ exceeds\ the\ stable\ time\ step ]]
     # 0.9 x: the kicked block rings for 10,000 steps, its energy bounded
     run -0 pd-run --bulk-modulus "$BULK" --safety 0.9 --threads 1 -q \
-        --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,10 \
+        --allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,10 \
         --steps 10000 --every 1000 model.h5 -o s.h5
     run -0 energies s.h5
     printf '%s\n' "$output" | "$PY" -c "
@@ -272,7 +272,7 @@ assert max(e) <= 1.01 * min(e), (min(e), max(e))"
 @test "eq. 46 is conservative in 3-D: forced to 2 x it holds, at 3 x the guard stops the run" {
     make_block
     stable=$(stable_dt model.h5)
-    local kick=(--indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,10 --force-dt -q)
+    local kick=(--allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,10 --force-dt -q)
     run -0 pd-run --bulk-modulus "$BULK" "${kick[@]}" --steps 2000 --every 2000 \
         --dt "$(py "print(repr(2 * float(sys.argv[1])))" "$stable")" model.h5 -o two.h5
     run -1 --separate-stderr pd-run --bulk-modulus "$BULK" "${kick[@]}" --steps 2000 \

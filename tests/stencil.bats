@@ -89,7 +89,7 @@ for name in a['frames']:
 @test "LPS on the stencil gives the bond list's run to rounding: failure, contact, indenter" {
     make_block
     opts=(--model lps --bulk-modulus "$BULK" --shear-modulus 8e9 --failure 0.0005,0.25 --contact
-          --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --every 20 -q --threads 2)
+          --allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --every 20 -q --threads 2)
     pd-run "${opts[@]}" --steps 80 model.h5 -o grid.h5
     pd-run "${opts[@]}" --steps 80 --bond-list model.h5 -o list.h5
     run -0 agree grid.h5 list.h5
@@ -212,7 +212,7 @@ with h5py.File(sys.argv[1]) as a, h5py.File(sys.argv[2]) as b:
     pd-lattice -q --spacing 0.0005 --density "$DENSITY" --box 0,0.01,0,0.01,0,0.0025 -o plate.h5
     pd-bonds -q --horizon 0.0015001 plate.h5 -o model.h5
     opts=(--bulk-modulus "$BULK" --failure 0.0005,0.25 --contact -q
-          --indenter sphere,0.005,0.005,0.0055,0.0025,1e18,0,0,-1000 --lost-margin 0.002
+          --allow-overlap --indenter sphere,0.005,0.005,0.0055,0.0025,1e18,0,0,-1000 --lost-margin 0.002
           --steps 150 --every 50)
     pd-run "${opts[@]}" model.h5 -o grid.h5
     pd-run "${opts[@]}" --bond-list model.h5 -o list.h5
@@ -229,7 +229,7 @@ with h5py.File(sys.argv[1]) as f:
         --box 0,0.02,0,0.01,-1,1 -o plate.h5
     pd-bonds -q --horizon 0.0015001 plate.h5 -o model.h5
     opts=(--youngs-modulus 72e9 --failure 0.002,0 --contact
-          --indenter sphere,0.01,0.0128,0,0.003,1e18,0,-50,0 --steps 200 --every 50)
+          --allow-overlap --indenter sphere,0.01,0.0128,0,0.003,1e18,0,-50,0 --steps 200 --every 50)
     run -0 --separate-stderr pd-run "${opts[@]}" model.h5 -o grid.h5
     [[ "$stderr" == *"lattice stencil of 14 offsets"* ]]
     pd-run -q "${opts[@]}" --bond-list model.h5 -o list.h5

@@ -24,7 +24,7 @@ vg() {
         -o lattice.h5
     run -0 vg pd-bonds -q --horizon 0.0015001 lattice.h5 -o model.h5
     run -0 vg pd-run -q --c 1.6863e22 --failure 0.0005,0.25 --contact \
-        --indenter sphere,0,0.0049,0,0.005,1e17,0,-100,0 --dt 1e-7 --steps 20 --every 10 \
+        --allow-overlap --indenter sphere,0,0.0049,0,0.005,1e17,0,-100,0 --dt 1e-7 --steps 20 --every 10 \
         --threads 1 model.h5 -o run.h5
     run -0 vg pd-damage -q run.h5
     run -0 vg pd-crack-tip run.h5

@@ -13,7 +13,7 @@ setup() {
 
 VES=(--model ves --bulk-modulus "$BULK" --shear-modulus 6e9 --ves-lambda 0.5 --ves-tau 1e-6)
 VES_RUN=("${VES[@]}" --failure 0.0005,0.25 --contact
-         --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100)
+         --allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100)
 
 @test "ves: option errors are usage errors with one clear line" {
     make_block
