@@ -979,7 +979,7 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
     pd_status s = PD_OK;
     if (!o->restart) {
         s = pd_sim_setup(sim);
-        if (s == PD_OK && sc->every > 0)
+        if (s == PD_OK && pd_frame_at(sc, 0))
             s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, NULL);
     }
     int64_t lost = pd_sim_lost(sim);
@@ -998,7 +998,7 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
          * energies instead of another pass over the bonds */
         pd_energy e;
         int known = 0;
-        if ((sc->every > 0 && n % sc->every == 0) || n == sc->steps) {
+        if (pd_frame_at(sc, n)) {
             s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, &e);
             known = s == PD_OK;
         }
@@ -1015,8 +1015,6 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
             }
         }
     }
-    if (s == PD_OK && !o->restart && sc->steps == 0 && sc->every == 0)
-        s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, NULL);
     if (tty)
         fputc('\n', stderr);
     return s;

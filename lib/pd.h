@@ -526,6 +526,14 @@ pd_status pd_scene_check(pd_scene_spec *spec);
  * refused).  spec->sc is then the scene a run takes (pd_sim_new). */
 pd_status pd_scene_resolve(pd_scene_spec *spec, const pd_particles *p, const pd_bonds *b,
                            const char *body);
+/* The frames of a run (pd-run --every): step n gets one when it is a
+ * multiple of sc->every (every > 0) or the last step, sc->steps.
+ * pd_frame_steps lists those a run from step `first` writes (steps may be
+ * NULL: only counted), step 0 included in a new run (`fresh`); returns how
+ * many. */
+int pd_frame_at(const pd_scene *sc, int64_t n);
+int64_t pd_frame_steps(const pd_scene *sc, int64_t first, int fresh, int64_t *steps);
+
 /* What pd_scene_inspect finds in a resolved scene that is valid but
  * likely wrong, before step 1. */
 #define PD_SCENE_WARNINGS 16 /* warnings kept, at most                     */

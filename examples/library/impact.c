@@ -87,7 +87,7 @@ int main(int argc, char **argv)
         if (n > 0)
             s = pd_sim_step(sim);
         pd_energy e;
-        if (s == PD_OK && n % sc->every == 0 &&
+        if (s == PD_OK && pd_frame_at(sc, n) &&
             (s = pd_run_file_frame(f, p, b, sim, sc->fields, &e)) == PD_OK)
             printf("step %3lld  t %.4e s  kinetic %.6e J  projectile %.6e J  balance %.6e J  "
                    "broken %lld\n",

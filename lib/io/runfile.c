@@ -12,26 +12,20 @@
 
 #include "pd.h"
 
-/* The steps after `first` that get a frame: every, 2 every, ... and the
- * last; only the last with --every 0; and step 0 itself in a new run
- * (`fresh`), not in a restart (even from step 0, whose frame exists). */
+/* Every frame of the run laid out (pd_frame_steps: the steps after `first`
+ * that get one, and step 0 itself in a new run, `fresh`). */
 static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds *b,
                              const pd_scene *sc, unsigned fields, int64_t first, int fresh)
 {
-    int64_t cap = sc->every > 0 ? sc->steps / sc->every + 2 : 1, m = 0;
-    int64_t *steps = malloc((size_t)cap * sizeof *steps);
-    double *times = malloc((size_t)cap * sizeof *times);
+    const int64_t m = pd_frame_steps(sc, first, fresh, NULL);
+    int64_t *steps = malloc((size_t)(m > 0 ? m : 1) * sizeof *steps);
+    double *times = malloc((size_t)(m > 0 ? m : 1) * sizeof *times);
     if (steps == NULL || times == NULL) {
         free(steps);
         free(times);
-        return pd_fail(PD_ERR_NOMEM, "out of memory planning %lld frames", (long long)cap);
+        return pd_fail(PD_ERR_NOMEM, "out of memory planning %lld frames", (long long)m);
     }
-    if (sc->every > 0)
-        for (int64_t n = 0; n <= sc->steps; n += sc->every)
-            if (n > first || (n == 0 && fresh))
-                steps[m++] = n;
-    if ((m == 0 || steps[m - 1] != sc->steps) && (sc->steps > first || fresh))
-        steps[m++] = sc->steps;
+    pd_frame_steps(sc, first, fresh, steps);
     for (int64_t k = 0; k < m; k++)
         times[k] = (double)steps[k] * sc->dt;
     pd_status s = pd_plan_frames(out, p->n, b->count, m, steps, times, fields);

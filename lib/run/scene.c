@@ -184,6 +184,33 @@ pd_status pd_scene_resolve(pd_scene_spec *o, const pd_particles *p, const pd_bon
     return PD_OK;
 }
 
+/* ------------------------------------------------------------ frames */
+
+int pd_frame_at(const pd_scene *sc, int64_t n)
+{
+    return (sc->every > 0 && n % sc->every == 0) || n == sc->steps;
+}
+
+int64_t pd_frame_steps(const pd_scene *sc, int64_t first, int fresh, int64_t *steps)
+{
+    const int64_t from = fresh ? 0 : first + 1; /* the steps this run takes */
+    int64_t m = 0, last = -1;
+    if (sc->every > 0)
+        for (int64_t n = (from + sc->every - 1) / sc->every * sc->every; n <= sc->steps;
+             n += sc->every) {
+            if (steps)
+                steps[m] = n;
+            m++;
+            last = n;
+        }
+    if (sc->steps >= from && last != sc->steps) {
+        if (steps)
+            steps[m] = sc->steps;
+        m++;
+    }
+    return m;
+}
+
 /* ------------------------------------------------------------ before step 1 */
 
 static void warn(pd_scene_report *rep, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
@@ -232,8 +259,8 @@ static double sphere_meets(const pd_particles *p, const double c[3], double R, c
 
 /* An overlap at t = 0 is an error; else the time of the first contact. */
 static pd_status sphere_check(const pd_scene_spec *o, const pd_particles *p, const char *what,
-                              const char *option, const double c[3], double R,
-                              const double v[3], pd_scene_report *rep)
+                              const double c[3], double R, const double v[3],
+                              pd_scene_report *rep)
 {
     int64_t deep;
     double depth;
@@ -247,7 +274,7 @@ static pd_status sphere_check(const pd_scene_spec *o, const pd_particles *p, con
     const double end = (double)o->sc.steps * o->sc.dt;
     if (isinf(t))
         warn(rep, "the %s never touches the body (it moves away from it or past it): check "
-                  "the velocity of --%s", what, option);
+                  "the velocity of --%s", what, what);
     else if (t > end)
         warn(rep, "the %s first touches the body at t = %.3g s, after the run ends (%.3g s, "
                   "%lld steps): more --steps?", what, t, end, (long long)o->sc.steps);
@@ -272,10 +299,10 @@ pd_status pd_scene_inspect(const pd_scene_spec *o, const pd_particles *p, const 
     rep->contact_time = NAN;
     pd_status s = PD_OK;
     if (sc->has_projectile)
-        s = sphere_check(o, p, "projectile", "projectile", sc->proj_center, sc->proj_radius,
+        s = sphere_check(o, p, "projectile", sc->proj_center, sc->proj_radius,
                          sc->proj_velocity, rep);
     if (s == PD_OK && sc->has_indenter)
-        s = sphere_check(o, p, "indenter", "indenter", sc->ind_center, sc->ind_radius,
+        s = sphere_check(o, p, "indenter", sc->ind_center, sc->ind_radius,
                          sc->ind_velocity, rep);
     if (s != PD_OK)
         return s;
@@ -305,7 +332,7 @@ pd_status pd_scene_inspect(const pd_scene_spec *o, const pd_particles *p, const 
     if (!sc->has_projectile && !sc->has_indenter && sc->nbc == 0)
         warn(rep, "nothing loads the body (no projectile, indenter, boundary condition or "
                   "body force): it stays at rest");
-    rep->frames = sc->every > 0 ? sc->steps / sc->every + 1 + (sc->steps % sc->every != 0) : 1;
+    rep->frames = pd_frame_steps(sc, 0, 1, NULL);
     return PD_OK;
 }
 
