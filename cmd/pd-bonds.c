@@ -12,6 +12,11 @@
  * Pre-cracks (--crack): every bond whose reference segment crosses a given
  * planar crack is created broken (mu = 0, seed 004) and marked in
  * /bonds/precrack; lib/bonds/crack.c holds the geometry and its conventions.
+ *
+ * A body whose families are a lattice stencil (the same offsets bonded at
+ * every particle, pd_bonds_find_stencil) is written as the stencil: its
+ * table of offsets and one state bit per bond, no per-bond arrays
+ * (lib/bonds/stencil.c); --csr writes the lists anyway.
  */
 #include <getopt.h>
 #include <math.h>
@@ -29,6 +34,7 @@ struct options {
     double horizon;
     int has_horizon;
     int no_sort;
+    int csr;
     pd_crack cracks[MAX_CRACKS];
     const char *crack_specs[MAX_CRACKS];
     int ncracks;
@@ -47,6 +53,8 @@ static void usage(FILE *out)
             "  --horizon DELTA   horizon, m (at least the spacing; give 3.0001 x spacing,\n"
             "                    not 3 x, so that pairs at exactly 3 spacings are bonded)\n"
             "  --no-sort         keep the particle order of INPUT\n"
+            "  --csr             write the bond lists (CSR) even when the families are a\n"
+            "                    lattice stencil (then only the stencil is written)\n"
             "  --crack SPEC      pre-crack: make every bond that crosses the crack broken\n"
             "                    (and marked in /bonds/precrack); repeatable.  SPEC is\n"
             "                    rect,X,Y,Z,AX,AY,AZ,BX,BY,BZ  the parallelogram with\n"
@@ -64,10 +72,11 @@ static void usage(FILE *out)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_HORIZON = 256, OPT_NOSORT, OPT_CRACK };
+    enum { OPT_HORIZON = 256, OPT_NOSORT, OPT_CRACK, OPT_CSR };
     static const struct option longopts[] = {
         {"horizon", required_argument, 0, OPT_HORIZON},
         {"no-sort", no_argument, 0, OPT_NOSORT},
+        {"csr", no_argument, 0, OPT_CSR},
         {"crack", required_argument, 0, OPT_CRACK},
         {"output", required_argument, 0, 'o'},
         {"quiet", no_argument, 0, 'q'},
@@ -85,6 +94,9 @@ static int parse_options(int argc, char **argv, struct options *o)
             break;
         case OPT_NOSORT:
             o->no_sort = 1;
+            break;
+        case OPT_CSR:
+            o->csr = 1;
             break;
         case OPT_CRACK:
             if (o->ncracks == MAX_CRACKS)
@@ -152,6 +164,8 @@ int main(int argc, char **argv)
     int64_t cut[MAX_CRACKS];
     if (s == PD_OK && o.ncracks > 0)
         s = pd_bonds_precrack(p, b, o.cracks, o.ncracks, cut);
+    if (s == PD_OK && !o.csr)
+        s = pd_bonds_find_stencil(p, b);
     pd_file *out = NULL;
     if (s == PD_OK)
         s = pd_file_create(o.output, &out);
@@ -173,6 +187,9 @@ int main(int argc, char **argv)
         fprintf(stderr, PROG ": %lld particles, %lld bonds (%.2f per particle, %lld to %lld)\n",
                 (long long)p->n, (long long)(b->count / 2), (double)b->count / (double)p->n,
                 (long long)lo, (long long)hi);
+        if (b->stencil)
+            fprintf(stderr, PROG ": stored as a lattice stencil of %d offsets\n",
+                    b->stencil->nk);
         for (int c = 0; c < o.ncracks; c++)
             fprintf(stderr, PROG ": --crack %s: %lld bonds broken\n", o.crack_specs[c],
                     (long long)cut[c]);

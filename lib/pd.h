@@ -19,7 +19,7 @@
 
 #define PD_VERSION "0.1.0"
 #define PD_FORMAT "pd-h5"
-#define PD_FORMAT_VERSION 1
+#define PD_FORMAT_VERSION 2 /* files of version 1 (no stencil form) still read */
 
 /* ---------------------------------------------------------------- status */
 
@@ -177,12 +177,54 @@ typedef struct {
                            bit b set = bond b was made broken before the run
                            by a pre-crack (pd_bonds_precrack)               */
     double horizon;     /* delta, m                                         */
+    struct pd_stencil *stencil; /* NULL, or the lattice stencil these families
+                           are, bit for bit (pd_bonds_find_stencil): files
+                           then store the stencil instead of the lists   */
 } pd_bonds;
+
+/* A body's families as a lattice stencil (lib/bonds/stencil.c): particle i
+ * sits at the site c_i = round((x_i - origin) / spacing) (to
+ * PD_LATTICE_TOL spacings), and its family is every particle j at a site
+ * c_i + d over the offsets d of the table, sorted by j as the lists are.
+ * Each bond's length |x_i - x_j| and partial-volume factor
+ * (pd_partial_volume) come from the particles, so the families expand to
+ * the very bits pd_bonds_build gives. */
+typedef struct pd_stencil {
+    int nk;             /* offsets (d and -d both)                          */
+    int32_t (*d)[3];    /* nk lattice offsets (x, y, z), spacings, sorted by
+                           (z, y, x)                                        */
+    double *length;     /* nk: the reference length of the offset's first
+                           bond (|d| spacing to rounding), m                */
+    double *vfactor;    /* nk: its partial-volume factor                    */
+    double origin[3];   /* the site (0, 0, 0), m                            */
+    double spacing;     /* m                                                */
+} pd_stencil;
 
 pd_bonds *pd_bonds_alloc(int64_t n, int64_t count);
 void pd_bonds_free(pd_bonds *b);
 /* Families within the horizon by cell lists (linear in N). */
 pd_status pd_bonds_build(const pd_particles *p, double horizon, pd_bonds **out);
+/* The partial-volume factor nu of a bond of length len to a node of radius
+ * r (seed 000, "Modification to the Particle Volume"): 1 for len <=
+ * horizon - r, (horizon + r - len) / (2 r) beyond. */
+double pd_partial_volume(double len, double horizon, double r);
+/* Are b's families a lattice stencil?  Sets b->stencil when they expand
+ * from one to exactly their bits (offsets, partners, lengths, volume
+ * factors); leaves it NULL when the particles are off a lattice, the body
+ * is too sparse for a site map (more than PD_STENCIL_SPARSE sites of its
+ * bounding box per particle), an offset reaches beyond PD_STENCIL_REACH
+ * spacings or a family differs from the stencil's. */
+pd_status pd_bonds_find_stencil(const pd_particles *p, pd_bonds *b);
+/* The families of a stencil (all intact, no pre-crack; out->stencil is a
+ * copy of st).  PD_ERR_FORMAT when a particle is off st's lattice, two
+ * share a site, or the body is too sparse for the site map. */
+pd_status pd_bonds_expand(const pd_particles *p, const pd_stencil *st, double horizon,
+                          pd_bonds **out);
+/* An empty stencil of nk offsets (NULL: out of memory); and its release. */
+pd_stencil *pd_stencil_alloc(int nk);
+void pd_stencil_free(pd_stencil *st);
+#define PD_STENCIL_REACH 16 /* spacings: offsets' components at most   */
+#define PD_STENCIL_SPARSE 8 /* bounding-box sites per particle at most */
 
 static inline int pd_bond_intact(const uint64_t *bits, int64_t b)
 {
@@ -268,6 +310,10 @@ pd_status pd_particles_sort_spatial(pd_particles *p, double cell);
  * lc[a][i] (when lc is not NULL) particle i's coordinate along axis[a].
  * Returns 1 or 0. */
 int pd_lattice_coords(const pd_particles *p, int axis[3], int32_t *lc[3]);
+/* Every particle's site round((x_i - origin) / h) along x, y, z into
+ * c[d][i] (c may be NULL): 1, or 0 when a particle is farther than
+ * PD_LATTICE_TOL spacings from its site. */
+int pd_lattice_sites(const pd_particles *p, const double origin[3], double h, int32_t *c[3]);
 /* Lattice order: sorted by (outer, mid, inner) coordinate.  *order gets
  * the old index of each new position (malloc'd), or NULL when the
  * particles are not on a lattice. */

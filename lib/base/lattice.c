@@ -155,6 +155,21 @@ pd_status pd_plate_make(const pd_region *regions, int nregions, const pd_lattice
 
 /* ------------------------------------------------------- lattice order */
 
+/* The lattice coordinate along axis d of every particle, round((x - lo) /
+ * h), into c (when not NULL); 0 when a particle is farther than
+ * PD_LATTICE_TOL spacings from its site or the coordinate leaves int32. */
+static int lattice_axis(const pd_particles *p, int d, double lo, double h, int32_t *c)
+{
+    for (int64_t i = 0; i < p->n; i++) {
+        double u = (p->x[d][i] - lo) / h, r = nearbyint(u);
+        if (!(fabs(u - r) <= PD_LATTICE_TOL) || !(fabs(r) < 1e9))
+            return 0;
+        if (c)
+            c[i] = (int32_t)r;
+    }
+    return 1;
+}
+
 int pd_lattice_coords(const pd_particles *p, int axis[3], int32_t *lc[3])
 {
     const double h = p->spacing;
@@ -178,16 +193,19 @@ int pd_lattice_coords(const pd_particles *p, int axis[3], int32_t *lc[3])
     axis[0] = ord[0];
     axis[1] = ord[2];
     axis[2] = ord[1];
-    for (int a = 0; a < 3; a++) {
-        int d = axis[a];
-        for (int64_t i = 0; i < p->n; i++) {
-            double c = (p->x[d][i] - lo[d]) / h, r = nearbyint(c);
-            if (!(fabs(c - r) <= PD_LATTICE_TOL))
-                return 0;
-            if (lc)
-                lc[a][i] = (int32_t)r;
-        }
-    }
+    for (int a = 0; a < 3; a++)
+        if (!lattice_axis(p, axis[a], lo[axis[a]], h, lc ? lc[a] : NULL))
+            return 0;
+    return 1;
+}
+
+int pd_lattice_sites(const pd_particles *p, const double origin[3], double h, int32_t *c[3])
+{
+    if (!(h > 0) || !isfinite(h) || p->n == 0)
+        return 0;
+    for (int d = 0; d < 3; d++)
+        if (!isfinite(origin[d]) || !lattice_axis(p, d, origin[d], h, c ? c[d] : NULL))
+            return 0;
     return 1;
 }
 

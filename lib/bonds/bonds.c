@@ -53,6 +53,7 @@ void pd_bonds_free(pd_bonds *b)
     free(b->vfactor);
     free(b->intact);
     free(b->precrack);
+    pd_stencil_free(b->stencil);
     free(b);
 }
 
@@ -78,8 +79,7 @@ int64_t pd_bits_count_broken_except(const uint64_t *bits, const uint64_t *skip, 
     return broken;
 }
 
-/* Partial-volume factor of a bond of length len to a node of radius r. */
-static double partial_volume(double len, double horizon, double r)
+double pd_partial_volume(double len, double horizon, double r)
 {
     if (len <= horizon - r)
         return 1.0;
@@ -163,7 +163,7 @@ pd_status pd_bonds_build(const pd_particles *p, double horizon, pd_bonds **out)
             double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
                    dz = p->x[2][i] - p->x[2][j];
             b->length[k] = sqrt(dx * dx + dy * dy + dz * dz);
-            b->vfactor[k] = partial_volume(b->length[k], horizon, p->radius[j]);
+            b->vfactor[k] = pd_partial_volume(b->length[k], horizon, p->radius[j]);
         }
     }
     pd_cells_free(&c);

@@ -112,8 +112,9 @@ static pd_status check_header(pd_file *f)
     int64_t version = 0;
     if (pd_h5_read_attr_int(f->fid, "pd_format_version", &version) != PD_OK)
         return pd_fail(PD_ERR_FORMAT, "'%s': no pd_format_version", f->name);
-    if (version != PD_FORMAT_VERSION)
-        return pd_fail(PD_ERR_FORMAT, "'%s': pd-h5 format version %lld, this pd reads version %d",
+    if (version < 1 || version > PD_FORMAT_VERSION)
+        return pd_fail(PD_ERR_FORMAT,
+                       "'%s': pd-h5 format version %lld, this pd reads versions 1 to %d",
                        f->name, (long long)version, PD_FORMAT_VERSION);
     return PD_OK;
 }

@@ -422,11 +422,10 @@ static pd_status check_precrack(const char *fn, const pd_bonds *b)
     return PD_OK;
 }
 
-pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
+/* /bonds as lists (CSR): offsets, partners, lengths, volume factors. */
+static pd_status read_list_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
 {
     const char *fn = f->name;
-    if (!pd_file_has_bonds(f))
-        return pd_fail(PD_ERR_FORMAT, "'%s' has no /bonds (run pd-bonds first)", fn);
     int64_t n = p->n;
     pd_h5_form of = {H5T_INTEGER, 8, 1, {(hsize_t)n + 1, 0}};
     int64_t *offset = NULL;
@@ -477,6 +476,113 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
         if (b->neighbor[k] < 0 || b->neighbor[k] >= n)
             s = pd_fail(PD_ERR_FORMAT, "'%s': bond %lld points to particle %lld of %lld", fn,
                         (long long)k, (long long)b->neighbor[k], (long long)n);
+    if (s != PD_OK) {
+        pd_bonds_free(b);
+        return s;
+    }
+    *out = b;
+    return PD_OK;
+}
+
+/* /bonds as a stencil (pd_stencil, lib/bonds/stencil.c): the table of
+ * offsets and its lattice, checked, then the families it expands to. */
+static pd_status read_stencil_bonds(const pd_file *f, hid_t g, const pd_particles *p,
+                                    double horizon, pd_bonds **out)
+{
+    const char *fn = f->name;
+    const int R = PD_STENCIL_REACH, w = 2 * R + 1;
+    pd_h5_form df = {H5T_INTEGER, 4, 2, {0, 3}};
+    hsize_t dims[2] = {0, 0};
+    int32_t *d = NULL;
+    pd_status s = pd_h5_read_data(f->fid, fn, "/bonds/stencil", &df, H5T_NATIVE_INT32,
+                                  sizeof(int32_t), (void **)&d, dims);
+    if (s != PD_OK)
+        return s;
+    const hsize_t nk = dims[0];
+    pd_stencil *st = nk >= 1 && nk < (hsize_t)w * w * w ? pd_stencil_alloc((int)nk) : NULL;
+    uint8_t *seen = calloc((size_t)w * w * w, 1);
+    if (nk < 1 || nk >= (hsize_t)w * w * w)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/stencil has %llu offsets", fn,
+                    (unsigned long long)nk);
+    else if (st == NULL || seen == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the stencil");
+    pd_h5_form lf = {H5T_FLOAT, 8, 1, {nk, 0}};
+    if (s == PD_OK) {
+        memcpy(st->d, d, (size_t)nk * sizeof *st->d);
+        void *len = st->length, *nu = st->vfactor;
+        s = pd_h5_read_data(f->fid, fn, "/bonds/stencil_length", &lf, H5T_NATIVE_DOUBLE,
+                            sizeof(double), &len, NULL);
+        if (s == PD_OK)
+            s = pd_h5_read_data(f->fid, fn, "/bonds/stencil_volume_factor", &lf,
+                                H5T_NATIVE_DOUBLE, sizeof(double), &nu, NULL);
+    }
+    free(d);
+    if (s == PD_OK && (pd_h5_read_attr_doubles(g, "origin", st->origin, 3) != PD_OK ||
+                       pd_h5_read_attr_double(g, "spacing", &st->spacing) != PD_OK))
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds as a stencil needs the attributes origin (3) "
+                                   "and spacing", fn);
+    if (s == PD_OK && (!(st->spacing > 0) || !isfinite(st->spacing) || !isfinite(st->origin[0]) ||
+                       !isfinite(st->origin[1]) || !isfinite(st->origin[2])))
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds has spacing %g and origin (%g, %g, %g)", fn,
+                    st->spacing, st->origin[0], st->origin[1], st->origin[2]);
+    /* offsets: within reach, not zero, each once, with their opposites */
+    for (int k = 0; k < (int)nk && s == PD_OK; k++) {
+        const int32_t *dk = st->d[k];
+        if (abs(dk[0]) > R || abs(dk[1]) > R || abs(dk[2]) > R || !(dk[0] || dk[1] || dk[2]))
+            s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/stencil offset %d is (%d, %d, %d)", fn, k,
+                        dk[0], dk[1], dk[2]);
+        else if (seen[((dk[2] + R) * w + dk[1] + R) * w + dk[0] + R]++)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/stencil has offset (%d, %d, %d) twice", fn,
+                        dk[0], dk[1], dk[2]);
+        else if (!(st->length[k] > 0) || !isfinite(st->length[k]) ||
+                 !(st->vfactor[k] > 0 && st->vfactor[k] <= 1))
+            s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/stencil offset %d has length %g and volume "
+                                       "factor %g", fn, k, st->length[k], st->vfactor[k]);
+    }
+    for (int k = 0; k < (int)nk && s == PD_OK; k++) {
+        const int32_t *dk = st->d[k];
+        if (!seen[((R - dk[2]) * w + R - dk[1]) * w + R - dk[0]])
+            s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/stencil has offset (%d, %d, %d) but not its "
+                                       "opposite", fn, dk[0], dk[1], dk[2]);
+    }
+    free(seen);
+    if (s == PD_OK && (s = pd_bonds_expand(p, st, horizon, out)) != PD_OK)
+        s = pd_fail(s, "'%s': %s", fn, pd_errmsg());
+    pd_stencil_free(st);
+    return s;
+}
+
+pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
+{
+    const char *fn = f->name;
+    if (!pd_file_has_bonds(f))
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no /bonds (run pd-bonds first)", fn);
+    hid_t g = H5Gopen2(f->fid, "/bonds", H5P_DEFAULT);
+    double horizon = 0;
+    char *form = NULL;
+    int64_t declared = -1;
+    pd_status s = PD_OK;
+    if (pd_h5_read_attr_double(g, "horizon", &horizon) != PD_OK)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds has no horizon attribute", fn);
+    else if (!(horizon > 0) || !isfinite(horizon))
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds horizon must be positive", fn);
+    else if (pd_h5_has_attr(g, "form") && pd_h5_read_attr_string(g, "form", &form) != PD_OK)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds attribute form is not a string", fn);
+    else if (form && strcmp(form, "stencil") != 0 && strcmp(form, "csr") != 0)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds form '%s' is neither 'csr' nor 'stencil'", fn,
+                    form);
+    pd_bonds *b = NULL;
+    const int stencil = form && strcmp(form, "stencil") == 0;
+    if (s == PD_OK && stencil && pd_h5_read_attr_int(g, "count", &declared) != PD_OK)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds as a stencil has no count attribute", fn);
+    if (s == PD_OK)
+        s = stencil ? read_stencil_bonds(f, g, p, horizon, &b) : read_list_bonds(f, p, &b);
+    H5Gclose(g);
+    free(form);
+    if (s == PD_OK && stencil && b->count != declared)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': the stencil gives %lld bonds, /bonds@count says %lld",
+                    fn, (long long)b->count, (long long)declared);
+    const int64_t count = b ? b->count : 0;
     pd_h5_form bf = {H5T_INTEGER, 1, 1, {(hsize_t)((count + 7) / 8), 0}};
     uint8_t *state = NULL;
     if (s == PD_OK && count > 0)
@@ -485,14 +591,10 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
     if (s == PD_OK && count > 0)
         bytes_to_words(state, count, b->intact);
     free(state);
-    if (s == PD_OK)
+    if (s == PD_OK) {
+        b->horizon = horizon;
         s = read_precrack(f, b);
-    hid_t g = H5Gopen2(f->fid, "/bonds", H5P_DEFAULT);
-    if (s == PD_OK && pd_h5_read_attr_double(g, "horizon", &b->horizon) != PD_OK)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds has no horizon attribute", fn);
-    H5Gclose(g);
-    if (s == PD_OK && !(b->horizon > 0))
-        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds horizon must be positive", fn);
+    }
     if (s == PD_OK)
         s = check_bonds(fn, b);
     if (s == PD_OK)
@@ -505,6 +607,37 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
     return PD_OK;
 }
 
+/* The families as lists (CSR) or, when b->stencil says they are one, as the
+ * stencil's table and its lattice (no per-bond arrays). */
+static pd_status write_families(hid_t g, const pd_bonds *b)
+{
+    hsize_t dn[1] = {(hsize_t)b->n + 1}, db[1] = {(hsize_t)b->count};
+    const pd_stencil *st = b->stencil;
+    pd_status s;
+    if (st == NULL) {
+        if ((s = pd_h5_write_data(g, "offset", H5T_STD_I64LE, H5T_NATIVE_INT64, 1, dn,
+                                  b->offset)) == PD_OK &&
+            (s = pd_h5_write_data(g, "neighbor", H5T_STD_I32LE, H5T_NATIVE_INT32, 1, db,
+                                  b->neighbor)) == PD_OK &&
+            (s = pd_h5_write_data(g, "length", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, db,
+                                  b->length)) == PD_OK)
+            s = pd_h5_write_data(g, "volume_factor", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, db,
+                                 b->vfactor);
+        return s;
+    }
+    hsize_t dd[2] = {(hsize_t)st->nk, 3}, dk[1] = {(hsize_t)st->nk};
+    if ((s = pd_h5_write_attr_string(g, "form", "stencil")) == PD_OK &&
+        (s = pd_h5_write_data(g, "stencil", H5T_STD_I32LE, H5T_NATIVE_INT32, 2, dd, st->d)) ==
+            PD_OK &&
+        (s = pd_h5_write_data(g, "stencil_length", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, dk,
+                              st->length)) == PD_OK &&
+        (s = pd_h5_write_data(g, "stencil_volume_factor", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1,
+                              dk, st->vfactor)) == PD_OK &&
+        (s = pd_h5_write_attr_doubles(g, "origin", st->origin, 3)) == PD_OK)
+        s = pd_h5_write_attr_doubles(g, "spacing", &st->spacing, 1);
+    return s;
+}
+
 pd_status pd_write_bonds(pd_file *f, const pd_bonds *b)
 {
     hid_t g = pd_h5_create_group(f->fid, "/bonds");
@@ -512,22 +645,12 @@ pd_status pd_write_bonds(pd_file *f, const pd_bonds *b)
         return pd_fail(PD_ERR_IO, "cannot create /bonds");
     uint8_t *bytes = words_to_bytes(b->intact, b->count);
     if (bytes == NULL) {
-        free(bytes);
         H5Gclose(g);
         return pd_fail(PD_ERR_NOMEM, "out of memory");
     }
-    hsize_t dn[1] = {(hsize_t)b->n + 1}, db[1] = {(hsize_t)b->count},
-            ds[1] = {(hsize_t)((b->count + 7) / 8)};
+    hsize_t ds[1] = {(hsize_t)((b->count + 7) / 8)};
     pd_status s;
-    if ((s = pd_h5_write_data(g, "offset", H5T_STD_I64LE, H5T_NATIVE_INT64, 1, dn, b->offset)) ==
-            PD_OK &&
-        (s = pd_h5_write_data(g, "neighbor", H5T_STD_I32LE, H5T_NATIVE_INT32, 1, db,
-                              b->neighbor)) ==
-            PD_OK &&
-        (s = pd_h5_write_data(g, "length", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, db,
-                              b->length)) == PD_OK &&
-        (s = pd_h5_write_data(g, "volume_factor", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, db,
-                              b->vfactor)) == PD_OK &&
+    if ((s = write_families(g, b)) == PD_OK &&
         (s = pd_h5_write_data(g, "state", H5T_STD_U8LE, H5T_NATIVE_UINT8, 1, ds, bytes)) ==
             PD_OK &&
         (s = pd_h5_write_attr_doubles(g, "horizon", &b->horizon, 1)) == PD_OK)

@@ -1,0 +1,400 @@
+/*
+ * stencil.c -- bond families as a lattice stencil, the compact form of a
+ * lattice body's bonds in files (man/man5/pd-h5.5, "/bonds as a stencil").
+ *
+ * A body made by pd-lattice sits on a simple cubic (or square) lattice of
+ * spacing h, and pd-bonds gives each particle a bond to every particle
+ * within the horizon.  When the same lattice offsets d are bonds for every
+ * particle that has a partner there, the families are the stencil: the
+ * table of offsets names every bond, and a file needs no partner, length
+ * or weight per bond, only its state bit.  The families come back from it
+ * in their own order (each sorted by partner), each bond's length and
+ * partial-volume factor computed from the particles by pd_bonds_build's
+ * own arithmetic: expanding gives the bond lists bit for bit, and
+ * pd_bonds_find_stencil proves it for a body before a file says so.
+ *
+ * Sites: c_i = round((x_i - origin) / h) (pd_lattice_sites), and a map
+ * over the sites' bounding box gives the particle at a site.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pd.h"
+
+pd_stencil *pd_stencil_alloc(int nk)
+{
+    pd_stencil *st = calloc(1, sizeof *st);
+    if (st == NULL)
+        return NULL;
+    size_t m = nk > 0 ? (size_t)nk : 1;
+    st->nk = nk;
+    st->d = malloc(m * sizeof *st->d);
+    st->length = malloc(m * sizeof(double));
+    st->vfactor = malloc(m * sizeof(double));
+    if (!st->d || !st->length || !st->vfactor) {
+        pd_stencil_free(st);
+        return NULL;
+    }
+    return st;
+}
+
+void pd_stencil_free(pd_stencil *st)
+{
+    if (st == NULL)
+        return;
+    free(st->d);
+    free(st->length);
+    free(st->vfactor);
+    free(st);
+}
+
+static pd_stencil *stencil_copy(const pd_stencil *st)
+{
+    pd_stencil *c = pd_stencil_alloc(st->nk);
+    if (c == NULL)
+        return NULL;
+    memcpy(c->d, st->d, (size_t)st->nk * sizeof *st->d);
+    memcpy(c->length, st->length, (size_t)st->nk * sizeof(double));
+    memcpy(c->vfactor, st->vfactor, (size_t)st->nk * sizeof(double));
+    memcpy(c->origin, st->origin, sizeof c->origin);
+    c->spacing = st->spacing;
+    return c;
+}
+
+/* ------------------------------------------------------------- site map */
+
+typedef struct {
+    int32_t *c[3];   /* site of particle i along x, y, z                  */
+    int32_t lo[3];   /* the bounding box's lowest site                    */
+    int64_t dim[3];  /* its sites per axis                                */
+    int32_t *map;    /* dim[0] dim[1] dim[2]: the particle at a site, or -1 */
+    int ax[3];       /* outer, mid, inner axis of the particles' order, or
+                        ax[0] = -1: the rows follow no lattice order      */
+} site_map;
+
+typedef enum { SITES_OK, SITES_OFF, SITES_SPARSE, SITES_SHARED, SITES_NOMEM } sites_result;
+
+static void sites_free(site_map *m)
+{
+    for (int d = 0; d < 3; d++)
+        free(m->c[d]);
+    free(m->map);
+}
+
+/* Is row order the lexicographic order of the sites in (ax[0], ax[1],
+ * ax[2])? */
+static int sorted_by(const site_map *m, int64_t n, const int ax[3])
+{
+    for (int64_t i = 1; i < n; i++) {
+        int a = 0;
+        while (a < 3 && m->c[ax[a]][i] == m->c[ax[a]][i - 1])
+            a++;
+        if (a == 3 || m->c[ax[a]][i] < m->c[ax[a]][i - 1])
+            return 0;
+    }
+    return 1;
+}
+
+/* The sites of p's particles on the lattice (origin, h) and their map;
+ * *shared gets a particle whose site another one holds (SITES_SHARED). */
+static sites_result sites_build(const pd_particles *p, const double origin[3], double h,
+                                site_map *m, int64_t *shared)
+{
+    const int64_t n = p->n;
+    memset(m, 0, sizeof *m);
+    for (int d = 0; d < 3; d++)
+        if ((m->c[d] = malloc((size_t)(n > 0 ? n : 1) * sizeof(int32_t))) == NULL)
+            return SITES_NOMEM;
+    if (!pd_lattice_sites(p, origin, h, m->c))
+        return SITES_OFF;
+    double sites = 1;
+    for (int d = 0; d < 3; d++) {
+        int32_t lo = INT32_MAX, hi = INT32_MIN;
+        for (int64_t i = 0; i < n; i++) {
+            lo = m->c[d][i] < lo ? m->c[d][i] : lo;
+            hi = m->c[d][i] > hi ? m->c[d][i] : hi;
+        }
+        m->lo[d] = lo;
+        m->dim[d] = (int64_t)hi - lo + 1;
+        sites *= (double)m->dim[d];
+    }
+    if (sites > (double)PD_STENCIL_SPARSE * (double)n + 4096)
+        return SITES_SPARSE;
+    const int64_t ns = m->dim[0] * m->dim[1] * m->dim[2];
+    if ((m->map = malloc((size_t)ns * sizeof(int32_t))) == NULL)
+        return SITES_NOMEM;
+    memset(m->map, 0xff, (size_t)ns * sizeof(int32_t));
+    for (int64_t i = 0; i < n; i++) {
+        int64_t s = ((int64_t)(m->c[2][i] - m->lo[2]) * m->dim[1] + (m->c[1][i] - m->lo[1])) *
+                        m->dim[0] +
+                    (m->c[0][i] - m->lo[0]);
+        if (m->map[s] >= 0) {
+            *shared = i;
+            return SITES_SHARED;
+        }
+        m->map[s] = (int32_t)i;
+    }
+    static const int perms[6][3] = {{2, 1, 0}, {2, 0, 1}, {1, 2, 0},
+                                    {1, 0, 2}, {0, 2, 1}, {0, 1, 2}};
+    m->ax[0] = -1;
+    for (int q = 0; q < 6 && m->ax[0] < 0; q++)
+        if (sorted_by(m, n, perms[q]))
+            memcpy(m->ax, perms[q], sizeof m->ax);
+    return SITES_OK;
+}
+
+/* The particle at site c_i + d, or -1. */
+static inline int32_t partner(const site_map *m, int64_t i, const int32_t d[3])
+{
+    int64_t s[3];
+    for (int a = 0; a < 3; a++) {
+        s[a] = (int64_t)m->c[a][i] + d[a] - m->lo[a];
+        if (s[a] < 0 || s[a] >= m->dim[a])
+            return -1;
+    }
+    return m->map[(s[2] * m->dim[1] + s[1]) * m->dim[0] + s[0]];
+}
+
+/* ---------------------------------------------------------- the families */
+
+typedef struct {
+    int64_t key;
+    int k;
+} key_item;
+
+static int cmp_key(const void *a, const void *b)
+{
+    const key_item *x = a, *y = b;
+    return (x->key > y->key) - (x->key < y->key);
+}
+
+/* The offsets in the order that makes every family come out sorted by
+ * partner when the rows are in lattice order (m->ax); the table's own
+ * order otherwise.  NULL: out of memory. */
+static int32_t (*walk_order(const pd_stencil *st, const site_map *m))[3]
+{
+    int32_t(*d)[3] = malloc((size_t)(st->nk > 0 ? st->nk : 1) * sizeof *d);
+    key_item *it = malloc((size_t)(st->nk > 0 ? st->nk : 1) * sizeof *it);
+    if (d == NULL || it == NULL) {
+        free(d);
+        free(it);
+        return NULL;
+    }
+    const int64_t w = 4 * (int64_t)PD_STENCIL_REACH + 1; /* wider than any |d| */
+    for (int k = 0; k < st->nk; k++) {
+        it[k].k = k;
+        it[k].key = k;
+        if (m->ax[0] >= 0) {
+            it[k].key = 0;
+            for (int a = 0; a < 3; a++)
+                it[k].key = it[k].key * w + (st->d[k][m->ax[a]] + 2 * PD_STENCIL_REACH);
+        }
+    }
+    qsort(it, (size_t)st->nk, sizeof *it, cmp_key);
+    for (int k = 0; k < st->nk; k++)
+        memcpy(d[k], st->d[it[k].k], sizeof d[k]);
+    free(it);
+    return d;
+}
+
+/* The partners of i from the stencil, sorted, into nb; returns how many. */
+static int64_t family_of(const site_map *m, int32_t (*d)[3], int nk, int64_t i, int32_t *nb)
+{
+    int64_t c = 0;
+    for (int k = 0; k < nk; k++) {
+        int32_t j = partner(m, i, d[k]);
+        if (j >= 0)
+            nb[c++] = j;
+    }
+    if (m->ax[0] < 0) /* rows in no lattice order: sort (insertion, short) */
+        for (int64_t a = 1; a < c; a++) {
+            int32_t v = nb[a];
+            int64_t q = a;
+            for (; q > 0 && nb[q - 1] > v; q--)
+                nb[q] = nb[q - 1];
+            nb[q] = v;
+        }
+    return c;
+}
+
+/* The length and partial-volume factor of bond i-j, as pd_bonds_build
+ * computes them. */
+static inline void bond_geometry(const pd_particles *p, int64_t i, int64_t j, double horizon,
+                                 double *len, double *nu)
+{
+    double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
+           dz = p->x[2][i] - p->x[2][j];
+    *len = sqrt(dx * dx + dy * dy + dz * dz);
+    *nu = pd_partial_volume(*len, horizon, p->radius[j]);
+}
+
+static pd_status expand(const pd_particles *p, const pd_stencil *st, double horizon,
+                        const site_map *m, pd_bonds **out)
+{
+    const int64_t n = p->n;
+    int32_t(*d)[3] = walk_order(st, m);
+    int64_t *count = malloc((size_t)(n + 1) * sizeof(int64_t));
+    if (d == NULL || count == NULL) {
+        free(d);
+        free(count);
+        return pd_fail(PD_ERR_NOMEM, "out of memory expanding the stencil");
+    }
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++) {
+        int64_t c = 0;
+        for (int k = 0; k < st->nk; k++)
+            c += partner(m, i, d[k]) >= 0;
+        count[i] = c;
+    }
+    int64_t total = 0;
+    for (int64_t i = 0; i < n; i++)
+        total += count[i];
+    pd_bonds *b = pd_bonds_alloc(n, total);
+    if (b == NULL || (b->stencil = stencil_copy(st)) == NULL) {
+        free(d);
+        free(count);
+        pd_bonds_free(b);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)total);
+    }
+    b->horizon = horizon;
+    for (int64_t i = 0; i < n; i++)
+        b->offset[i + 1] = b->offset[i] + count[i];
+    free(count);
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++) {
+        const int64_t o = b->offset[i];
+        const int64_t c = family_of(m, d, st->nk, i, b->neighbor + o);
+        for (int64_t q = 0; q < c; q++)
+            bond_geometry(p, i, b->neighbor[o + q], horizon, &b->length[o + q], &b->vfactor[o + q]);
+    }
+    free(d);
+    memset(b->intact, 0xff, (size_t)pd_bits_words(total) * sizeof(uint64_t));
+    *out = b;
+    return PD_OK;
+}
+
+pd_status pd_bonds_expand(const pd_particles *p, const pd_stencil *st, double horizon,
+                          pd_bonds **out)
+{
+    *out = NULL;
+    if (p->n >= INT32_MAX)
+        return pd_fail(PD_ERR_INVALID, "too many particles for one process (%lld)",
+                       (long long)p->n);
+    site_map m;
+    int64_t shared = 0;
+    sites_result r = sites_build(p, st->origin, st->spacing, &m, &shared);
+    pd_status s = PD_OK;
+    if (r == SITES_NOMEM)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the lattice sites");
+    else if (r == SITES_OFF)
+        s = pd_fail(PD_ERR_FORMAT, "a particle is off the lattice of the bonds' stencil "
+                                   "(spacing %g m)", st->spacing);
+    else if (r == SITES_SPARSE)
+        s = pd_fail(PD_ERR_FORMAT, "the particles are too sparse on the stencil's lattice "
+                                   "(more than %d sites per particle)", PD_STENCIL_SPARSE);
+    else if (r == SITES_SHARED)
+        s = pd_fail(PD_ERR_FORMAT, "particle %lld (id %lld) shares its lattice site with another",
+                    (long long)shared, (long long)p->id[shared]);
+    else
+        s = expand(p, st, horizon, &m, out);
+    sites_free(&m);
+    return s;
+}
+
+/* ------------------------------------------------------------ the finding */
+
+/* Do the families of b equal the stencil's, bit for bit? */
+static int same_families(const pd_particles *p, const pd_bonds *b, const pd_stencil *st,
+                         const site_map *m)
+{
+    int32_t(*d)[3] = walk_order(st, m);
+    int same = d != NULL;
+#pragma omp parallel reduction(&& : same)
+    {
+        int32_t *nb = d ? malloc((size_t)(st->nk > 0 ? st->nk : 1) * sizeof(int32_t)) : NULL;
+        same = nb != NULL; /* out of memory: the bond lists stay */
+#pragma omp for schedule(static)
+        for (int64_t i = 0; i < b->n; i++) {
+            if (!same)
+                continue;
+            const int64_t o = b->offset[i], c = family_of(m, d, st->nk, i, nb);
+            same = c == b->offset[i + 1] - o;
+            for (int64_t q = 0; q < c && same; q++) {
+                double len, nu;
+                bond_geometry(p, i, nb[q], b->horizon, &len, &nu);
+                same = nb[q] == b->neighbor[o + q] &&
+                       memcmp(&len, &b->length[o + q], sizeof len) == 0 &&
+                       memcmp(&nu, &b->vfactor[o + q], sizeof nu) == 0;
+            }
+        }
+        free(nb);
+    }
+    free(d);
+    return same;
+}
+
+pd_status pd_bonds_find_stencil(const pd_particles *p, pd_bonds *b)
+{
+    pd_stencil_free(b->stencil);
+    b->stencil = NULL;
+    if (b->count == 0 || p->n < 2 || p->n >= INT32_MAX)
+        return PD_OK;
+    double origin[3], hi[3];
+    pd_particles_bounds(p, origin, hi);
+    site_map m;
+    int64_t shared = 0;
+    sites_result r = sites_build(p, origin, p->spacing, &m, &shared);
+    if (r != SITES_OK) {
+        sites_free(&m);
+        return r == SITES_NOMEM ? pd_fail(PD_ERR_NOMEM, "out of memory for the lattice sites")
+                                : PD_OK;
+    }
+    /* every offset a bond has, with its first bond (lowest row) */
+    const int R = PD_STENCIL_REACH, w = 2 * R + 1;
+    int64_t *first = malloc((size_t)w * w * w * sizeof(int64_t));
+    if (first == NULL) {
+        sites_free(&m);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the stencil");
+    }
+    for (int q = 0; q < w * w * w; q++)
+        first[q] = -1;
+    int ok = 1, nk = 0;
+    for (int64_t i = 0; i < b->n && ok; i++)
+        for (int64_t q = b->offset[i]; q < b->offset[i + 1] && ok; q++) {
+            const int32_t j = b->neighbor[q];
+            int at = 0;
+            for (int a = 2; a >= 0; a--) {
+                const int64_t dd = (int64_t)m.c[a][j] - m.c[a][i];
+                ok = ok && dd >= -R && dd <= R;
+                at = at * w + (int)(dd + R);
+            }
+            if (ok && first[at] < 0) {
+                first[at] = q;
+                nk++;
+            }
+        }
+    pd_stencil *st = ok ? pd_stencil_alloc(nk) : NULL;
+    pd_status s = ok && st == NULL ? pd_fail(PD_ERR_NOMEM, "out of memory for the stencil") : PD_OK;
+    if (st) {
+        int k = 0;
+        for (int q = 0; q < w * w * w; q++) /* (z, y, x) ascending */
+            if (first[q] >= 0) {
+                st->d[k][0] = q % w - R;
+                st->d[k][1] = (q / w) % w - R;
+                st->d[k][2] = q / (w * w) - R;
+                st->length[k] = b->length[first[q]];
+                st->vfactor[k] = b->vfactor[first[q]];
+                k++;
+            }
+        memcpy(st->origin, origin, sizeof origin);
+        st->spacing = p->spacing;
+        if (same_families(p, b, st, &m))
+            b->stencil = st;
+        else
+            pd_stencil_free(st);
+    }
+    free(first);
+    sites_free(&m);
+    return s;
+}
