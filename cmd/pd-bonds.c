@@ -159,13 +159,19 @@ int main(int argc, char **argv)
     pd_status s = pd_read_sets(in, p, &sets);
     if (s == PD_OK && !o.no_sort)
         s = pd_particles_sort_spatial(p, o.horizon);
+    /* on a lattice whose families are a stencil, the file needs only that
+     * (unless the lists are asked for, or pre-cracks cut them) */
     if (s == PD_OK)
+        s = pd_bonds_build_lattice(p, o.horizon, o.csr || o.ncracks > 0, &b);
+    if (s == PD_OK && b == NULL)
         s = pd_bonds_build(p, o.horizon, &b);
     int64_t cut[MAX_CRACKS];
     if (s == PD_OK && o.ncracks > 0)
         s = pd_bonds_precrack(p, b, o.cracks, o.ncracks, cut);
-    if (s == PD_OK && !o.csr)
-        s = pd_bonds_find_stencil(p, b);
+    if (s == PD_OK && o.csr) { /* the lists, though the families are a stencil */
+        pd_stencil_free(b->stencil);
+        b->stencil = NULL;
+    }
     pd_file *out = NULL;
     if (s == PD_OK)
         s = pd_file_create(o.output, &out);

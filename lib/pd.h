@@ -202,8 +202,21 @@ typedef struct pd_stencil {
 
 pd_bonds *pd_bonds_alloc(int64_t n, int64_t count);
 void pd_bonds_free(pd_bonds *b);
-/* Families within the horizon by cell lists (linear in N). */
+/* Families within the horizon (linear in N): on a lattice by its sites
+ * (pd_bonds_build_lattice, which also finds their stencil), otherwise by
+ * cell lists; the same bonds either way. */
 pd_status pd_bonds_build(const pd_particles *p, double horizon, pd_bonds **out);
+/* The families of particles on their lattice (spacing p->spacing, origin
+ * their lowest corner), walked over the offsets that can hold a pair
+ * within the horizon: pd_bonds_build's bonds bit for bit, with b->stencil
+ * set when every offset holds all of its pairs or none.  With lists 0 and
+ * a stencil found, b holds only the offsets, the state bits and the
+ * stencil (neighbor, length and vfactor NULL): enough to write a model
+ * file (pd-bonds), whose readers expand it.  *out stays NULL when the
+ * particles are off a lattice, sparse on it (PD_STENCIL_SPARSE), share a
+ * site, or the horizon reaches beyond PD_STENCIL_REACH spacings. */
+pd_status pd_bonds_build_lattice(const pd_particles *p, double horizon, int lists,
+                                 pd_bonds **out);
 /* The partial-volume factor nu of a bond of length len to a node of radius
  * r (seed 000, "Modification to the Particle Volume"): 1 for len <=
  * horizon - r, (horizon + r - len) / (2 r) beyond. */

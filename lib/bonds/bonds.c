@@ -127,6 +127,9 @@ pd_status pd_bonds_build(const pd_particles *p, double horizon, pd_bonds **out)
     if (p->n >= INT32_MAX)
         return pd_fail(PD_ERR_INVALID, "too many particles for one process (%lld)",
                        (long long)p->n);
+    pd_status ls = pd_bonds_build_lattice(p, horizon, 1, out);
+    if (ls != PD_OK || *out)
+        return ls;
     pd_cells c;
     pd_status st = pd_cells_build(&c, p->n, p->x, horizon);
     if (st != PD_OK)

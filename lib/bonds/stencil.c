@@ -398,3 +398,194 @@ pd_status pd_bonds_find_stencil(const pd_particles *p, pd_bonds *b)
     sites_free(&m);
     return s;
 }
+
+/* ------------------------------------------------- building on a lattice */
+
+/* Is bond i-j within the horizon?  pd_bonds_build's test (lib/bonds/bonds.c,
+ * family()), the same arithmetic. */
+static inline int within(const pd_particles *p, int64_t i, int64_t j, double cut2)
+{
+    double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
+           dz = p->x[2][i] - p->x[2][j];
+    return dx * dx + dy * dy + dz * dz <= cut2;
+}
+
+/* Every offset that can hold a pair within the horizon: |d| h <= delta +
+ * 1e-5 h covers the sites' tolerance of PD_LATTICE_TOL at both ends. */
+static pd_stencil *candidates(double horizon, double h)
+{
+    const int R = (int)floor(horizon / h + 1e-5);
+    const double lim = (horizon / h + 1e-5) * (horizon / h + 1e-5);
+    int nk = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        pd_stencil *st = pass ? pd_stencil_alloc(nk) : NULL;
+        if (pass && st == NULL)
+            return NULL;
+        int k = 0;
+        for (int z = -R; z <= R; z++)
+            for (int y = -R; y <= R; y++)
+                for (int x = -R; x <= R; x++)
+                    if ((x || y || z) && (double)(x * x + y * y + z * z) <= lim) {
+                        if (pass) {
+                            st->d[k][0] = x;
+                            st->d[k][1] = y;
+                            st->d[k][2] = z;
+                        }
+                        k++;
+                    }
+        if (pass)
+            return st;
+        nk = k;
+    }
+    return NULL;
+}
+
+pd_status pd_bonds_build_lattice(const pd_particles *p, double horizon, int lists,
+                                 pd_bonds **out)
+{
+    *out = NULL;
+    const double h = p->spacing;
+    if (p->n < 2 || p->n >= INT32_MAX || !(h > 0) || !isfinite(h) ||
+        !(horizon / h + 1e-5 < PD_STENCIL_REACH + 1))
+        return PD_OK;
+    double origin[3], hi[3];
+    pd_particles_bounds(p, origin, hi);
+    site_map m;
+    int64_t shared = 0;
+    sites_result r = sites_build(p, origin, h, &m, &shared);
+    if (r != SITES_OK) { /* off the lattice, sparse, two at one site: cell lists */
+        sites_free(&m);
+        return r == SITES_NOMEM ? pd_fail(PD_ERR_NOMEM, "out of memory for the lattice sites")
+                                : PD_OK;
+    }
+    const int64_t n = p->n;
+    const double cut2 = horizon * horizon;
+    pd_stencil *cand = candidates(horizon, h);
+    int32_t(*d)[3] = cand ? walk_order(cand, &m) : NULL;
+    const int nk = cand ? cand->nk : 0;
+    /* per walked offset: pairs within the horizon, pairs there at all, and
+     * the first row with a bond there */
+    int64_t *in = calloc((size_t)nk + 1, sizeof(int64_t)), *there = calloc((size_t)nk + 1, 8);
+    int64_t *first = malloc(((size_t)nk + 1) * sizeof(int64_t));
+    int64_t *count = malloc((size_t)(n + 1) * sizeof(int64_t));
+    pd_bonds *b = NULL;
+    pd_status s = PD_OK;
+    if (!d || !in || !there || !first || !count)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the bonds");
+    for (int k = 0; k < nk && s == PD_OK; k++)
+        first[k] = INT64_MAX;
+    if (s == PD_OK) {
+#pragma omp parallel
+        {
+            int64_t *my_in = calloc(2 * (size_t)nk + 1, sizeof(int64_t)), *my_there = my_in + nk;
+            int64_t *my_first = malloc(((size_t)nk + 1) * sizeof(int64_t));
+            for (int k = 0; my_first && k < nk; k++)
+                my_first[k] = INT64_MAX;
+#pragma omp for schedule(static)
+            for (int64_t i = 0; i < n; i++) {
+                int64_t c = 0;
+                for (int k = 0; k < nk; k++) {
+                    const int32_t j = partner(&m, i, d[k]);
+                    if (j < 0)
+                        continue;
+                    const int w = within(p, i, j, cut2);
+                    c += w;
+                    if (my_in && my_first) {
+                        my_there[k]++;
+                        my_in[k] += w;
+                        if (w && i < my_first[k])
+                            my_first[k] = i;
+                    }
+                }
+                count[i] = c;
+            }
+#pragma omp critical
+            {
+                if (my_in == NULL || my_first == NULL)
+                    in[nk] = 1; /* a thread without its tallies: no stencil */
+                for (int k = 0; my_in && my_first && k < nk; k++) {
+                    in[k] += my_in[k];
+                    there[k] += my_there[k];
+                    first[k] = my_first[k] < first[k] ? my_first[k] : first[k];
+                }
+            }
+            free(my_in);
+            free(my_first);
+        }
+        int64_t total = 0;
+        for (int64_t i = 0; i < n; i++)
+            total += count[i];
+        if ((b = pd_bonds_alloc(n, total)) == NULL)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)total);
+        for (int64_t i = 0; i < n && b; i++)
+            b->offset[i + 1] = b->offset[i] + count[i];
+    }
+    /* a stencil when every offset holds all of its pairs or none */
+    int uniform = s == PD_OK && b->count > 0 && in[nk] == 0, used = 0;
+    for (int k = 0; k < nk && s == PD_OK; k++) {
+        uniform = uniform && (in[k] == 0 || in[k] == there[k]);
+        used += in[k] > 0;
+    }
+    if (s == PD_OK && uniform && !lists) { /* the stencil stands for the lists */
+        free(b->neighbor);
+        free(b->length);
+        free(b->vfactor);
+        b->neighbor = NULL;
+        b->length = b->vfactor = NULL;
+    }
+    if (s == PD_OK) {
+        b->horizon = horizon;
+#pragma omp parallel for schedule(static) if (b->neighbor)
+        for (int64_t i = 0; i < n; i++) {
+            if (b->neighbor == NULL)
+                continue;
+            int32_t *nb = b->neighbor + b->offset[i];
+            int64_t c = 0;
+            for (int k = 0; k < nk; k++) {
+                const int32_t j = partner(&m, i, d[k]);
+                if (j >= 0 && within(p, i, j, cut2))
+                    nb[c++] = j;
+            }
+            if (m.ax[0] < 0) /* rows in no lattice order */
+                for (int64_t a = 1; a < c; a++) {
+                    int32_t v = nb[a];
+                    int64_t q = a;
+                    for (; q > 0 && nb[q - 1] > v; q--)
+                        nb[q] = nb[q - 1];
+                    nb[q] = v;
+                }
+            for (int64_t q = 0; q < c; q++)
+                bond_geometry(p, i, nb[q], horizon, &b->length[b->offset[i] + q],
+                              &b->vfactor[b->offset[i] + q]);
+        }
+        memset(b->intact, 0xff, (size_t)pd_bits_words(b->count) * sizeof(uint64_t));
+        pd_stencil *st = uniform ? pd_stencil_alloc(used) : NULL;
+        if (st) { /* in (z, y, x) order: the candidates' own */
+            int q = 0;
+            for (int c = 0; c < cand->nk; c++)
+                for (int k = 0; k < nk; k++)
+                    if (in[k] > 0 && memcmp(d[k], cand->d[c], sizeof d[k]) == 0) {
+                        memcpy(st->d[q], d[k], sizeof d[k]);
+                        const int32_t j = partner(&m, first[k], d[k]);
+                        bond_geometry(p, first[k], j, horizon, &st->length[q], &st->vfactor[q]);
+                        q++;
+                    }
+            memcpy(st->origin, origin, sizeof origin);
+            st->spacing = h;
+            b->stencil = st;
+        }
+    }
+    free(d);
+    free(in);
+    free(there);
+    free(first);
+    free(count);
+    pd_stencil_free(cand);
+    sites_free(&m);
+    if (s != PD_OK) {
+        pd_bonds_free(b);
+        return s;
+    }
+    *out = b;
+    return PD_OK;
+}
