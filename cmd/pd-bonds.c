@@ -2,7 +2,8 @@
  * pd-bonds -- build the bond families within the horizon.
  *
  * Family of i: every j with |x_j - x_i| <= delta (seed 000 eq. 11), found
- * with cell lists of edge delta (linear in N).  Stored as CSR with reference
+ * on the lattice's sites, or with cell lists of edge delta off a lattice
+ * (linear in N either way, the same bonds).  Stored as CSR with reference
  * lengths, partial-volume factors (seed 000, "Modification to the Particle
  * Volume") and the bond state mu as one bit per bond.  Particles are first
  * sorted (pd_particles_sort_spatial: in lattice order on a lattice, else by
