@@ -866,6 +866,10 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
                  ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
             (long long)p->n, (long long)(h->b->count / 2), pd_sim_effects(sim), sc->dt,
             sc->dt_stable, (long long)nsteps, o->restart ? " more" : "");
+    const char *wait = getenv("OMP_WAIT_POLICY"), *spin = getenv("GOMP_SPINCOUNT");
+    fprintf(stderr, PROG ": %d thread%s%s%s%s%s\n", sc->threads, sc->threads > 1 ? "s" : "",
+            wait ? ", OMP_WAIT_POLICY=" : "", wait ? wait : "", spin ? ", GOMP_SPINCOUNT=" : "",
+            spin ? spin : "");
     if (pd_sim_stencil(sim) > 0)
         fprintf(stderr, PROG ": bonds walked as a lattice stencil of %d offsets%s%s\n",
                 pd_sim_stencil(sim), pd_sim_stencil_tiles(sim) ? " in AVX-512 tiles" : "",
@@ -1037,6 +1041,7 @@ static pd_status finish(struct held *h, pd_status s)
 int main(int argc, char **argv)
 {
     pd_h5_debug(0); /* before any file is opened (a --restart reads its scene) */
+    settle_threads(argv);
     struct held h;
     memset(&h, 0, sizeof h);
     struct options o;
