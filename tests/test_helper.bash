@@ -25,8 +25,11 @@ export PATH
 export OMP_WAIT_POLICY
 
 # Debian's python, the one with h5py and numpy; another python3 may come
-# first on PATH.
+# first on PATH.  share/ comes first on its path, for pdh5 (the bonds of
+# either form of /bonds, pd-h5(5)): every $PY the suites run finds it.
 PY=/usr/bin/python3
+PYTHONPATH="$(cd "$BATS_TEST_DIRNAME/../share" && pwd)${PYTHONPATH:+:$PYTHONPATH}"
+export PYTHONPATH
 
 # The small block of make_block: an 11x11x11 simple cubic lattice (1331
 # particles) with horizon 3.0001 spacings.
@@ -104,11 +107,12 @@ make_run() {
 }
 
 # py CODE [ARG]...: run CODE with Debian's python; numpy is np, h5py is h5py,
-# the arguments are sys.argv[1:].
+# pdh5 (share/pdh5.py) is pdh5, the arguments are sys.argv[1:].  The bonds
+# of a model in either form: `off, nb, length, nu = pdh5.bonds(f)`.
 py() {
     local code=$1
     shift
-    "$PY" -c "import sys, h5py, numpy as np
+    "$PY" -c "import sys, h5py, numpy as np, pdh5
 $code" "$@"
 }
 
