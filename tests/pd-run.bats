@@ -158,6 +158,26 @@ bad_steps() {
     expect_runtime_error "v99\.h5.*version 99" pd-run --c 1e21 --steps 1 v99.h5 -o r.h5
 }
 
+@test "a model of format version 1 (bond lists) runs as the stencil model of version 2 does" {
+    make_block
+    mkdir csr && make_csr_block csr
+    with_version csr/model.h5 v1.h5 1
+    pd-run -q "${RUN_OPTS[@]}" --steps 20 --every 10 v1.h5 -o r1.h5
+    pd-run -q "${RUN_OPTS[@]}" --steps 20 --every 10 model.h5 -o r2.h5
+    # the same frames bit for bit, and each run keeps its model's form
+    run -0 py "
+a, b = h5py.File(sys.argv[1], 'r'), h5py.File(sys.argv[2], 'r')
+assert pdh5.form(a) == 'csr' and pdh5.form(b) == 'stencil'
+assert sorted(a['frames']) == sorted(b['frames']) and len(a['frames']) == 3
+for k in a['frames']:
+    for name in ('displacement', 'velocity', 'state'):
+        x, y = a['frames'][k][name][()], b['frames'][k][name][()]
+        assert x.dtype == y.dtype and x.tobytes() == y.tobytes(), (k, name)
+assert a['frames/00000020'].attrs['broken_bonds'] > 0
+print('ok')" r1.h5 r2.h5
+    assert_output ok
+}
+
 @test "a lattice without /bonds (the wrong stage) is a runtime error" {
     make_block
     expect_runtime_error "lattice\.h5.*/bonds.*pd-bonds" pd-run --c 1e21 --steps 1 lattice.h5 -o r.h5
