@@ -110,13 +110,15 @@ fuzz:
 
 install: all
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR) $(DESTDIR)$(PCDIR) \
-	    $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(MANDIR)/man5 $(DESTDIR)$(MANDIR)/man7
+	    $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(MANDIR)/man5 $(DESTDIR)$(MANDIR)/man7 \
+	    $(DESTDIR)$(SHAREDIR)/python
 	install -m 755 $(BIN) $(DESTDIR)$(BINDIR)
 	install -m 644 lib/libpd.a $(DESTDIR)$(LIBDIR)
 	install -m 644 lib/pd.h $(DESTDIR)$(INCDIR)
 	install -m 644 man/man1/*.1 $(DESTDIR)$(MANDIR)/man1
 	install -m 644 man/man5/*.5 $(DESTDIR)$(MANDIR)/man5
 	install -m 644 man/man7/*.7 $(DESTDIR)$(MANDIR)/man7
+	install -m 644 share/pdh5.py $(DESTDIR)$(SHAREDIR)/python
 	sed -e 's|@PREFIX@|$(PREFIX)|' share/pd.pc.in > $(DESTDIR)$(PCDIR)/pd.pc
 
 uninstall:
@@ -124,6 +126,8 @@ uninstall:
 	rm -f $(DESTDIR)$(LIBDIR)/libpd.a $(DESTDIR)$(INCDIR)/pd.h $(DESTDIR)$(PCDIR)/pd.pc
 	rm -f $(addprefix $(DESTDIR)$(MANDIR)/man1/,$(addsuffix .1,$(PROGRAMS)))
 	rm -f $(DESTDIR)$(MANDIR)/man5/pd-h5.5 $(DESTDIR)$(MANDIR)/man7/pd.7
+	rm -f $(DESTDIR)$(SHAREDIR)/python/pdh5.py
+	-rmdir $(DESTDIR)$(SHAREDIR)/python $(DESTDIR)$(SHAREDIR) 2>/dev/null
 
 clean:
 	rm -rf bin lib/*/*.o lib/libpd.a

@@ -78,6 +78,9 @@ LMP=${LMP:-lmp}
 MPIRUN=${MPIRUN:-mpirun}
 CC=${CC:-cc}
 PY=/usr/bin/python3
+# share/pdh5.py for the comparisons below: /bonds in either form
+PYTHONPATH=$ROOT/share${PYTHONPATH:+:$PYTHONPATH}
+export PYTHONPATH
 EX=$ROOT/examples/lammps-impact
 SCENE=$EX/impact.scene
 TIME=/usr/bin/time
@@ -166,11 +169,16 @@ build_model() {
         echo "$stamp" >"$1.stamp"
     fi
 }
-# counts FILE: "PARTICLES BONDS" (bonds i < j) of a model file
+# counts FILE: "PARTICLES BONDS" (bonds i < j) of a model file: the length
+# of /particles/id and /bonds@count (the directed bonds, in either form of
+# /bonds: a lattice stencil has no per-bond dataset)
 counts() {
-    h5ls "$1/particles/id" "$1/bonds/neighbor" 2>/dev/null |
-        sed -n 's/.*Dataset {\([0-9]*\).*/\1/p' | awk 'NR == 1 { n = $1 } NR == 2 { b = $1 / 2 }
-        END { if (n && b) print n, b; else exit 1 }'
+    c_n=$(h5ls "$1/particles/id" 2>/dev/null | sed -n 's/.*Dataset {\([0-9]*\).*/\1/p')
+    c_b=$(h5dump -a /bonds/count "$1" 2>/dev/null | sed -n 's/^ *(0): \([0-9]*\) *$/\1/p')
+    case $c_n in '' | *[!0-9]*) return 1 ;; esac
+    case $c_b in '' | *[!0-9]*) return 1 ;; esac
+    [ "$c_n" -gt 0 ] && [ "$c_b" -gt 0 ] || return 1
+    echo "$c_n $((c_b / 2))"
 }
 build_model model.h5 0.037
 read -r N0 B0 <<EOF
@@ -427,12 +435,13 @@ if ! skip kernels; then
 import sys
 import h5py
 import numpy as np
+import pdh5
 
 def last(name):
     f = h5py.File(name, "r")
     g = max(f["frames"].values(), key=lambda g: g.attrs["step"])
     # damaged: a particle with a broken bond (directed bond states, by row)
-    off, count = f["bonds/offset"][:], int(f["bonds"].attrs["count"])
+    off, count = pdh5.bonds(f)[0], int(f["bonds"].attrs["count"])
     state = np.unpackbits(g["state"][:], bitorder="little")[:count].astype(np.int64)
     broken = np.add.reduceat(1 - state, off[:-1]) if count else np.zeros(len(off) - 1)
     broken[off[:-1] == off[1:]] = 0  # reduceat of an empty row

@@ -43,7 +43,7 @@ refused_by_run() {
 }
 
 @test "unknown format version" {
-    refused_by_run version-99.h5 "'version-99.h5': pd-h5 format version 99, this pd reads version 1"
+    refused_by_run version-99.h5 "'version-99.h5': pd-h5 format version 99, this pd reads versions 1 to 2"
 }
 
 @test "HDF5 without pd_format" {
@@ -103,7 +103,7 @@ refused_by_run() {
 }
 
 @test "a pre-cracked bond that is intact in /bonds/state" {
-    refused_by_run precrack-intact.h5 "'precrack-intact.h5': bond 0-2 is pre-cracked (/bonds/precrack) but intact in /bonds/state"
+    refused_by_run precrack-intact.h5 "'precrack-intact.h5': bond 0-3 is pre-cracked (/bonds/precrack) but intact in /bonds/state"
 }
 
 @test "a bond pre-cracked on one side only" {
@@ -306,6 +306,73 @@ for f in files[1:]:
     expect_runtime_error "the model has no set 'top'" pd-run --c 1e3 --steps 1 --velocity-bc top,y,1 \
         m.h5 -o r2.h5
     [ ! -e r2.h5 ]
+}
+
+# ------------------------------------------------------------ /bonds as a
+# stencil (pd-h5 format version 2): the corpus's block has the stencil of
+# 18 offsets; its table, its lattice and its count are checked before the
+# families it expands to are used
+
+@test "a stencil offset of zero" {
+    refused_by_run stencil-offset-zero.h5 "'stencil-offset-zero.h5': /bonds/stencil offset 2 is (0, 0, 0)"
+}
+
+@test "a stencil offset beyond the reach of 16 sites" {
+    refused_by_run stencil-offset-far.h5 "'stencil-offset-far.h5': /bonds/stencil offset 9 is (17, 0, 0)"
+}
+
+@test "a stencil offset twice" {
+    refused_by_run stencil-offset-twice.h5 "'stencil-offset-twice.h5': /bonds/stencil has offset (-1, 0, 0) twice"
+}
+
+@test "a stencil offset without its opposite" {
+    refused_by_run stencil-no-opposite.h5 "'stencil-no-opposite.h5': /bonds/stencil has offset (-1, 0, 0) but not its opposite"
+}
+
+@test "a stencil length of zero" {
+    refused_by_run stencil-length-zero.h5 "'stencil-length-zero.h5': /bonds/stencil offset 2 has length 0 and volume factor 1"
+}
+
+@test "a stencil volume factor of 1.5" {
+    refused_by_run stencil-vfactor.h5 "'stencil-vfactor.h5': /bonds/stencil offset 0 has length 1.41421 and volume factor 1.5"
+}
+
+@test "a stencil without its spacing" {
+    refused_by_run stencil-no-spacing.h5 "'stencil-no-spacing.h5': /bonds as a stencil needs the attributes origin (3) and spacing"
+}
+
+@test "a stencil whose origin has two values" {
+    refused_by_run stencil-origin-2.h5 "'stencil-origin-2.h5': /bonds as a stencil needs the attributes origin (3) and spacing"
+}
+
+@test "a stencil whose /bonds@count is not the bonds it gives" {
+    refused_by_run stencil-count.h5 "'stencil-count.h5': the stencil gives 252 bonds, /bonds@count says 254"
+}
+
+@test "a /bonds form that is neither csr nor stencil" {
+    refused_by_run bonds-form-foo.h5 "'bonds-form-foo.h5': /bonds form 'foo' is neither 'csr' nor 'stencil'"
+}
+
+@test "a particle off the lattice of the stencil" {
+    refused_by_run stencil-off-lattice.h5 "'stencil-off-lattice.h5': a particle is off the lattice of the bonds' stencil (spacing 1 m)"
+}
+
+@test "the corpus: the list fixtures are CSR, the others the stencil of pd-bonds' default" {
+    py "
+import glob
+lists = ('offset-decreasing', 'offset-huge', 'neighbor-out-of-range', 'neighbor-self',
+         'length-negative', 'vfactor-two')
+for name in sorted(glob.glob('*.h5')):
+    with h5py.File(name, 'r') as f:
+        if 'bonds' not in f or name == 'bonds-form-foo.h5':
+            continue
+        b = f['bonds']
+        form = b.attrs.get('form', 'csr')
+        form = form.decode() if isinstance(form, bytes) else form
+        want = 'csr' if name[:-3] in lists else 'stencil'
+        assert form == want, (name, form)
+        assert ('neighbor' in b) == (want == 'csr') and ('stencil' in b) == (want == 'stencil'), name
+"
 }
 
 @test "every file of the corpus has a test here" {

@@ -158,7 +158,7 @@ setup() {
     run -0 py "
 with h5py.File(sys.argv[1]) as h:
     x = h['particles/position'][...]
-    off = h['bonds/offset'][...]; nb = h['bonds/neighbor'][...]; L = h['bonds/length'][...]
+    off, nb, L, _ = pdh5.bonds(h)
     i = np.repeat(np.arange(len(x)), np.diff(off))
     y = x + h['frames/00000001/displacement'][...]
     s = (np.linalg.norm(y[nb] - y[i], axis=1) - L) / L

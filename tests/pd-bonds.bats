@@ -1,8 +1,10 @@
 #!/usr/bin/env bats
 # pd-bonds: families within the horizon, checked against a brute-force
 # all-pairs search, the lattice count of 122 partners for delta = 3.0001 dx,
-# the partial-volume factors of seed 000, symmetry, and the errors of a
-# program that must never leave a half-written file.
+# the partial-volume factors of seed 000, symmetry, the two forms of /bonds
+# (a lattice body's stencil, read back through share/pdh5.py, equals the
+# lists of --csr bit for bit), and the errors of a program that must never
+# leave a half-written file.
 
 load test_helper
 
@@ -10,9 +12,10 @@ setup() {
     cd "$BATS_TEST_TMPDIR"
 }
 
-# check_families MODEL.h5: every family equals the brute-force set of
-# particles within the horizon (|xi| <= delta), sorted, without self, and
-# symmetric; lengths are the distances and volume factors follow seed 000:
+# check_families MODEL.h5: every family (of either form of /bonds, through
+# pdh5: a stencil is expanded) equals the brute-force set of particles
+# within the horizon (|xi| <= delta), sorted, without self, and symmetric;
+# lengths are the distances and volume factors follow seed 000:
 # nu = 1 for |xi| <= delta - r_j, else (delta + r_j - |xi|) / (2 r_j).
 # Prints "ok MIN MAX PAIRS".
 check_families() {
@@ -21,8 +24,10 @@ f = h5py.File(sys.argv[1], 'r')
 x = f['particles/position'][:]
 r = f['particles/radius'][:]
 b = f['bonds']
-off, nb = b['offset'][:], b['neighbor'][:]
-length, nu = b['length'][:], b['volume_factor'][:]
+if pdh5.form(f) == 'csr':
+    assert b['offset'].dtype == np.int64 and b['neighbor'].dtype == np.int32
+    assert b['length'].dtype == np.float64 and b['volume_factor'].dtype == np.float64
+off, nb, length, nu = pdh5.bonds(f)
 delta = float(b.attrs['horizon'])
 n = x.shape[0]
 assert off.dtype == np.int64 and nb.dtype == np.int32
@@ -253,11 +258,14 @@ print(h.decode() if isinstance(h, bytes) else h)" model.h5
     # 122 = integer points with i^2+j^2+k^2 <= 9, less the origin; a corner
     # keeps the 28 of them with i, j, k >= 0 (less the origin)
     assert_output "ok 28 122 $(py "
-f = h5py.File(sys.argv[1], 'r'); print(f['bonds/neighbor'].size // 2)" model.h5)"
+f = h5py.File(sys.argv[1], 'r'); print(f['bonds'].attrs['count'] // 2)" model.h5)"
+    # the sizes of the families the stencil expands to (make_block's model
+    # is a stencil: pd-bonds' default on a lattice)
     run -0 py "
 f = h5py.File(sys.argv[1], 'r')
+assert pdh5.form(f) == 'stencil'
 x = f['particles/position'][:]
-sizes = np.diff(f['bonds/offset'][:])
+sizes = np.diff(pdh5.bonds(f)[0])
 k = np.round(x / 0.001).astype(int)
 interior = np.all((k >= 3) & (k <= 7), axis=1)
 assert interior.sum() == 125
@@ -277,8 +285,10 @@ print('ok')" model.h5
 @test "the summary line reports particles, pairs and the family range" {
     make_block
     run -0 --separate-stderr pd-bonds --horizon "$HORIZON" lattice.h5 -o m.h5
-    pairs=$(py "print(h5py.File(sys.argv[1], 'r')['bonds/neighbor'].size // 2)" m.h5)
-    assert_regex "$stderr" "^pd-bonds: 1331 particles, $pairs bonds \([0-9.]+ per particle, 28 to 122\)$"
+    pairs=$(py "print(pdh5.bonds(h5py.File(sys.argv[1], 'r'))[1].size // 2)" m.h5)
+    assert_equal "${#stderr_lines[@]}" 2
+    assert_regex "${stderr_lines[0]}" "^pd-bonds: 1331 particles, $pairs bonds \([0-9.]+ per particle, 28 to 122\)$"
+    assert_equal "${stderr_lines[1]}" "pd-bonds: stored as a lattice stencil of 122 offsets"
 }
 
 @test "a pair at exactly the horizon is bonded with volume factor 1/2" {
@@ -289,7 +299,7 @@ print('ok')" model.h5
     assert_output --regexp '^ok '
     run -0 py "
 f = h5py.File(sys.argv[1], 'r')
-length, nu = f['bonds/length'][:], f['bonds/volume_factor'][:]
+length, nu = pdh5.bonds(f)[2:]
 at = length == 1.5
 inner = length <= 1.5 - 0.25
 assert at.sum() > 0
@@ -308,11 +318,29 @@ print('ok')" m.h5
     assert_output --regexp '^ok '
 }
 
+@test "a perturbed cloud is no lattice: its bonds stay lists (CSR), said by no stencil line" {
+    pd-lattice -q --spacing 0.001 --density 2200 --box 0,0.006,0,0.006,0,0.006 \
+        --perturb 0.0001 --seed 3 -o l.h5
+    run -0 --separate-stderr pd-bonds --horizon 0.0030001 l.h5 -o m.h5
+    assert_equal "${#stderr_lines[@]}" 1
+    assert_regex "${stderr_lines[0]}" '^pd-bonds: 343 particles, '
+    run -0 py "
+b = h5py.File(sys.argv[1], 'r')['bonds']
+assert b.attrs.get('form', 'csr') in ('csr', b'csr'), b.attrs['form']
+assert sorted(b) == ['length', 'neighbor', 'offset', 'state', 'volume_factor'], sorted(b)
+assert 'spacing' not in b.attrs and 'origin' not in b.attrs
+assert int(b.attrs['count']) == b['neighbor'].size
+print('ok')" m.h5
+    assert_output ok
+    run -0 check_families m.h5
+    assert_output --regexp '^ok '
+}
+
 @test "every bond starts intact: one set bit per bond, padding bits clear" {
     make_block
     run -0 py "
 b = h5py.File(sys.argv[1], 'r')['bonds']
-count = b['neighbor'].size
+count = int(b.attrs['count'])
 s = b['state'][:]
 assert s.dtype == np.uint8 and s.size == (count + 7) // 8
 bits = np.unpackbits(s, bitorder='little')
@@ -347,7 +375,7 @@ print('ok')" lattice.h5 model.h5 plain.h5
     run -0 py "
 def pairs(name):
     f = h5py.File(name, 'r')
-    ids, off, nb = f['particles/id'][:], f['bonds/offset'][:], f['bonds/neighbor'][:]
+    ids, (off, nb) = f['particles/id'][:], pdh5.bonds(f)[:2]
     rows = np.repeat(np.arange(ids.size), np.diff(off))
     return np.sort(ids[rows] * 10**7 + ids[nb])
 assert np.array_equal(pairs(sys.argv[1]), pairs(sys.argv[2]))
@@ -381,7 +409,7 @@ f = h5py.File(sys.argv[1], 'r')
 x = f['particles/position'][:]
 ids = f['particles/id'][:]
 b = f['bonds']
-off, nb = b['offset'][:], b['neighbor'][:]
+off, nb = pdh5.bonds(f)[:2]
 delta = float(b.attrs['horizon'])
 n, count = x.shape[0], nb.size
 pre_bytes = b['precrack'][:]
@@ -467,10 +495,11 @@ print(np.count_nonzero((x[I, 0] < 0.0045) != (x[J, 0] < 0.0045)))" m.h5 "$HORIZO
     [ "$half" -gt 0 ] && [ "$half" -lt "$full" ]
     run -0 --separate-stderr pd-bonds --horizon "$HORIZON" --crack "$CRACK_FULL" \
         --crack "$CRACK_HALF" lattice.h5 -o m.h5
-    assert_equal "${#stderr_lines[@]}" 3
+    assert_equal "${#stderr_lines[@]}" 4
     assert_regex "${stderr_lines[0]}" '^pd-bonds: 1331 particles, '
-    assert_equal "${stderr_lines[1]}" "pd-bonds: --crack $CRACK_FULL: $full bonds broken"
-    assert_equal "${stderr_lines[2]}" "pd-bonds: --crack $CRACK_HALF: $half bonds broken"
+    assert_equal "${stderr_lines[1]}" "pd-bonds: stored as a lattice stencil of 122 offsets"
+    assert_equal "${stderr_lines[2]}" "pd-bonds: --crack $CRACK_FULL: $full bonds broken"
+    assert_equal "${stderr_lines[3]}" "pd-bonds: --crack $CRACK_HALF: $half bonds broken"
     run -0 --separate-stderr pd-bonds -q --horizon "$HORIZON" --crack "$CRACK_FULL" lattice.h5 -o m.h5
     assert_equal "$stderr" ""
 }
@@ -486,7 +515,7 @@ print(np.count_nonzero((x[I, 0] < 0.0045) != (x[J, 0] < 0.0045)))" m.h5 "$HORIZO
     run -0 py "
 def load(name):
     f = h5py.File(name, 'r')
-    off, nb = f['bonds/offset'][:], f['bonds/neighbor'][:]
+    off, nb = pdh5.bonds(f)[:2]
     pre = np.unpackbits(f['bonds/precrack'][:], bitorder='little')[:nb.size].astype(bool)
     return f['particles/position'][:], np.repeat(np.arange(off.size - 1), np.diff(off)), nb, pre
 x, rows, nb, full = load(sys.argv[1])
@@ -543,11 +572,11 @@ print('ok')" full.h5 half.h5
     make_block
     run -0 --separate-stderr pd-bonds --horizon "$HORIZON" --crack rect,0.5,0,0,0,1,0,0,0,1 \
         lattice.h5 -o m.h5
-    assert_equal "${stderr_lines[1]}" "pd-bonds: --crack rect,0.5,0,0,0,1,0,0,0,1: 0 bonds broken"
+    assert_equal "${stderr_lines[2]}" "pd-bonds: --crack rect,0.5,0,0,0,1,0,0,0,1: 0 bonds broken"
     run -0 py "
 b = h5py.File(sys.argv[1], 'r')['bonds']
 assert 'precrack' not in b
-count = b['neighbor'].size
+count = int(b.attrs['count'])
 assert np.all(np.unpackbits(b['state'][:], bitorder='little')[:count] == 1)
 print('ok')" m.h5
     assert_output ok
@@ -584,10 +613,15 @@ bad_crack() {
     pd-run -q "${RUN_OPTS[@]}" --steps 20 --every 10 m.h5 -o run.h5
     run -0 py "
 m, r = h5py.File(sys.argv[1], 'r'), h5py.File(sys.argv[2], 'r')
-for k in ('precrack', 'state', 'offset', 'neighbor'):
+# /bonds as the model has it (a stencil here), every dataset and attribute
+assert sorted(m['bonds']) == sorted(r['bonds']) and 'precrack' in m['bonds'], sorted(r['bonds'])
+for k in m['bonds']:
     a, b = m['bonds/' + k], r['bonds/' + k]
     assert a.dtype == b.dtype and np.array_equal(a[:], b[:]), k
-count = r['bonds/neighbor'].size
+assert sorted(m['bonds'].attrs) == sorted(r['bonds'].attrs)
+for k in m['bonds'].attrs:
+    assert np.array_equal(m['bonds'].attrs[k], r['bonds'].attrs[k]), k
+count = int(r['bonds'].attrs['count'])
 pre = np.unpackbits(r['bonds/precrack'][:], bitorder='little')[:count].astype(bool)
 assert pre.any()
 frames = list(r['frames'].values())
@@ -597,4 +631,103 @@ for g in frames:
     assert not np.any(mu & pre), ('a pre-cracked bond intact in a frame', g.attrs['step'])
 print('ok')" m.h5 run.h5
     assert_output ok
+}
+
+# ------------------------------------------------------------ the two forms
+
+# same_bonds STENCIL.h5 CSR.h5 [DIM]: the first file's /bonds is a lattice
+# stencil (form "stencil", spacing and origin, the table of offsets, no
+# per-bond list), the second's the lists of --csr; the table is every
+# nonzero lattice offset d of a DIM-D lattice (default 3) with |d| h <=
+# delta, each with its opposite, stencil_length = |d| h, the factors in
+# (0, 1]; pdh5.bonds expands the stencil to exactly the lists (dtype, shape
+# and bits), and the state and pre-crack bits, the count, the horizon and
+# /particles are the same in both.  Prints "ok K".
+same_bonds() {
+    py "
+s, c = h5py.File(sys.argv[1], 'r'), h5py.File(sys.argv[2], 'r')
+dim = int(sys.argv[3]) if len(sys.argv) > 3 else 3
+bs, bc = s['bonds'], c['bonds']
+assert pdh5.form(s) == 'stencil' and pdh5.form(c) == 'csr'
+pre = ['precrack'] if 'precrack' in bc else []
+assert sorted(bs) == sorted(['stencil', 'stencil_length', 'stencil_volume_factor', 'state'] + pre), sorted(bs)
+assert sorted(bc) == sorted(['offset', 'neighbor', 'length', 'volume_factor', 'state'] + pre), sorted(bc)
+assert 'form' not in bc.attrs or pdh5.form(c) == 'csr'
+h, delta = float(bs.attrs['spacing']), float(bs.attrs['horizon'])
+assert h == float(s['particles'].attrs['spacing']) and bs.attrs['origin'].shape == (3,)
+assert delta == float(bc.attrs['horizon']) and int(bs.attrs['count']) == int(bc.attrs['count'])
+# the table: the ball of lattice offsets within the horizon
+d = bs['stencil'][:]
+assert d.dtype == np.int32 and d.ndim == 2 and d.shape[1] == 3
+m = int(delta / h) + 1
+g = np.arange(-m, m + 1)
+ball = np.stack(np.meshgrid(g, g, g if dim == 3 else [0], indexing='ij'), -1).reshape(-1, 3)
+ball = ball[np.any(ball != 0, axis=1) & (((ball * h)**2).sum(1) <= delta * delta)]
+key = lambda v: sorted(map(tuple, v.tolist()))
+assert key(d) == key(ball), (len(d), len(ball))
+assert key(-d) == key(d)
+L, nu = bs['stencil_length'][:], bs['stencil_volume_factor'][:]
+assert L.shape == nu.shape == (len(d),)
+assert np.allclose(L, np.sqrt((d.astype(float)**2).sum(1)) * h, rtol=1e-12, atol=0)
+assert np.all((nu > 0) & (nu <= 1))
+# the expansion equals the lists bit for bit
+for got, name in zip(pdh5.bonds(s), ('offset', 'neighbor', 'length', 'volume_factor')):
+    want = bc[name][()]
+    assert got.dtype == want.dtype and got.shape == want.shape, (name, got.dtype, want.dtype)
+    assert got.tobytes() == want.tobytes(), (name, np.nonzero(got != want)[0][:5])
+for name in ['state'] + pre:
+    a, b = bs[name][()], bc[name][()]
+    assert a.dtype == b.dtype == np.uint8 and a.tobytes() == b.tobytes(), name
+assert not pre or pdh5.bits(bs['precrack'], int(bs.attrs['count'])).any()
+for k in c['particles']:
+    assert s['particles'][k][()].tobytes() == c['particles'][k][()].tobytes(), k
+print('ok', len(d))
+" "$@"
+}
+
+@test "a box lattice: the default writes the stencil of 122 offsets; pdh5 expands it to the --csr lists bit for bit" {
+    make_block
+    run -0 --separate-stderr pd-bonds --horizon "$HORIZON" lattice.h5 -o s.h5
+    assert_equal "${stderr_lines[1]}" "pd-bonds: stored as a lattice stencil of 122 offsets"
+    run -0 --separate-stderr pd-bonds --csr --horizon "$HORIZON" lattice.h5 -o c.h5
+    assert_equal "${#stderr_lines[@]}" 1
+    run -0 same_bonds s.h5 c.h5
+    assert_output "ok 122"
+    # the model of make_block, the suites' block, is that stencil
+    py "
+a, b = (h5py.File(n, 'r')['bonds'] for n in sys.argv[1:3])
+assert sorted(a) == sorted(b) and all(np.array_equal(a[k][()], b[k][()]) for k in a)" model.h5 s.h5
+    run -0 check_families s.h5
+    assert_output --regexp '^ok 28 122 '
+}
+
+@test "a plate: the stencil of the 28 in-plane offsets, the same bonds as --csr" {
+    pd-lattice -q --dimension 2 --thickness 0.001 --spacing 0.0005 --density 8000 \
+        --box -0.003,0.003,-0.002,0.002,0,0 -o pl.h5
+    run -0 --separate-stderr pd-bonds --horizon 0.0015001 pl.h5 -o s.h5
+    assert_equal "${stderr_lines[1]}" "pd-bonds: stored as a lattice stencil of 28 offsets"
+    pd-bonds -q --csr --horizon 0.0015001 pl.h5 -o c.h5
+    run -0 same_bonds s.h5 c.h5 2
+    assert_output "ok 28"
+    run -0 check_families s.h5
+    assert_output --regexp '^ok [0-9]+ 28 '
+}
+
+@test "a pre-cracked lattice: the stencil keeps the pre-crack bits, equal to those of --csr" {
+    make_block
+    pd-bonds -q --horizon "$HORIZON" --crack "$CRACK_HALF" lattice.h5 -o s.h5
+    pd-bonds -q --csr --horizon "$HORIZON" --crack "$CRACK_HALF" lattice.h5 -o c.h5
+    run -0 same_bonds s.h5 c.h5
+    assert_output "ok 122"
+    run -0 check_precrack s.h5 "$CRACK_HALF"
+    assert_line --index 1 --regexp '^ok [1-9][0-9]*$'
+}
+
+@test "pd-run keeps either form: a run of the --csr model has the lists, of the default the stencil" {
+    make_block
+    pd-bonds -q --csr --horizon "$HORIZON" lattice.h5 -o c.h5
+    pd-run -q --c 1e21 --steps 1 model.h5 -o rs.h5
+    pd-run -q --c 1e21 --steps 1 c.h5 -o rc.h5
+    run -0 same_bonds rs.h5 rc.h5
+    assert_output "ok 122"
 }

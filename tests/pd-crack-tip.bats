@@ -31,7 +31,7 @@ setup() {
 check_tip() {
     "$PY" - "$HEADER" "$@" <<'EOF'
 import sys, math
-import h5py, numpy as np
+import h5py, numpy as np, pdh5
 
 header, run, table = sys.argv[1], sys.argv[2], sys.argv[3]
 axis, thr = "xyz".index(sys.argv[4]), float(sys.argv[5])
@@ -41,7 +41,7 @@ rows = [l.split() for l in lines[1:]]
 f = h5py.File(run, "r")
 x = f["particles/position"][:]
 n = x.shape[0]
-off, nb, vol = f["bonds/offset"][:], f["bonds/neighbor"][:], f["particles/volume"][:]
+(off, nb), vol = pdh5.bonds(f)[:2], f["particles/volume"][:]
 row = np.repeat(np.arange(n), np.diff(off))
 b = np.arange(nb.size)
 keys = sorted(f["frames"], key=lambda k: int(f["frames"][k].attrs["step"]))

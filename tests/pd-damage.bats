@@ -18,7 +18,7 @@ check_damage() {
     py "
 f = h5py.File(sys.argv[1], 'r')
 V = f['particles/volume'][:]
-off, nb = f['bonds/offset'][:], f['bonds/neighbor'][:]
+off, nb = pdh5.bonds(f)[:2]
 n, count = V.size, nb.size
 rows = np.repeat(np.arange(n), np.diff(off))
 total = np.bincount(rows, V[nb], minlength=n)
@@ -320,7 +320,7 @@ check_damage_run() {
     py "
 f = h5py.File(sys.argv[1], 'r')
 V = f['particles/volume'][:]
-off, nb = f['bonds/offset'][:], f['bonds/neighbor'][:]
+off, nb = pdh5.bonds(f)[:2]
 n, count = V.size, nb.size
 pre = np.unpackbits(f['bonds/precrack'][:], bitorder='little')[:count].astype(bool)
 assert pre.any()
@@ -362,7 +362,7 @@ print('ok', len(frames), repr(frames[-1]['damage_run'][:].max() > 0))
     pd-damage -q --no-precrack run.h5
     run -0 py "
 f = h5py.File(sys.argv[1], 'r')
-off, nb = f['bonds/offset'][:], f['bonds/neighbor'][:]
+off, nb = pdh5.bonds(f)[:2]
 pre = np.unpackbits(f['bonds/precrack'][:], bitorder='little')[:nb.size].astype(bool)
 rows = np.repeat(np.arange(off.size - 1), np.diff(off))
 next_to = np.bincount(rows, pre, minlength=off.size - 1) > 0
@@ -401,17 +401,18 @@ print('ok')" out.h5
     diff <(pd-damage -n run.h5) <(pd-damage -n --no-precrack run.h5)
 }
 
-# precrack_edit EDIT: model.h5 of make_cracked_model, its /bonds/precrack
-# changed by EDIT (python, with f open and count, pre (bits), state (bits),
-# off, nb), into bad.h5.
+# precrack_edit EDIT: model.h5 of make_cracked_model (a stencil: the bits
+# follow its expanded families), its /bonds/precrack changed by EDIT
+# (python, with f open and count, pre (bits), state (bits), off, nb), into
+# bad.h5.
 precrack_edit() {
     make_cracked_model
     cp model.h5 bad.h5
     py "
 f = h5py.File(sys.argv[1], 'a')
 b = f['bonds']
-count = b['neighbor'].size
-off, nb = b['offset'][:], b['neighbor'][:]
+count = int(b.attrs['count'])
+off, nb = pdh5.bonds(f)[:2]
 pre = np.unpackbits(b['precrack'][:], bitorder='little')[:count]
 state = np.unpackbits(b['state'][:], bitorder='little')[:count]
 $1
@@ -426,7 +427,7 @@ m = off[j] + np.searchsorted(nb[off[j]:off[j + 1]], 0)
 assert state[0] == 1 and state[m] == 1
 pre[0] = pre[m] = 1
 b['precrack'][...] = np.packbits(pre, bitorder='little')"
-    j=$(py "print(h5py.File(sys.argv[1], 'r')['bonds/neighbor'][0])" bad.h5)
+    j=$(py "print(pdh5.bonds(h5py.File(sys.argv[1], 'r'))[1][0])" bad.h5)
     msg="'bad\.h5': bond 0-$j is pre-cracked \(/bonds/precrack\) but intact in /bonds/state$"
     expect_runtime_error "$msg" pd-damage -n bad.h5
     expect_runtime_error "$msg" pd-run -q --bulk-modulus "$BULK" --steps 0 bad.h5 -o r.h5

@@ -27,15 +27,14 @@ check_vtk() {
     "$PY" - "$@" <<'EOF'
 import os, sys
 import xml.etree.ElementTree as ET
-import h5py, meshio, numpy as np
+import h5py, meshio, numpy as np, pdh5
 
 run, out, name = sys.argv[1:4]
 use_field = len(sys.argv) > 4 and sys.argv[4] == "field"
 f = h5py.File(run, "r")
 x = f["particles/position"][:]
 n = x.shape[0]
-off = f["bonds/offset"][:]
-nb = f["bonds/neighbor"][:]
+off, nb = pdh5.bonds(f)[:2]
 vol = f["particles/volume"][:]
 row = np.repeat(np.arange(n), np.diff(off))
 
@@ -245,11 +244,11 @@ make_cracked_run() {
 check_damage_run() {
     "$PY" - "$@" <<'EOF2'
 import os, sys
-import h5py, meshio, numpy as np
+import h5py, meshio, numpy as np, pdh5
 run, out, name = sys.argv[1:4]
 f = h5py.File(run, "r")
 vol = f["particles/volume"][:]
-off, nb = f["bonds/offset"][:], f["bonds/neighbor"][:]
+off, nb = pdh5.bonds(f)[:2]
 n, count = vol.size, nb.size
 row = np.repeat(np.arange(n), np.diff(off))
 pre = np.unpackbits(f["bonds/precrack"][:], bitorder="little")[:count].astype(bool)

@@ -286,7 +286,7 @@ h = a['history']
 h = h.decode() if isinstance(h, bytes) else h
 print(a['pd_format'], int(a['pd_format_version']), a['units'])
 print(h)" b.h5
-    assert_line --index 0 "pd-h5 1 SI"
+    assert_line --index 0 "pd-h5 2 SI"
     assert_line --index 1 "pd-lattice -q --spacing 0.001 --density 2200 --box 0,0.01,0,0.01,0,0.01 -o b.h5"
     assert_equal "${#lines[@]}" 2
 }

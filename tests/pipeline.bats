@@ -115,5 +115,13 @@ print('ok')"
     pd-lattice -q --spacing 0.0005 --cylinder y,0,0,0.005,-0.003,0 --density 2200 -o - |
         pd-bonds --horizon 0.0015001 - -o m.h5 2> log
     run -0 cat log
-    assert_output --regexp '^pd-bonds: [0-9]+ particles, [0-9]+ bonds \([0-9.]+ per particle, [0-9]+ to 122\)$'
+    assert_equal "${#lines[@]}" 2
+    assert_line --index 0 --regexp '^pd-bonds: [0-9]+ particles, [0-9]+ bonds \([0-9.]+ per particle, [0-9]+ to 122\)$'
+    # a cylinder cut from the lattice: its families are the lattice stencil
+    assert_line --index 1 "pd-bonds: stored as a lattice stencil of 122 offsets"
+    run -0 py "
+f = h5py.File(sys.argv[1], 'r')
+assert pdh5.form(f) == 'stencil'
+print(np.diff(pdh5.bonds(f)[0]).max())" m.h5
+    assert_output 122
 }

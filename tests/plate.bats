@@ -115,12 +115,12 @@ with h5py.File(sys.argv[1], 'a') as f:
     run -0 pd-bonds -q --horizon $DELTA plate.h5 -o model.h5
     py "
 with h5py.File(sys.argv[1]) as f:
-    p, b = f['particles'], f['bonds']
+    p = f['particles']
     assert int(p.attrs['dimension']) == 2 and p.attrs['thickness'] == 0.001
     x = p['position'][:]
     ids = p['id'][:]
     assert sorted(ids) == list(range(1, len(x) + 1))
-    off, nb, vf = b['offset'][:], b['neighbor'][:], b['volume_factor'][:]
+    off, nb, _, vf = pdh5.bonds(f)
     for i in range(len(x)):
         fam = nb[off[i]:off[i + 1]]
         d = np.round((x[fam, :2] - x[i, :2]) / 0.0005).astype(int)
@@ -145,7 +145,7 @@ with h5py.File(sys.argv[1]) as f:
     py "
 with h5py.File(sys.argv[1]) as f:
     x = f['particles/position'][:]
-    off, nb = f['bonds/offset'][:], f['bonds/neighbor'][:]
+    off, nb = pdh5.bonds(f)[:2]
     pre = np.unpackbits(f['bonds/precrack'][:], bitorder='little')[:len(nb)]
 i = np.repeat(np.arange(len(x)), np.diff(off))
 j = nb

@@ -32,10 +32,10 @@ SPHERE=0.005,0.005,0.0131,0.003
     py "
 import math
 with h5py.File(sys.argv[1]) as f:
-    p, b = f['particles'], f['bonds']
+    p = f['particles']
     V = p['volume'][:]
-    off, nb = b['offset'][:], b['neighbor'][:]
-    w = V[nb] * b['volume_factor'][:] / b['length'][:]
+    off, nb, length, nu = pdh5.bonds(f)
+    w = V[nb] * nu / length
     c = f['scene'].attrs['c']
     smax = c * max(w[off[i]:off[i + 1]].sum() for i in range(len(off) - 1))
     K = f['scene'].attrs['projectile'][8]

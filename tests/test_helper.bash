@@ -25,8 +25,11 @@ export PATH
 export OMP_WAIT_POLICY
 
 # Debian's python, the one with h5py and numpy; another python3 may come
-# first on PATH.
+# first on PATH.  share/ comes first on its path, for pdh5 (the bonds of
+# either form of /bonds, pd-h5(5)): every $PY the suites run finds it.
 PY=/usr/bin/python3
+PYTHONPATH="$(cd "$BATS_TEST_DIRNAME/../share" && pwd)${PYTHONPATH:+:$PYTHONPATH}"
+export PYTHONPATH
 
 # The small block of make_block: an 11x11x11 simple cubic lattice (1331
 # particles) with horizon 3.0001 spacings.
@@ -57,18 +60,30 @@ _pd_cached() {
     mv -T "$tmp" "$_PD_CACHE" 2>/dev/null || rm -rf "$tmp"
 }
 
+# _pd_build_block DIR [PD-BONDS OPTION]...
 _pd_build_block() {
+    local dir=$1
+    shift
     pd-lattice -q --spacing "$SPACING" --density "$DENSITY" \
-        --box 0,0.01,0,0.01,0,0.01 -o "$1/lattice.h5" &&
-        pd-bonds -q --horizon "$HORIZON" "$1/lattice.h5" -o "$1/model.h5"
+        --box 0,0.01,0,0.01,0,0.01 -o "$dir/lattice.h5" &&
+        pd-bonds -q --horizon "$HORIZON" "$@" "$dir/lattice.h5" -o "$dir/model.h5"
 }
 
 # make_block [DIR]: DIR/lattice.h5 (/particles only) and DIR/model.h5 (with
-# /bonds) of a 10 mm cube of glass-like material.  DIR defaults to
-# $BATS_TEST_TMPDIR.
+# /bonds, a lattice stencil: pd-bonds' default on a lattice) of a 10 mm cube
+# of glass-like material.  DIR defaults to $BATS_TEST_TMPDIR.
 make_block() {
     local dir=${1:-$BATS_TEST_TMPDIR}
     _pd_cached block _pd_build_block || return 1
+    cp "$_PD_CACHE/lattice.h5" "$_PD_CACHE/model.h5" "$dir/"
+}
+
+# make_csr_block [DIR]: make_block's files, /bonds of DIR/model.h5 stored as
+# lists (pd-bonds --csr: /bonds/offset, neighbor, length, volume_factor), for
+# tests that change those lists.
+make_csr_block() {
+    local dir=${1:-$BATS_TEST_TMPDIR}
+    _pd_cached block-csr _pd_build_block --csr || return 1
     cp "$_PD_CACHE/lattice.h5" "$_PD_CACHE/model.h5" "$dir/"
 }
 
@@ -104,11 +119,12 @@ make_run() {
 }
 
 # py CODE [ARG]...: run CODE with Debian's python; numpy is np, h5py is h5py,
-# the arguments are sys.argv[1:].
+# pdh5 (share/pdh5.py) is pdh5, the arguments are sys.argv[1:].  The bonds
+# of a model in either form: `off, nb, length, nu = pdh5.bonds(f)`.
 py() {
     local code=$1
     shift
-    "$PY" -c "import sys, h5py, numpy as np
+    "$PY" -c "import sys, h5py, numpy as np, pdh5
 $code" "$@"
 }
 

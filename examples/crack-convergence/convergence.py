@@ -42,7 +42,7 @@ def grid(dx):
     speed = 0.5 * (t[:, 6] + t[:, 7])
     with h5py.File("run-%s.h5" % dx) as f:
         n = f["particles/id"].shape[0]
-        bonds = f["bonds/neighbor"].shape[0] // 2
+        bonds = int(f["bonds"].attrs["count"]) // 2
         steps = int(f["scene"].attrs["steps"])
     log = open("run-%s.log" % dx).read()
     m = re.search(r"(\d+) steps in ([0-9.eE+-]+) s \(([0-9.eE+-]+) bond updates/s\)", log)

@@ -19,10 +19,16 @@ Damage is the frame's 'damage' (pd-damage) or, without it, the broken
 fraction of each bond family.  Rows are sorted by damage so that the most
 damaged particles are drawn last.  '#' lines say the step and the counts.
 """
+import os
 import sys
 
 import h5py
 import numpy as np
+
+# share/pdh5.py of this source tree (installed: $(PREFIX)/share/pd/python):
+# the bonds of /bonds in either form (lists or a lattice stencil)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "share"))
+import pdh5  # noqa: E402
 
 
 def frame(h, step):
@@ -36,7 +42,7 @@ def frame(h, step):
     if "damage" in g:
         dmg = np.asarray(g["damage"][...], dtype=np.float64)
     else:
-        off = np.asarray(h["bonds/offset"][...], dtype=np.int64)
+        off = pdh5.bonds(h)[0]
         fam = np.diff(off)
         bits = np.unpackbits(np.asarray(g["state"][...], dtype=np.uint8),
                              bitorder="little")[:off[-1]]

@@ -15,10 +15,16 @@ DUMP is the LAMMPS dump of in.impact (id x y z c_C1; its step-0 frame gives
 the reference positions).  The step and the number of particles go into
 '#' comment lines.
 """
+import os
 import sys
 
 import h5py
 import numpy as np
+
+# share/pdh5.py of this source tree (installed: $(PREFIX)/share/pd/python):
+# the bonds of /bonds in either form (lists or a lattice stencil)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "share"))
+import pdh5  # noqa: E402
 
 
 def pd_frame(path, step):
@@ -33,7 +39,7 @@ def pd_frame(path, step):
         if "damage" in g:
             dmg = np.asarray(g["damage"][...], dtype=np.float64)
         else:
-            off = np.asarray(h["bonds/offset"][...], dtype=np.int64)
+            off = pdh5.bonds(h)[0]
             fam = np.diff(off)
             bits = np.unpackbits(np.asarray(g["state"][...], dtype=np.uint8),
                                  bitorder="little")[:off[-1]]

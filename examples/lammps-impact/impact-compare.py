@@ -39,6 +39,11 @@ import sys
 import h5py
 import numpy as np
 
+# share/pdh5.py of this source tree (installed: $(PREFIX)/share/pd/python):
+# the bonds of /bonds in either form (lists or a lattice stencil)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "share"))
+import pdh5  # noqa: E402
+
 BINS = ["0"] + ["(%.1f,%.1f]" % (k / 10, (k + 1) / 10) for k in range(10)]
 
 
@@ -117,7 +122,7 @@ def main(argv):
     with h5py.File(a.run, "r") as h:
         x0 = np.asarray(h["particles/position"][...], dtype=np.float64)
         spacing = float(h["particles"].attrs["spacing"])
-        off = np.asarray(h["bonds/offset"][...], dtype=np.int64)
+        off = pdh5.bonds(h)[0]
         fam = np.diff(off)
         nbond = int(off[-1])
         pd = {}

@@ -42,10 +42,16 @@ Exit status: 0 if within tolerances, 1 if not (or ids do not match),
 at least N damaged particles (a comparison without damage proves little).
 """
 import argparse
+import os
 import sys
 
 import h5py
 import numpy as np
+
+# share/pdh5.py of this source tree (installed: $(PREFIX)/share/pd/python):
+# the bonds of /bonds in either form (lists or a lattice stencil)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "share"))
+import pdh5  # noqa: E402
 
 
 def read_dump(path, want=None):
@@ -96,7 +102,7 @@ def main(argv):
         ids = np.asarray(h["particles/id"][...], dtype=np.int64)
         x0 = np.asarray(h["particles/position"][...], dtype=np.float64)
         spacing = float(h["particles"].attrs.get("spacing", np.nan))
-        off = np.asarray(h["bonds/offset"][...], dtype=np.int64)
+        off = pdh5.bonds(h)[0]
         nbond = off[-1]
         fam = np.diff(off)
         want = a.step
