@@ -49,10 +49,16 @@ def _expand(f):
     g = f["bonds"]
     x = np.asarray(f["particles/position"][()], dtype=np.float64)
     radius = np.asarray(f["particles/radius"][()], dtype=np.float64)
-    d = np.asarray(g["stencil"][()], dtype=np.int64).reshape(-1, 3)
-    h = float(g.attrs["spacing"])
-    origin = np.asarray(g.attrs["origin"], dtype=np.float64).reshape(3)
-    horizon = float(g.attrs["horizon"])
+    try:
+        d = np.asarray(g["stencil"][()], dtype=np.int64).reshape(-1, 3)
+        h = float(g.attrs["spacing"])
+        origin = np.asarray(g.attrs["origin"], dtype=np.float64).reshape(3)
+        horizon = float(g.attrs["horizon"])
+        count = int(g.attrs["count"])
+    except (KeyError, ValueError) as e:
+        raise FormatError(f"/bonds as a stencil: {e}") from None
+    if not (h > 0 and np.isfinite(h) and np.isfinite(origin).all()):
+        raise FormatError(f"/bonds has spacing {h} and origin {origin}")
     n = len(x)
     u = (x - origin) / h
     c = np.rint(u).astype(np.int64)
@@ -85,9 +91,8 @@ def _expand(f):
     dy = x[i, 1] - x[j, 1]
     dz = x[i, 2] - x[j, 2]
     length = np.sqrt(dx * dx + dy * dy + dz * dz)
-    if int(g.attrs["count"]) != len(j):
-        raise FormatError(f"the stencil gives {len(j)} bonds, /bonds@count says "
-                          f"{int(g.attrs['count'])}")
+    if count != len(j):
+        raise FormatError(f"the stencil gives {len(j)} bonds, /bonds@count says {count}")
     return offset, j.astype(np.int32), length, _partial_volume(length, horizon, radius[j])
 
 

@@ -333,6 +333,14 @@ for f in files[1:]:
     refused_by_run stencil-length-zero.h5 "'stencil-length-zero.h5': /bonds/stencil offset 2 has length 0 and volume factor 1"
 }
 
+@test "a stencil offset beyond the horizon" {
+    refused_by_run stencil-beyond-horizon.h5 "'stencil-beyond-horizon.h5': /bonds/stencil offset (2, 0, 0) is 2 m long, beyond the horizon 1.5 m"
+}
+
+@test "a stencil length that is not its offset's" {
+    refused_by_run stencil-length-wrong.h5 "'stencil-length-wrong.h5': /bonds/stencil_length of offset (0, 0, -1) is 5 m, not 1 m"
+}
+
 @test "a stencil volume factor of 1.5" {
     refused_by_run stencil-vfactor.h5 "'stencil-vfactor.h5': /bonds/stencil offset 0 has length 1.41421 and volume factor 1.5"
 }

@@ -22,33 +22,6 @@
 
 #include "pd.h"
 
-pd_stencil *pd_stencil_alloc(int nk)
-{
-    pd_stencil *st = calloc(1, sizeof *st);
-    if (st == NULL)
-        return NULL;
-    size_t m = nk > 0 ? (size_t)nk : 1;
-    st->nk = nk;
-    st->d = malloc(m * sizeof *st->d);
-    st->length = malloc(m * sizeof(double));
-    st->vfactor = malloc(m * sizeof(double));
-    if (!st->d || !st->length || !st->vfactor) {
-        pd_stencil_free(st);
-        return NULL;
-    }
-    return st;
-}
-
-void pd_stencil_free(pd_stencil *st)
-{
-    if (st == NULL)
-        return;
-    free(st->d);
-    free(st->length);
-    free(st->vfactor);
-    free(st);
-}
-
 static pd_stencil *stencil_copy(const pd_stencil *st)
 {
     pd_stencil *c = pd_stencil_alloc(st->nk);

@@ -312,6 +312,9 @@ static pd_status check_bonds(const char *fn, const pd_bonds *b)
             if (!(b->length[k] > 0) || !isfinite(b->length[k]))
                 return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has length %g", fn, (long long)k,
                                b->length[k]);
+            if (b->length[k] > b->horizon * (1 + 1e-9))
+                return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld is %g m long, beyond the horizon "
+                                              "%g m", fn, (long long)k, b->length[k], b->horizon);
             if (!(b->vfactor[k] > 0 && b->vfactor[k] <= 1))
                 return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has volume factor %g", fn,
                                (long long)k, b->vfactor[k]);
@@ -538,6 +541,21 @@ static pd_status read_stencil_bonds(const pd_file *f, hid_t g, const pd_particle
                  !(st->vfactor[k] > 0 && st->vfactor[k] <= 1))
             s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/stencil offset %d has length %g and volume "
                                        "factor %g", fn, k, st->length[k], st->vfactor[k]);
+    }
+    /* within the horizon, and each length that of its offset (to the
+     * sites' tolerance at both ends, as pd_bonds_build_lattice's reach) */
+    for (int k = 0; k < (int)nk && s == PD_OK; k++) {
+        const int32_t *dk = st->d[k];
+        const double h = st->spacing,
+                     len = h * sqrt((double)dk[0] * dk[0] + (double)dk[1] * dk[1] +
+                                    (double)dk[2] * dk[2]);
+        if (len > horizon + 1e-5 * h)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/stencil offset (%d, %d, %d) is %g m long, "
+                                       "beyond the horizon %g m", fn, dk[0], dk[1], dk[2], len,
+                        horizon);
+        else if (fabs(st->length[k] - len) > 1e-5 * h)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/stencil_length of offset (%d, %d, %d) is %g m, "
+                                       "not %g m", fn, dk[0], dk[1], dk[2], st->length[k], len);
     }
     for (int k = 0; k < (int)nk && s == PD_OK; k++) {
         const int32_t *dk = st->d[k];
