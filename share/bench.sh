@@ -47,6 +47,19 @@
 #       (a), which walks the bonds as a lattice stencil: the speed-up, the
 #       largest position difference after BENCH_STEPS steps and the
 #       damaged particles of each (the accuracy the faster mode costs);
+#   (h) files and the pipe ("files"): pd-lattice and pd-bonds of the seed
+#       disk (the best of two runs each), the sizes of the lattice, of the
+#       model (a lattice stencil) and of the same model as lists (pd-bonds
+#       --csr), the run file of (a) (its one frame) and the bytes of each
+#       per particle; pd-run's time outside its loop in (a) (start-up and
+#       the last frame); (a)'s peak memory per particle; and the whole
+#       scene of (a) as one pipe, pd-lattice | pd-bonds | pd-run, against
+#       LAMMPS's whole process of (a);
+#   (i) a sweep ("sweep"): four pd-runs of the full scene (BENCH_SWEEP_STEPS
+#       steps, default 100, four critical stretches) as a Makefile with no
+#       thread option, made with make -j BENCH_THREADS and made one after
+#       another (make -j1), twice each: the better wall times and their
+#       ratio (runs sharing the cores, cmd/cli.h);
 # Wall time and peak RSS come from /usr/bin/time -f '%e %M' around pd-run,
 # around mpirun (wall) and around each LAMMPS rank (peak RSS, summed).
 #
@@ -54,7 +67,8 @@
 # BENCH_SIZES ("25k 100k 400k 1.6M": particle counts, k = 1e3, M = 1e6;
 # the 1.6M disk needs about 6 GB of memory and 3 GB in BENCH_DIR, and
 # minutes to build), BENCH_SKIP (words among lammps, lps, effects,
-# roofline, scaling, threads, kernels: the parts left out), BENCH_DIR (cache of the
+# roofline, scaling, threads, kernels, files, sweep: the parts left out),
+# BENCH_SWEEP_STEPS (100), BENCH_DIR (cache of the
 # models and the runs, default $TMPDIR/pd-bench), PD_BIN (default: bin/ of
 # this tree), LMP (lmp), MPIRUN (mpirun), CC (cc, for share/stream.c).
 # Run from anywhere; `make bench` builds the programs first.
@@ -94,8 +108,8 @@ case $THREADS in '' | *[!0-9]*) die "BENCH_THREADS must be a positive integer, n
 [ "$THREADS" -gt 0 ] || die "BENCH_THREADS must be a positive integer"
 for w in $SKIP; do
     case $w in
-    lammps | lps | effects | roofline | scaling | threads | kernels) ;;
-    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels)" ;;
+    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep) ;;
+    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep)" ;;
     esac
 done
 # skip PART: is PART left out?
@@ -454,6 +468,61 @@ print("%.3g %.3g %d %d %d %d" % (np.abs(ua - ub).max(), np.abs(ua).max(), da.sum
 EOF
     rm -f list.h5
 fi
+# --- (h) files and the pipe ---------------------------------------------------------
+# size FILE: its bytes
+size() { wc -c <"$1" | tr -d ' '; }
+# best2 NAME CMD...: CMD twice under /usr/bin/time; NAME.time gets the
+# better "wall peak_kB"
+best2() {
+    name=$1
+    shift
+    "$TIME" -f '%e %M' -o "$name.t1" "$@" || die "$name failed"
+    "$TIME" -f '%e %M' -o "$name.t2" "$@" || die "$name failed"
+    sort -n "$name.t1" "$name.t2" | head -n 1 >"$name.time"
+}
+if ! skip files; then
+    echo "$prog: files and the pipe" >&2
+    lat="--spacing 0.0005 --cylinder y,0,0,0.037,-0.0025,0 --density 2200"
+    # shellcheck disable=SC2086 # lat is a list of options
+    best2 lattice "$PD_BIN/pd-lattice" $lat -q -o f-lattice.h5
+    best2 bonds "$PD_BIN/pd-bonds" --horizon "$HORIZON" -q f-lattice.h5 -o f-model.h5
+    "$PD_BIN/pd-bonds" --horizon "$HORIZON" --csr -q f-lattice.h5 -o f-csr.h5 ||
+        die "pd-bonds --csr failed"
+    keep=1 pd_bench files f-model.h5 "$STEPS" --scene "$SCENE" --status "$THERMO"
+    keep=''
+    echo "$(size f-lattice.h5) $(size f-model.h5) $(size f-csr.h5) $(size files.h5)" >files.sizes
+    rm -f f-csr.h5 files.h5
+    # the pipe: the whole scene of (a) from nothing
+    echo "$prog: pd-lattice | pd-bonds | pd-run ($STEPS steps)" >&2
+    "$TIME" -f '%e %M' -o pipe.time sh -c '"$1"/pd-lattice $2 -q -o - |
+        "$1"/pd-bonds --horizon "$3" -q - -o - |
+        "$1"/pd-run --scene "$4" --status "$5" --threads "$6" --steps "$7" --every 0 - -o pipe.h5' \
+        _ "$PD_BIN" "$lat" "$HORIZON" "$SCENE" "$THERMO" "$THREADS" "$STEPS" 2>pipe.log ||
+        { cat pipe.log >&2; die "the pipe failed"; }
+    rm -f pipe.h5
+fi
+
+# --- (i) a sweep: make -j against one run after another ------------------------
+SWEEP_STEPS=${BENCH_SWEEP_STEPS:-100}
+if ! skip sweep; then
+    echo "$prog: a sweep of four runs, make -j$THREADS and make -j1, twice each" >&2
+    {
+        echo "S = 0.0004 0.0005 0.0006 0.0007"
+        echo 'all: $(S:%=sweep-%.h5)'
+        echo "sweep-%.h5: model.h5"
+        printf '\t"%s" -q --scene "%s" --failure $*,0.25 --steps %s --every 0 model.h5 -o $@\n' \
+            "$PD_BIN/pd-run" "$SCENE" "$SWEEP_STEPS"
+    } >sweep.mk
+    rm -f "sweep-$THREADS.times" sweep-1.times
+    for j in "$THREADS" 1 "$THREADS" 1; do
+        rm -f sweep-*.h5
+        # a make of its own, not a part of `make bench`'s jobserver
+        "$TIME" -f '%e' -a -o "sweep-$j.times" env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL \
+            make -s -f sweep.mk -j "$j" all ||
+            die "the sweep failed (make -j$j)"
+    done
+    rm -f sweep-*.h5
+fi
 rm -f full.h5
 
 # --- report ---------------------------------------------------------------------
@@ -610,6 +679,42 @@ EOF
     echo "  after $STEPS steps: largest position difference $du m (largest displacement $umax m);"
     echo "  damaged particles $dmg_s (stencil) and $dmg_l (list), $ddiff damaged in one run only;"
     echo "  broken bonds differ by $bdiff (the two sum in another order: they agree to rounding)"
+fi
+if ! skip files; then
+    echo
+    read -r s_lat s_model s_csr s_run <files.sizes
+    read -r t_lat _ <lattice.time
+    read -r t_bonds _ <bonds.time
+    read -r fw fk <files.time
+    read -r fl _ <<EOF
+$(pd_loop files.log)
+EOF
+    read -r pw _ <pipe.time
+    lw=
+    skip lammps || read -r lw _ <lmp.time
+    echo "files: the seed disk, $N0 particles, $B0 bonds"
+    awk -v n="$N0" -v sl="$s_lat" -v sm="$s_model" -v sc="$s_csr" -v sr="$s_run" \
+        -v tl="$t_lat" -v tb="$t_bonds" -v fw="$fw" -v fl="$fl" -v fk="$fk" -v pw="$pw" \
+        -v lw="$lw" -v st="$STEPS" 'BEGIN {
+        printf "  %-46s %8.3f s\n", "pd-lattice (the better of two)", tl
+        printf "  %-46s %8.3f s\n", "pd-bonds (the better of two)", tb
+        printf "  %-46s %8.1f MB %6.0f B/particle\n", "lattice.h5", sl / 1e6, sl / n
+        printf "  %-46s %8.1f MB %6.0f B/particle\n", "model.h5 (a lattice stencil)", sm / 1e6, sm / n
+        printf "  %-46s %8.1f MB %6.0f B/particle\n", "the same as lists (pd-bonds --csr)", sc / 1e6, sc / n
+        printf "  %-46s %8.1f MB %6.0f B/particle\n", "run file of (a): the model and one frame", sr / 1e6, sr / n
+        printf "  %-46s %8.3f s\n", "pd-run outside its loop (start-up, last frame)", fw - fl
+        printf "  %-46s %8.0f B/particle\n", "pd-run peak memory", fk * 1024 / n
+        printf "  %-46s %8.2f s\n", "pd-lattice | pd-bonds | pd-run, " st " steps", pw
+        if (lw != "") printf "  %-46s %8.2f s: LAMMPS/pipe %.2fx\n", "LAMMPS, whole process", lw, lw / pw }'
+fi
+
+if ! skip sweep; then
+    echo
+    echo "sweep: four pd-runs of the full scene ($SWEEP_STEPS steps each, no thread option)"
+    awk -v j="$THREADS" 'FNR == 1 { k++ } { t[k, FNR] = $1 }
+        END { a = t[1, 1] < t[1, 2] ? t[1, 1] : t[1, 2]; b = t[2, 1] < t[2, 2] ? t[2, 1] : t[2, 2]
+            printf "  make -j%d %.2f s, make -j1 %.2f s: -j%d/-j1 %.2f (the better of two each)\n",
+                j, a, b, j, a / b }' "sweep-$THREADS.times" sweep-1.times
 fi
 echo
 echo "(runs and logs in $DIR; the models are kept there for the next run)"
