@@ -171,13 +171,17 @@ static int32_t (*walk_order(const pd_stencil *st, const site_map *m))[3]
     return d;
 }
 
-/* The partners of i from the stencil, sorted, into nb; returns how many. */
-static int64_t family_of(const site_map *m, int32_t (*d)[3], int nk, int64_t i, int32_t *nb)
+static inline int within(const pd_particles *p, int64_t i, int64_t j, double cut2);
+
+/* The partners of i at the offsets d, sorted, into nb (with p, only those
+ * within the horizon, cut2 its square); returns how many. */
+static int64_t family_of(const site_map *m, int32_t (*d)[3], int nk, int64_t i, int32_t *nb,
+                         const pd_particles *p, double cut2)
 {
     int64_t c = 0;
     for (int k = 0; k < nk; k++) {
         int32_t j = partner(m, i, d[k]);
-        if (j >= 0)
+        if (j >= 0 && (p == NULL || within(p, i, j, cut2)))
             nb[c++] = j;
     }
     if (m->ax[0] < 0) /* rows in no lattice order: sort (insertion, short) */
@@ -237,7 +241,7 @@ static pd_status expand(const pd_particles *p, const pd_stencil *st, double hori
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++) {
         const int64_t o = b->offset[i];
-        const int64_t c = family_of(m, d, st->nk, i, b->neighbor + o);
+        const int64_t c = family_of(m, d, st->nk, i, b->neighbor + o, NULL, 0);
         for (int64_t q = 0; q < c; q++)
             bond_geometry(p, i, b->neighbor[o + q], horizon, &b->length[o + q], &b->vfactor[o + q]);
     }
@@ -291,7 +295,7 @@ static int same_families(const pd_particles *p, const pd_bonds *b, const pd_sten
         for (int64_t i = 0; i < b->n; i++) {
             if (!same)
                 continue;
-            const int64_t o = b->offset[i], c = family_of(m, d, st->nk, i, nb);
+            const int64_t o = b->offset[i], c = family_of(m, d, st->nk, i, nb, NULL, 0);
             same = c == b->offset[i + 1] - o;
             for (int64_t q = 0; q < c && same; q++) {
                 double len, nu;
@@ -513,20 +517,7 @@ pd_status pd_bonds_build_lattice(const pd_particles *p, double horizon, int list
             if (b->neighbor == NULL)
                 continue;
             int32_t *nb = b->neighbor + b->offset[i];
-            int64_t c = 0;
-            for (int k = 0; k < nk; k++) {
-                const int32_t j = partner(&m, i, d[k]);
-                if (j >= 0 && within(p, i, j, cut2))
-                    nb[c++] = j;
-            }
-            if (m.ax[0] < 0) /* rows in no lattice order */
-                for (int64_t a = 1; a < c; a++) {
-                    int32_t v = nb[a];
-                    int64_t q = a;
-                    for (; q > 0 && nb[q - 1] > v; q--)
-                        nb[q] = nb[q - 1];
-                    nb[q] = v;
-                }
+            const int64_t c = family_of(&m, d, nk, i, nb, p, cut2);
             for (int64_t q = 0; q < c; q++)
                 bond_geometry(p, i, nb[q], horizon, &b->length[b->offset[i] + q],
                               &b->vfactor[b->offset[i] + q]);
