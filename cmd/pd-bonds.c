@@ -15,7 +15,7 @@
  * /bonds/precrack; lib/bonds/crack.c holds the geometry and its conventions.
  *
  * A body whose families are a lattice stencil (the same offsets bonded at
- * every particle, pd_bonds_find_stencil) is written as the stencil: its
+ * every particle, found by pd_bonds_build_lattice) is written as the stencil: its
  * table of offsets and one state bit per bond, no per-bond arrays
  * (lib/bonds/stencil.c); --csr writes the lists anyway.
  */
@@ -55,7 +55,7 @@ static void usage(FILE *out)
             "                    not 3 x, so that pairs at exactly 3 spacings are bonded)\n"
             "  --no-sort         keep the particle order of INPUT\n"
             "  --csr             write the bond lists (CSR) even when the families are a\n"
-            "                    lattice stencil (then only the stencil is written)\n"
+            "                    lattice stencil (by default such a body gets the stencil)\n"
             "  --crack SPEC      pre-crack: make every bond that crosses the crack broken\n"
             "                    (and marked in /bonds/precrack); repeatable.  SPEC is\n"
             "                    rect,X,Y,Z,AX,AY,AZ,BX,BY,BZ  the parallelogram with\n"
