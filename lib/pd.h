@@ -178,8 +178,9 @@ typedef struct {
                            by a pre-crack (pd_bonds_precrack)               */
     double horizon;     /* delta, m                                         */
     struct pd_stencil *stencil; /* NULL, or the lattice stencil these families
-                           are, bit for bit (pd_bonds_find_stencil): files
-                           then store the stencil instead of the lists   */
+                           are, bit for bit (pd_bonds_build_lattice,
+                           pd_bonds_find_stencil): files then store the
+                           stencil instead of the lists                 */
 } pd_bonds;
 
 /* A body's families as a lattice stencil (lib/bonds/stencil.c): particle i
