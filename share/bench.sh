@@ -60,6 +60,10 @@
 #       thread option, made with make -j BENCH_THREADS and made one after
 #       another (make -j1), twice each: the better wall times and their
 #       ratio (runs sharing the cores, cmd/cli.h);
+#   (j) a plate ("plate"): a pre-cracked 2-D plate of 97,969 particles
+#       (dx 0.16 mm, delta 3 dx) under velocity pulses on two sets, PMB with
+#       failure, BENCH_STEPS steps: its bond updates per second against
+#       those of (a);
 # Wall time and peak RSS come from /usr/bin/time -f '%e %M' around pd-run,
 # around mpirun (wall) and around each LAMMPS rank (peak RSS, summed).
 #
@@ -67,7 +71,7 @@
 # BENCH_SIZES ("25k 100k 400k 1.6M": particle counts, k = 1e3, M = 1e6;
 # the 1.6M disk needs about 6 GB of memory and 3 GB in BENCH_DIR, and
 # minutes to build), BENCH_SKIP (words among lammps, lps, effects,
-# roofline, scaling, threads, kernels, files, sweep: the parts left out),
+# roofline, scaling, threads, kernels, files, sweep, plate: the parts left out),
 # BENCH_SWEEP_STEPS (100), BENCH_DIR (cache of the
 # models and the runs, default $TMPDIR/pd-bench), PD_BIN (default: bin/ of
 # this tree), LMP (lmp), MPIRUN (mpirun), CC (cc, for share/stream.c).
@@ -108,8 +112,8 @@ case $THREADS in '' | *[!0-9]*) die "BENCH_THREADS must be a positive integer, n
 [ "$THREADS" -gt 0 ] || die "BENCH_THREADS must be a positive integer"
 for w in $SKIP; do
     case $w in
-    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep) ;;
-    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep)" ;;
+    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep | plate) ;;
+    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate)" ;;
     esac
 done
 # skip PART: is PART left out?
@@ -523,6 +527,18 @@ if ! skip sweep; then
     done
     rm -f sweep-*.h5
 fi
+# --- (j) a plate: the 2-D stencil against the 3-D seed -------------------------
+if ! skip plate; then
+    echo "$prog: a pre-cracked 2-D plate ($STEPS steps)" >&2
+    "$PD_BIN/pd-lattice" -q --dimension 2 --thickness 0.001 --spacing 0.00016 --density 8000 \
+        --box -0.025,0.025,-0.025,0.025,-1,1 --set top=box,-1,1,0.0245,1,-1,1 \
+        --set bottom=box,-1,1,-1,-0.0245,-1,1 -o plate-lattice.h5 || die "pd-lattice (plate) failed"
+    "$PD_BIN/pd-bonds" -q --horizon 0.00048005 --crack segment,-0.005,0,0.005,0 \
+        plate-lattice.h5 -o plate-model.h5 || die "pd-bonds (plate) failed"
+    pd_bench plate plate-model.h5 "$STEPS" --youngs-modulus 192e9 --failure 0.02,0 \
+        --velocity-bc top,y,pulses:20,5e-6,-20,5e-6 --velocity-bc bottom,y,pulses:-20,5e-6,20,5e-6
+    rm -f plate-lattice.h5
+fi
 rm -f full.h5
 
 # --- report ---------------------------------------------------------------------
@@ -715,6 +731,22 @@ if ! skip sweep; then
         END { a = t[1, 1] < t[1, 2] ? t[1, 1] : t[1, 2]; b = t[2, 1] < t[2, 2] ? t[2, 1] : t[2, 2]
             printf "  make -j%d %.2f s, make -j1 %.2f s: -j%d/-j1 %.2f (the better of two each)\n",
                 j, a, b, j, a / b }' "sweep-$THREADS.times" sweep-1.times
+fi
+if ! skip plate; then
+    echo
+    read -r _ r3 <<EOF
+$(pd_loop full.log)
+EOF
+    read -r t2 r2 <<EOF
+$(pd_loop plate.log)
+EOF
+    n2=$(sed -n 's/^pd-run: \([0-9]*\) particles, \([0-9]*\) bonds.*/\1 particles, \2 bonds/p' plate.log |
+        head -n 1)
+    echo "plate: a 2-D plate, 50 mm square, dx 0.16 mm, delta 3 dx, a 10 mm centre pre-crack,"
+    echo "  velocity pulses on its top and bottom sets, PMB with failure ($n2)"
+    awk -v r2="$r2" -v r3="$r3" -v t="$t2" -v n="$STEPS" 'BEGIN {
+        printf "  %.2f ms/step, %.3g bond updates/s: %.0f%% of the 3-D seed'"'"'s %.3g (a)\n",
+            1000 * t / n, r2, 100 * r2 / r3, r3 }'
 fi
 echo
 echo "(runs and logs in $DIR; the models are kept there for the next run)"
