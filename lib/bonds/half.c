@@ -6,6 +6,10 @@
  */
 #include <stdlib.h>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "bonds/half.h"
 
 static int64_t lower_bound(const int32_t *v, int64_t lo, int64_t hi, int32_t key)
@@ -110,22 +114,104 @@ void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i)
     }
 }
 
-void pd_half_expand(pd_half_bonds *h, const pd_bonds *b, uint64_t *intact)
+/* The row holding directed bond k: the last i with offset[i] <= k. */
+static int64_t row_of(const int64_t *offset, int64_t n, int64_t k)
 {
-    /* Row i meets its bonds to j < i in ascending i for each j, so a cursor
-     * per row walks the half bonds of j in order. */
-    for (int64_t i = 0; i < h->n; i++)
+    int64_t lo = 0, hi = n; /* offset[lo] <= k < offset[hi] */
+    while (hi - lo > 1) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (offset[mid] <= k)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The directed bits of rows [i0, i1), whose bonds are [k0, k1): row i
+ * meets its bonds to j < i in ascending i for each j, so a cursor per row
+ * walks the half bonds of j in order.  The cursors of rows j >= i0 start
+ * at their rows' heads (h->cursor, used by this range alone); those of the
+ * rows before i0 (at most h->block of them) in `before`, at the first half
+ * bond of j to a row >= i0.  The first and last words may be shared with
+ * the neighbouring ranges, and are or-ed in atomically. */
+static void expand_rows(const pd_half_bonds *h, const pd_bonds *b, int64_t i0, int64_t i1,
+                        int64_t *before, uint64_t *intact)
+{
+    const int64_t k0 = b->offset[i0], k1 = b->offset[i1];
+    if (k1 == k0)
+        return;
+    const int64_t j0 = i0 - h->block > 0 ? i0 - h->block : 0;
+    for (int64_t j = j0; j < i0; j++) {
+        int64_t q = h->offset[j];
+        while (q < h->offset[j + 1] && h->neighbor[q] < i0)
+            q++;
+        before[j - j0] = q;
+    }
+    for (int64_t i = i0; i < i1; i++)
         h->cursor[i] = h->offset[i];
-    int64_t words = pd_bits_words(b->count);
-    for (int64_t w = 0; w < words; w++)
-        intact[w] = 0;
-    for (int64_t i = 0; i < h->n; i++) {
+    const int64_t w0 = k0 >> 6, w1 = (k1 - 1) >> 6;
+    uint64_t word = 0;
+    int64_t w = w0;
+    for (int64_t i = i0; i < i1; i++) {
         int64_t own = h->offset[i];
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            int32_t j = b->neighbor[k];
-            int64_t q = j < i ? h->cursor[j]++ : own++;
+            if ((k >> 6) != w) { /* a word done */
+                if (w == w0)
+                    __atomic_fetch_or(&intact[w], word, __ATOMIC_RELAXED);
+                else
+                    intact[w] = word;
+                word = 0;
+                w = k >> 6;
+            }
+            const int32_t j = b->neighbor[k];
+            const int64_t q = j > i ? own++ : j >= i0 ? h->cursor[j]++ : before[j - j0]++;
             if (pd_bond_intact(h->intact, q))
-                intact[k >> 6] |= UINT64_C(1) << (k & 63);
+                word |= UINT64_C(1) << (k & 63);
+        }
+    }
+    if (w == w0 || w == w1)
+        __atomic_fetch_or(&intact[w], word, __ATOMIC_RELAXED);
+    else
+        intact[w] = word;
+}
+
+void pd_half_expand(const pd_half_bonds *h, const pd_bonds *b, uint64_t *intact)
+{
+    /* rows split among the threads by their bonds; each range walks its
+     * rows as one serial walk would, so the bits are the same for every
+     * thread count */
+    const int64_t words = pd_bits_words(b->count);
+    for (int64_t w = 0; w < words; w++)
+        intact[w] = 0;
+    int failed = 0;
+#pragma omp parallel reduction(| : failed)
+    {
+        int T = 1, t = 0;
+#ifdef _OPENMP
+        T = omp_get_num_threads();
+        t = omp_get_thread_num();
+#endif
+        const int64_t i0 = t == 0 ? 0 : row_of(b->offset, b->n, b->count * t / T) + 1;
+        const int64_t i1 = t == T - 1 ? b->n : row_of(b->offset, b->n, b->count * (t + 1) / T) + 1;
+        int64_t *before = malloc((size_t)(h->block > 0 ? h->block : 1) * sizeof(int64_t));
+        if (before == NULL)
+            failed = 1;
+        else if (i0 < i1)
+            expand_rows(h, b, i0, i1, before, intact);
+        free(before);
+    }
+    if (failed) { /* out of memory for a few cursors: one serial walk */
+        for (int64_t i = 0; i < h->n; i++)
+            h->cursor[i] = h->offset[i];
+        for (int64_t i = 0; i < h->n; i++) {
+            int64_t own = h->offset[i];
+            for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+                int32_t j = b->neighbor[k];
+                int64_t q = j < i ? h->cursor[j]++ : own++;
+                if (pd_bond_intact(h->intact, q))
+                    intact[k >> 6] |= UINT64_C(1) << (k & 63);
+            }
         }
     }
 }

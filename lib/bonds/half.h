@@ -23,7 +23,7 @@ typedef struct {
     int64_t nblocks;
     double *released;  /* nblocks: energy of the bonds broken in a block
                           in this step, J (summed in block order)        */
-    int64_t *cursor;   /* scratch of pd_half_expand                      */
+    int64_t *cursor;   /* scratch of the weights' set-up (pmb.c, lps.c)    */
     double *kfail;     /* per bond s00_bond / s00: the bond breaks at
                           kfail min(s0_i, s0_j) (lib/models/materials.c); NULL:
                           all 1, the kernel of old                       */
@@ -37,7 +37,7 @@ pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h);
 void pd_half_free(pd_half_bonds *h);
 /* The half bonds' bits from directed state bits (the file's), and back. */
 void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact);
-void pd_half_expand(pd_half_bonds *h, const pd_bonds *b, uint64_t *intact);
+void pd_half_expand(const pd_half_bonds *h, const pd_bonds *b, uint64_t *intact);
 /* Break every bond of particle i (both halves). */
 void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i);
 /* The half bond i-j (i < j): its index, or -1 when there is none. */
