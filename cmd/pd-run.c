@@ -988,6 +988,9 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
     }
     int64_t lost = pd_sim_lost(sim);
     for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
+        const int status = ((n - first) % status_every == 0 || n == sc->steps) && !o->quiet;
+        if (status || pd_frame_at(sc, n)) /* the step's bond pass counts the energies */
+            pd_sim_energy_next(sim);
         s = pd_sim_step(sim);
         if (s != PD_OK)
             break;
@@ -1006,7 +1009,7 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
             s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, &e);
             known = s == PD_OK;
         }
-        if (((n - first) % status_every == 0 || n == sc->steps) && !o->quiet) {
+        if (status) {
             double t0 = pd_wtime(); /* its energy pass is output's time */
             status_line(sim, sc->steps, tty, known ? &e : NULL);
             *t_output += pd_wtime() - t0;

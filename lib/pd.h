@@ -669,6 +669,11 @@ typedef struct {
  * the energy of each of its bonds, per its volume).  Sums are taken in a
  * fixed order: the same figures at any thread count. */
 pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density);
+/* The energies of the step pd_sim_step takes next will be asked for (a
+ * frame, a status line): its pass over the bonds counts them on the way
+ * (the lattice stencil's PMB kernel, but in AVX-512 tiles), so that
+ * pd_sim_energy then walks no bond.  The same figures, bit for bit. */
+void pd_sim_energy_next(pd_sim *sim);
 /* The peridynamic stress of every particle (seed 003 eq. 7 read per
  * particle: the static virial of its bonds),
  *   sigma_i = 1/2 sum_j V_j f_ij (x) xi_ij,

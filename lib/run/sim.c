@@ -201,9 +201,15 @@ static pd_status constrain(pd_sim *sim, int phase)
     return s;
 }
 
+void pd_sim_energy_next(pd_sim *sim)
+{
+    sim->energy_next = 1;
+}
+
 pd_status pd_sim_setup(pd_sim *sim)
 {
     sim->setup = 1;
+    sim->energy_next = 1; /* energy0, below */
     pd_status s = constrain(sim, PD_PHASE_SETUP);
     if (s == PD_OK)
         s = compute_forces(sim);

@@ -108,6 +108,8 @@ struct pd_sim {
     int64_t nlost;      /* lost particles so far                         */
     double lost_energy; /* kinetic energy of the lost particles, J       */
     int setup;          /* 1 while computing the forces of the initial state */
+    int energy_next;    /* 1: the energies of the next force evaluation
+                           are wanted (pd_sim_energy_next)               */
     const pd_effect *effects[PD_MAX_EFFECTS]; /* the step's table: the
                            model's force first, then the declared
                            effects (lib/effects/effects.c's order)       */

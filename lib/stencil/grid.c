@@ -113,6 +113,8 @@ void pd_grid_free(pd_grid *G)
     free(G->released);
     free(G->s0);
     free(G->s0n);
+    free(G->eb);
+    free(G->ec);
     free(G);
 }
 
@@ -397,6 +399,7 @@ void pd_grid_sync(pd_sim *sim, pd_grid *G)
     const int W = G->words;
     const int64_t n = G->n;
     int64_t *inv = NULL;
+    G->energy_ok = 0;
     memset(G->mask, 0, (size_t)n * W * sizeof(uint64_t));
     if (G->perm) { /* i -> g, from the perm (a scratch made here) */
         inv = malloc((size_t)n * sizeof(int64_t));

@@ -121,6 +121,12 @@ struct pd_grid {
     const double *s0n_ready; /* the s0 array the last step's end filled with
                             -inf for the next one's new s0 (PMB, lattice
                             order)                                         */
+    double *eb, *ec;     /* n each, grid order: the energies the last bond
+                            pass counted (grid_arrays), when energy_ok     */
+    int energy_ok;       /* they are those of step energy_step, with the
+                            half bonds at energy_epoch                     */
+    int64_t energy_step;
+    uint64_t energy_epoch;
     double gap;          /* the shortest lattice distance not in the
                             stencil, less the sites' tolerance, m          */
     int status;          /* PD_OK, or the error a parallel pass met        */
@@ -132,6 +138,11 @@ typedef struct {
     const double *y0, *y1, *y2, *s0;
     double *f0, *f1, *f2, *s0n;
     double s00, alpha;
+    /* the energies counted on the way (pd_sim_energy_next), grid order, J,
+     * half of each pair to each end; NULL: not this step */
+    double *eb;          /* the intact bonds' elastic energy               */
+    double *ec;          /* the contact energy of the stencil pairs        */
+    double V;            /* the particles' volume, m^3                     */
 } grid_arrays;
 
 /* The first segment and the first particle of block blk (blk = nblocks:
@@ -205,20 +216,31 @@ static __attribute__((unused)) int record_break(grid_breaks *bl, int64_t g, int3
 }
 
 /* The contact forces of the pairs of a segment's chunk [c0, c0 + m) that
- * are closer than d_k (seed 000 eqs. 13-15), both ends. */
+ * are closer than d_k (seed 000 eqs. 13-15), both ends; with A->ec their
+ * energy too, 1/4 (c_S/delta) (d_k - r)^2 V V to each end (grid_energy.c's
+ * pair_x, bit for bit and in its order). */
 static __attribute__((unused)) void seg_contact(pd_grid *G, const grid_seg *sg,
                                                 const grid_arrays *A, int64_t c0, int64_t m,
                                                 int W)
 {
     const int k = sg->k;
     const uint64_t bit = UINT64_C(1) << (k & 63);
-    const double dc = G->dc[k], kc = G->kc;
+    const double dc = G->dc[k], kc = G->kc, ce = 0.25 * G->kc * A->V;
     const double *y0 = A->y0, *y1 = A->y1, *y2 = A->y2;
+    double *ec = A->ec;
     for (int64_t q = 0; q < m; q++) {
         const int64_t g = c0 + q, j = g + sg->shift;
         const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
-        const double r = sqrt(dx * dx + dy * dy + dz * dz);
-        if (!(r < dc) || !(r > 0.0) || !(G->cmask[g * W + (k >> 6)] & bit))
+        const double r2 = dx * dx + dy * dy + dz * dz;
+        const double r = sqrt(r2);
+        if (!(r < dc) || !(G->cmask[g * W + (k >> 6)] & bit))
+            continue;
+        if (ec && r2 < dc * dc) {
+            const double x = ce * (dc - r) * (dc - r);
+            ec[g] += x;
+            ec[j] += x;
+        }
+        if (!(r > 0.0))
             continue;
         const double fs = kc * (r - dc) / r;
         A->f0[g] += fs * dx;

@@ -55,7 +55,7 @@ static double bond_energy(const pd_sim *sim, const pd_grid *G, int64_t i, int64_
  * than a tile take it. */
 static inline __attribute__((always_inline)) int
 seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failure,
-          const int contact, const int one_word, grid_breaks *bl)
+          const int contact, const int one_word, const int energy, grid_breaks *bl)
 {
     const int k = sg->k, W = one_word ? 1 : G->words, word = k >> 6;
     const uint64_t bit = UINT64_C(1) << (k & 63);
@@ -64,9 +64,12 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
     const double s00 = A->s00, alpha = A->alpha;
     const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
     const double *restrict s0 = A->s0;
-    double *f0 = A->f0, *f1 = A->f1, *f2 = A->f2, *s0n = A->s0n;
+    double *f0 = A->f0, *f1 = A->f1, *f2 = A->f2, *s0n = A->s0n, *eb = A->eb;
+    /* grid_energy.c's c of the offset: e = ce s^2 to each end */
+    const double ce = energy ? 0.25 * w * L * A->V : 0.0;
     const uint64_t *restrict mask = G->mask + word;
     double brk[GRID_CHUNK], gx[GRID_CHUNK], gy[GRID_CHUNK], gz[GRID_CHUNK], t[GRID_CHUNK];
+    double xe[energy ? GRID_CHUNK : 1];
     const int fused = shift >= GRID_SAFE;
     for (int64_t c0 = sg->lo; c0 < sg->hi; c0 += GRID_CHUNK) {
         const int64_t m = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;
@@ -81,14 +84,20 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
                 f0[j] -= fs * dx;
                 f1[j] -= fs * dy;
                 f2[j] -= fs * dz;
+                double b = 0.0;
                 if (failure) {
                     const double thr = s0[g] < s0[j] ? s0[g] : s0[j];
-                    const double b = s > thr ? mu : 0.0;
+                    b = s > thr ? mu : 0.0;
                     const double tt = mu > 0 ? s00 - alpha * s : -INFINITY;
                     s0n[g] = tt > s0n[g] ? tt : s0n[g];
                     s0n[j] = tt > s0n[j] ? tt : s0n[j];
                     brk[q] = b;
                     nbreak += b;
+                }
+                if (energy) { /* intact after this pass: mu 1, not broken */
+                    const double x = mu > b ? ce * (s * s) : 0.0;
+                    eb[g] += x;
+                    eb[j] += x;
                 }
             }
         } else {
@@ -97,12 +106,15 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
                 gx[q] = fs * dx;
                 gy[q] = fs * dy;
                 gz[q] = fs * dz;
+                double b = 0.0;
                 if (failure) {
                     const double thr = s0[g] < s0[j] ? s0[g] : s0[j];
-                    brk[q] = s > thr ? mu : 0.0;
+                    b = brk[q] = s > thr ? mu : 0.0;
                     t[q] = mu > 0 ? s00 - alpha * s : -INFINITY;
                     nbreak += brk[q];
                 }
+                if (energy)
+                    xe[q] = mu > b ? ce * (s * s) : 0.0;
             }
             for (int64_t q = 0; q < m; q++) {
                 f0[c0 + q] += gx[q];
@@ -119,6 +131,11 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
                 if (failure)
                     s0n[j] = t[q] > s0n[j] ? t[q] : s0n[j];
             }
+            if (energy) /* both ends bond by bond, as grid_energy.c adds them */
+                for (int64_t q = 0; q < m; q++) {
+                    eb[c0 + q] += xe[q];
+                    eb[c0 + q + shift] += xe[q];
+                }
         }
         /* contact: pairs closer than d_k are rare (a compression of 10%
          * and more), so the bond pass only counts them, and a second pass
@@ -310,7 +327,7 @@ tile_run(pd_grid *G, const grid_run *R, const grid_arrays *A, const int failure,
                     return -1;                                                                 \
             } else                                                                             \
                 for (int64_t s = R->seg0; s < R[1].seg0; s++)                                  \
-                    if (seg_bonds(G, &G->seg[s], A, failure, contact, 1, &G->breaks[blk]))     \
+                    if (seg_bonds(G, &G->seg[s], A, failure, contact, 1, 0, &G->breaks[blk]))  \
                         return -1;                                                             \
         }                                                                                      \
         return 0;                                                                              \
@@ -321,30 +338,61 @@ GRID_TILE_BLOCK(grid_tile_10, PD_BONDS_FAILURE, 0)
 GRID_TILE_BLOCK(grid_tile_11, PD_BONDS_FAILURE, 1)
 #endif
 
-/* The kernel's variants: with or without failure and contact, and with
- * one mask word per particle (up to 64 offsets, delta < 3.3 h: the
- * words load as one vector) or more. */
-#define GRID_BLOCK(name, failure, contact, one_word)                                          \
+/* The kernel's variants: with or without failure and contact, with one
+ * mask word per particle (up to 64 offsets, delta < 3.3 h: the words load
+ * as one vector) or more, and counting the energies or not. */
+#define GRID_BLOCK(name, failure, contact, one_word, energy)                                  \
     PD_VECTOR_CLONES static int name(pd_grid *G, int64_t blk, const grid_arrays *A)          \
     {                                                                                         \
         for (int64_t s = block_seg0(G, blk); s < block_seg0(G, blk + 1); s++)                 \
-            if (seg_bonds(G, &G->seg[s], A, failure, contact, one_word, &G->breaks[blk]))     \
+            if (seg_bonds(G, &G->seg[s], A, failure, contact, one_word, energy,               \
+                          &G->breaks[blk]))                                                   \
                 return -1;                                                                    \
         return 0;                                                                             \
     }
-GRID_BLOCK(grid_block_000, PD_BONDS_ELASTIC, 0, 0)
-GRID_BLOCK(grid_block_010, PD_BONDS_ELASTIC, 1, 0)
-GRID_BLOCK(grid_block_100, PD_BONDS_FAILURE, 0, 0)
-GRID_BLOCK(grid_block_110, PD_BONDS_FAILURE, 1, 0)
-GRID_BLOCK(grid_block_001, PD_BONDS_ELASTIC, 0, 1)
-GRID_BLOCK(grid_block_011, PD_BONDS_ELASTIC, 1, 1)
-GRID_BLOCK(grid_block_101, PD_BONDS_FAILURE, 0, 1)
-GRID_BLOCK(grid_block_111, PD_BONDS_FAILURE, 1, 1)
+GRID_BLOCK(grid_block_000, PD_BONDS_ELASTIC, 0, 0, 0)
+GRID_BLOCK(grid_block_010, PD_BONDS_ELASTIC, 1, 0, 0)
+GRID_BLOCK(grid_block_100, PD_BONDS_FAILURE, 0, 0, 0)
+GRID_BLOCK(grid_block_110, PD_BONDS_FAILURE, 1, 0, 0)
+GRID_BLOCK(grid_block_001, PD_BONDS_ELASTIC, 0, 1, 0)
+GRID_BLOCK(grid_block_011, PD_BONDS_ELASTIC, 1, 1, 0)
+GRID_BLOCK(grid_block_101, PD_BONDS_FAILURE, 0, 1, 0)
+GRID_BLOCK(grid_block_111, PD_BONDS_FAILURE, 1, 1, 0)
+GRID_BLOCK(grid_energy_000, PD_BONDS_ELASTIC, 0, 0, 1)
+GRID_BLOCK(grid_energy_010, PD_BONDS_ELASTIC, 1, 0, 1)
+GRID_BLOCK(grid_energy_100, PD_BONDS_FAILURE, 0, 0, 1)
+GRID_BLOCK(grid_energy_110, PD_BONDS_FAILURE, 1, 0, 1)
+GRID_BLOCK(grid_energy_001, PD_BONDS_ELASTIC, 0, 1, 1)
+GRID_BLOCK(grid_energy_011, PD_BONDS_ELASTIC, 1, 1, 1)
+GRID_BLOCK(grid_energy_101, PD_BONDS_FAILURE, 0, 1, 1)
+GRID_BLOCK(grid_energy_111, PD_BONDS_FAILURE, 1, 1, 1)
 
 typedef int (*grid_block_fn)(pd_grid *, int64_t, const grid_arrays *);
-static const grid_block_fn grid_blocks[8] = {grid_block_000, grid_block_001, grid_block_010,
-                                             grid_block_011, grid_block_100, grid_block_101,
-                                             grid_block_110, grid_block_111};
+static const grid_block_fn grid_blocks[16] = {
+    grid_block_000,  grid_block_001,  grid_block_010,  grid_block_011,
+    grid_block_100,  grid_block_101,  grid_block_110,  grid_block_111,
+    grid_energy_000, grid_energy_001, grid_energy_010, grid_energy_011,
+    grid_energy_100, grid_energy_101, grid_energy_110, grid_energy_111};
+
+/* The energy buffers of a pass that counts them (zeroed; 0 when out of
+ * memory: the pass then counts nothing and pd_sim_energy walks the bonds). */
+static int energy_buffers(pd_grid *G)
+{
+    const size_t n = (size_t)(G->n > 0 ? G->n : 1);
+    if (G->eb == NULL)
+        G->eb = malloc(n * sizeof(double));
+    if (G->cmask && G->ec == NULL)
+        G->ec = malloc(n * sizeof(double));
+    if (G->eb == NULL || (G->cmask && G->ec == NULL))
+        return 0;
+#pragma omp parallel for schedule(static)
+    for (int64_t g = 0; g < G->n; g++) {
+        G->eb[g] = 0;
+        if (G->ec)
+            G->ec[g] = 0;
+    }
+    return 1;
+}
 
 pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
 {
@@ -356,7 +404,16 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
             return G->status;
     }
     double tf = pd_wtime();
-    grid_arrays A = {.s00 = sim->sc.s00, .alpha = sim->sc.alpha};
+    grid_arrays A = {.s00 = sim->sc.s00, .alpha = sim->sc.alpha, .V = sim->p->volume[0]};
+    /* the energies on the way when the step's are wanted (not in tiles,
+     * whose order of sums is not grid_energy.c's) */
+    G->energy_ok = 0;
+    const int energy = sim->energy_next && !G->tile && energy_buffers(G);
+    sim->energy_next = 0;
+    if (energy) {
+        A.eb = G->eb;
+        A.ec = G->ec;
+    }
     const int64_t *perm = G->perm;
     if (perm) {
 #pragma omp parallel for schedule(static)
@@ -385,7 +442,8 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
     }
     tf = pd_wtime() - tf;
     const int contact = G->cmask != NULL;
-    grid_block_fn fn = grid_blocks[4 * (failure != 0) + 2 * contact + (G->words == 1)];
+    grid_block_fn fn =
+        grid_blocks[8 * energy + 4 * (failure != 0) + 2 * contact + (G->words == 1)];
 #if PD_GRID_AVX512
     static const grid_block_fn tiles[4] = {grid_tile_00, grid_tile_01, grid_tile_10, grid_tile_11};
     if (G->tile)
@@ -456,6 +514,11 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
             sim->released += G->released[blk];
         /* the caller swaps s0 and s0_new (lib/models/pmb.c) */
         G->s0n_ready = perm ? NULL : sim->s0;
+    }
+    if (energy) {
+        G->energy_ok = 1;
+        G->energy_step = sim->step;
+        G->energy_epoch = sim->half.epoch;
     }
     tf += pd_wtime() - t0;
     sim->timers[PD_T_FAILURE] += tf;
