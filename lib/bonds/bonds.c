@@ -114,11 +114,55 @@ double pd_partial_volume(double len, double horizon, double r)
     return (horizon + r - len) / (2.0 * r);
 }
 
+/* The bits of `bits` set among [lo, hi), and with `skip` those whose bit
+ * in skip is clear. */
+static int64_t bits_in(const uint64_t *bits, const uint64_t *skip, int64_t lo, int64_t hi)
+{
+    int64_t c = 0;
+    while (lo < hi) {
+        const int64_t w = lo >> 6, end = (w + 1) * 64 < hi ? (w + 1) * 64 : hi;
+        uint64_t m = ~UINT64_C(0) << (lo & 63);
+        if (end & 63 && end == hi)
+            m &= (UINT64_C(1) << (end & 63)) - 1;
+        uint64_t x = (bits ? bits[w] : ~UINT64_C(0)) & m;
+        if (skip)
+            x &= ~skip[w];
+        c += __builtin_popcountll(x);
+        lo = end;
+    }
+    return c;
+}
+
 /* Damage (seed 000 eq. 10) over the bonds whose bit in `skip` is clear
- * (skip NULL: every bond). */
+ * (skip NULL: every bond).  The sums of V_j run in family order; when all
+ * volumes are equal, a sum of m of them is the m-th of the running sums
+ * V, V + V, ... (table[m], added in that very order), so the bits are
+ * counted instead of walking the partners: the same damage, bit for bit,
+ * without reading the neighbour lists. */
 static void damage_over(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
                         const uint64_t *skip, double *damage)
 {
+    int uniform = b->n > 0;
+    for (int64_t i = 1; i < p->n && uniform; i++)
+        uniform = p->volume[i] == p->volume[0];
+    int64_t longest = 0;
+    for (int64_t i = 0; i < b->n && uniform; i++)
+        longest = b->offset[i + 1] - b->offset[i] > longest ? b->offset[i + 1] - b->offset[i]
+                                                            : longest;
+    double *table = uniform ? malloc((size_t)(longest + 1) * sizeof(double)) : NULL;
+    if (table) {
+        table[0] = 0;
+        for (int64_t m = 1; m <= longest; m++)
+            table[m] = table[m - 1] + p->volume[0];
+#pragma omp parallel for schedule(static)
+        for (int64_t i = 0; i < b->n; i++) {
+            const double all = table[bits_in(NULL, skip, b->offset[i], b->offset[i + 1])];
+            const double kept = table[bits_in(intact, skip, b->offset[i], b->offset[i + 1])];
+            damage[i] = all > 0 ? 1.0 - kept / all : 0.0;
+        }
+        free(table);
+        return;
+    }
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < b->n; i++) {
         double all = 0, kept = 0;

@@ -12,7 +12,9 @@
  * pre-cracked bonds leave both sums: a pre-crack alone gives damage 0, a
  * bond broken later weighs against the family less its pre-cracked
  * bonds, a family all pre-cracked gives 0, and with no pre-crack it equals
- * pd_damage.
+ * pd_damage.  On a lattice (equal volumes: the bits are counted) both are
+ * bit for bit the sums over the partners in family order, with a
+ * pseudo-random third of the bonds broken and a fifth pre-cracked.
  */
 #include <math.h>
 #include <stdio.h>
@@ -194,11 +196,74 @@ static void test_no_precrack(void)
     proved(f0, "damage without the pre-crack: pre-cracked bonds out of both sums");
 }
 
+/* seed 000 eq. 10 summed over the partners, in family order */
+static double walked(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
+                     const uint64_t *skip, int64_t i)
+{
+    double all = 0, kept = 0;
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        if (skip && pd_bond_intact(skip, k))
+            continue;
+        all += p->volume[b->neighbor[k]];
+        if (pd_bond_intact(intact, k))
+            kept += p->volume[b->neighbor[k]];
+    }
+    return all > 0 ? 1.0 - kept / all : 0.0;
+}
+
+static void test_counted(void)
+{
+    int f0 = failures;
+    pd_region r;
+    if (pd_region_parse(PD_REGION_BOX, "0,0.0071,0,0.0051,0,0.0041", &r) != PD_OK)
+        die("region");
+    pd_lattice_params lp = {0.001, 2200.0, 1, 0.0, 1};
+    pd_particles *p = NULL;
+    pd_bonds *b = NULL;
+    if (pd_lattice_make(&r, 1, &lp, &p) != PD_OK || pd_bonds_build(p, 3.0001e-3, &b) != PD_OK)
+        die("model");
+    const size_t words = (size_t)pd_bits_words(b->count);
+    uint64_t *intact = calloc(words, sizeof(uint64_t)), *pre = calloc(words, sizeof(uint64_t));
+    double *d = malloc((size_t)p->n * sizeof(double)), *dn = malloc((size_t)p->n * sizeof(double));
+    if (!intact || !pre || !d || !dn)
+        die("memory");
+    for (int64_t k = 0; k < b->count; k++) {
+        uint64_t h = (uint64_t)k * 2654435761u;
+        if (h % 3 != 0)
+            intact[k >> 6] |= UINT64_C(1) << (k & 63);
+        if (h % 5 == 1) {
+            pre[k >> 6] |= UINT64_C(1) << (k & 63);
+            intact[k >> 6] &= ~(UINT64_C(1) << (k & 63));
+        }
+    }
+    b->precrack = pre;
+    pd_damage(p, b, intact, d);
+    pd_damage_no_precrack(p, b, intact, dn);
+    int64_t differ = 0, between = 0;
+    for (int64_t i = 0; i < p->n; i++) {
+        differ += memcmp(&d[i], &(double){walked(p, b, intact, NULL, i)}, sizeof(double)) != 0;
+        differ += memcmp(&dn[i], &(double){walked(p, b, intact, pre, i)}, sizeof(double)) != 0;
+        between += d[i] > 0 && d[i] < 1;
+    }
+    CHECK(differ == 0, "%lld damages differ from the sums over the partners", (long long)differ);
+    CHECK(between > p->n / 2, "the damage should lie strictly between 0 and 1 for most particles");
+    b->precrack = NULL;
+    free(pre);
+    free(intact);
+    free(d);
+    free(dn);
+    pd_bonds_free(b);
+    pd_particles_free(p);
+    proved(f0, "equal volumes: the counted damage is the partners' sums bit for bit (with and "
+               "without the pre-crack)");
+}
+
 int main(void)
 {
     test_hand_built();
     test_plane_cut();
     test_no_precrack();
+    test_counted();
     if (failures)
         fprintf(stderr, "test_damage: %d failures\n", failures);
     return failures != 0;
