@@ -91,6 +91,10 @@ struct pd_sim {
                            the order of b; kept up to date from `half`
                            on demand (pd_sim_intact)                     */
     int intact_stale;   /* 1: `intact` lags behind half.intact           */
+    int (*directed_bits)(const pd_sim *sim, uint64_t *intact); /* writes
+                           `intact` from a faster copy of the state than
+                           the half bonds (the stencil's masks): 1, or 0
+                           when it cannot; NULL: none                    */
     double *s0;         /* critical stretch of the previous step (seed
                            000 eq. 9), dimensionless; NULL without
                            failure                                       */

@@ -51,7 +51,8 @@ const uint64_t *pd_sim_intact(const pd_sim *sim)
 {
     pd_sim *mut = (pd_sim *)sim; /* a cache: the state itself does not change */
     if (mut->intact_stale) {
-        pd_half_expand(&mut->half, sim->b, mut->intact);
+        if (!(mut->directed_bits && mut->directed_bits(sim, mut->intact)))
+            pd_half_expand(&mut->half, sim->b, mut->intact);
         mut->intact_stale = 0;
     }
     return sim->intact;

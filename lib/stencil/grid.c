@@ -115,6 +115,9 @@ void pd_grid_free(pd_grid *G)
     free(G->s0n);
     free(G->eb);
     free(G->ec);
+    free(G->pos);
+    free(G->neg);
+    free(G->mirror);
     free(G);
 }
 
@@ -561,6 +564,7 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
         return s;
     }
     *out = G;
+    sim->directed_bits = pd_grid_directed_bits;
     return PD_OK;
 }
 

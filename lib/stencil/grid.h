@@ -45,6 +45,11 @@ int pd_grid_pair(const pd_grid *g, int64_t i, int64_t j);
  * cleared. */
 pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode failure,
                       void (*mark)(void *ctx, int64_t i, int64_t j), void *ctx);
+/* The directed state bits of the file's families (b's order) read off
+ * the masks (grid_bits.c): 1 when written, 0 when the grid cannot tell
+ * (particles not in grid order, more than 64 offsets, masks lagging
+ * behind the half bonds); pd_sim_intact then expands the half bonds. */
+int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact);
 /* The bonds' elastic energy, J, added to e[i]. */
 void pd_grid_pmb_energy(const pd_sim *sim, double *e);
 /* The contact energy of the stencil pairs, J, added to e[i]. */

@@ -127,6 +127,11 @@ struct pd_grid {
                             half bonds at energy_epoch                     */
     int64_t energy_step;
     uint64_t energy_epoch;
+    /* the file's rows read off the masks (grid_bits.c), made on first use: */
+    uint64_t *pos, *neg; /* n: bit k set when g has a partner at d_k, -d_k */
+    uint64_t *mirror;    /* n: bit k the state of g's bond at -d_k         */
+    int rows;            /* 0 not tried, 1 made, -1 the rows cannot be read
+                            off (or out of memory)                         */
     double gap;          /* the shortest lattice distance not in the
                             stencil, less the sites' tolerance, m          */
     int status;          /* PD_OK, or the error a parallel pass met        */

@@ -1,0 +1,163 @@
+/*
+ * grid_bits.c -- the directed bond bits of the file's families (a frame's
+ * /frames/N/state, the restart's) read off the stencil's masks, without a
+ * walk of the bond lists (grid.c explains the stencil).
+ *
+ * In grid order (no permutation) the family of particle g, sorted by
+ * partner as the file holds it, is sorted by offset too: its partners at
+ * the negative offsets -d_k first, k descending (d_k ascends with k in
+ * (outer, mid, inner)), then those at d_k, k ascending.  Which offsets g
+ * has is fixed by the body: bit k of `pos` (g has a partner at d_k) and
+ * bit 63 - k of `neg` (at -d_k: the bits reversed, so that k descending
+ * is place ascending).  The state of g's bond at d_k is bit k of g's mask;
+ * that at -d_k is bit k of the partner's mask, gathered into bit 63 - k
+ * of g's `mirror` word by a walk of the segments.  A row of the file is
+ * then the mirror's bits at `neg` followed by the mask's bits at `pos`,
+ * each packed in place order: two bit gathers (one instruction each with
+ * BMI2) per particle instead of a lookup per bond.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "stencil/grid_impl.h"
+
+/* The bits of x at the places set in m, packed from bit 0 up in the order
+ * of the places (pext, where the processor has BMI2). */
+static inline uint64_t gather(uint64_t x, uint64_t m)
+{
+    uint64_t r = 0;
+    for (int c = 0; m; c++, m &= m - 1)
+        r |= (uint64_t)((x & m & -m) != 0) << c;
+    return r;
+}
+
+/* A writer of consecutive bits into words: the first and the last word it
+ * touches may be shared with the writers of the ranges beside it, and
+ * are or-ed in atomically; the others are stored whole. */
+typedef struct {
+    uint64_t *out;
+    int64_t w, first; /* the word being filled, the first one            */
+    uint64_t cur;     /* its bits so far                                  */
+    int fill;         /* how many (the next bit's place)                  */
+} bit_writer;
+
+static inline void put_word(bit_writer *bw, int last)
+{
+    if (bw->w == bw->first || last)
+        __atomic_fetch_or(&bw->out[bw->w], bw->cur, __ATOMIC_RELAXED);
+    else
+        bw->out[bw->w] = bw->cur;
+}
+
+/* Append the low nbits (<= 64) of v (no bit above them set). */
+static inline void put_bits(bit_writer *bw, uint64_t v, int nbits)
+{
+    if (nbits == 0)
+        return;
+    bw->cur |= v << bw->fill;
+    if (bw->fill + nbits < 64) {
+        bw->fill += nbits;
+        return;
+    }
+    put_word(bw, 0);
+    const int spill = bw->fill + nbits - 64; /* bits of v left for the next word */
+    bw->cur = spill ? v >> (nbits - spill) : 0;
+    bw->w++;
+    bw->fill = spill;
+}
+
+/* pos and neg of every particle (once); 0 when the families are not the
+ * stencil's rows (a count differs), -1 out of memory. */
+static int offsets_of_rows(pd_grid *G, const pd_bonds *b)
+{
+    const int64_t n = G->n;
+    G->pos = calloc((size_t)(n > 0 ? n : 1), sizeof(uint64_t));
+    G->neg = calloc((size_t)(n > 0 ? n : 1), sizeof(uint64_t));
+    if (G->pos == NULL || G->neg == NULL)
+        return -1;
+    for (int64_t s = 0; s < G->nseg; s++) {
+        const grid_seg *sg = &G->seg[s];
+        const uint64_t bit = UINT64_C(1) << sg->k, rev = UINT64_C(1) << (63 - sg->k);
+        for (int64_t g = sg->lo; g < sg->hi; g++) {
+            G->pos[g] |= bit;
+            G->neg[g + sg->shift] |= rev;
+        }
+    }
+    for (int64_t g = 0; g < n; g++)
+        if (__builtin_popcountll(G->pos[g]) + __builtin_popcountll(G->neg[g]) !=
+            b->offset[g + 1] - b->offset[g])
+            return 0;
+    return 1;
+}
+
+/* The rows of particles [g0, g1) into intact, gather_fn the bit gather. */
+#define GRID_ROWS(name, attr, gather_fn)                                                        \
+    attr static void name(const pd_grid *G, const pd_bonds *b, uint64_t *intact, int64_t g0,  \
+                          int64_t g1)                                                         \
+    {                                                                                         \
+        bit_writer bw = {.out = intact, .w = b->offset[g0] >> 6, .first = b->offset[g0] >> 6, \
+                         .fill = (int)(b->offset[g0] & 63)};                                  \
+        for (int64_t g = g0; g < g1; g++) {                                                   \
+            put_bits(&bw, gather_fn(G->mirror[g], G->neg[g]),                                 \
+                     __builtin_popcountll(G->neg[g]));                                        \
+            put_bits(&bw, gather_fn(G->mask[g], G->pos[g]), __builtin_popcountll(G->pos[g])); \
+        }                                                                                     \
+        if (bw.fill > 0)                                                                      \
+            put_word(&bw, 1);                                                                 \
+    }
+GRID_ROWS(rows_plain, , gather)
+#if PD_GRID_AVX512 /* x86-64 with GCC or clang: pext where the processor has it */
+GRID_ROWS(rows_bmi2, __attribute__((target("bmi2"))), _pext_u64)
+#endif
+
+int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
+{
+    pd_grid *G = sim->grid;
+    const pd_bonds *b = sim->b;
+    if (G == NULL || G->perm || G->words != 1 || G->epoch != sim->half.epoch || G->rows < 0)
+        return 0;
+    if (G->rows == 0) {
+        int r = offsets_of_rows(G, b);
+        G->mirror = r > 0 ? malloc((size_t)(G->n > 0 ? G->n : 1) * sizeof(uint64_t)) : NULL;
+        G->rows = r > 0 && G->mirror ? 1 : -1;
+        if (G->rows < 0)
+            return 0;
+    }
+    const int64_t n = G->n;
+    uint64_t *mirror = G->mirror;
+    memset(mirror, 0, (size_t)n * sizeof(uint64_t));
+    /* the partners' bits at -d_k, block by block: a block's segments reach
+     * only into itself and the next one, so even blocks, then odd ones */
+    for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel
+        for (int64_t blk = phase; blk < G->nblocks; blk += 2) {
+            if (!grid_mine(G, blk))
+                continue;
+            for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++) {
+                const grid_seg *sg = &G->seg[si];
+                const int k = sg->k, up = 63 - k;
+                for (int64_t g = sg->lo; g < sg->hi; g++)
+                    mirror[g + sg->shift] |= ((G->mask[g] >> k) & 1) << up;
+            }
+        }
+    }
+    memset(intact, 0, (size_t)pd_bits_words(b->count) * sizeof(uint64_t));
+#pragma omp parallel
+    {
+        int T = 1, t = 0;
+#ifdef _OPENMP
+        T = omp_get_num_threads();
+        t = omp_get_thread_num();
+#endif
+        const int64_t g0 = n * t / T, g1 = n * (t + 1) / T;
+        if (g0 < g1 && b->offset[g1] > b->offset[g0]) {
+#if PD_GRID_AVX512
+            if (__builtin_cpu_supports("bmi2"))
+                rows_bmi2(G, b, intact, g0, g1);
+            else
+#endif
+                rows_plain(G, b, intact, g0, g1);
+        }
+    }
+    return 1;
+}
