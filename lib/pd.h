@@ -926,8 +926,11 @@ enum {
     PD_FIELD_STRESS = 2  /* stress (N,3,3) and von_mises (N), Pa             */
 };
 
-/* The optional fields of one frame (each NULL when not asked for). */
+/* The fields of one frame besides the motion and the bond states: the
+ * damage (every frame has it; NULL: zeros) and the optional ones (each
+ * NULL when not asked for). */
 typedef struct {
+    const double *damage;         /* N values, seed 000 eq. 10 (pd_damage)  */
     const double *energy_density; /* N values, J/m^3                        */
     const double *stress;         /* 9 N values, Pa: particle i's tensor at
                                      stress[9i + 3a + b], row a, column b  */
@@ -941,16 +944,18 @@ enum { PD_FRAME_PROJECTILE = 1u << 16 };
  * see schema.c on crash safety. */
 pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
                          const int64_t *steps, const double *times, unsigned fields);
-/* Restart slots (see schema.c): lay out, write (in turn), read the one of
- * `step` (arrays allocated; pd_restart_free). */
-pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact);
+/* Restart slots (see schema.c): lay out `slots` of them (1: a run that
+ * writes one frame needs no second; 2 else; those there already stay),
+ * write (in turn), read the one of `step` (arrays allocated;
+ * pd_restart_free). */
+pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact, int slots);
 pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart *r);
 pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart *r);
-/* Lay out the projectile's state in both restart slots (after
+/* Lay out the projectile's state in the restart slots (after
  * pd_plan_restart; nothing when it is there already). */
 pd_status pd_plan_restart_projectile(pd_file *f);
 /* Lay out the model's bond history, `width` doubles for each of `nbonds`
- * directed bonds, in both restart slots (nothing when it is there). */
+ * directed bonds, in the restart slots (nothing when it is there). */
 pd_status pd_plan_restart_history(pd_file *f, int64_t nbonds, int width);
 void pd_restart_free(pd_restart *r);
 /* A model file: the header (history from `from`, may be NULL, and

@@ -222,33 +222,76 @@ with h5py.File(sys.argv[1], 'a') as f:
     assert_output "ok 6 True"
 }
 
+@test "pd-run writes each frame's damage: on the stencil, the bond list, LPS, an irregular body" {
+    make_block
+    pd-run -q "${RUN_OPTS[@]}" --steps 50 --every 10 model.h5 -o stencil.h5
+    pd-run -q "${RUN_OPTS[@]}" --steps 50 --every 10 --bond-list model.h5 -o list.h5
+    # LPS breaks its first bonds later
+    pd-run -q "${RUN_OPTS[@]}" --steps 100 --every 20 --model lps --shear-modulus 1e10 \
+        model.h5 -o lps.h5
+    pd-lattice -q --spacing "$SPACING" --density "$DENSITY" --box 0,0.01,0,0.01,0,0.01 \
+        --perturb 5e-5 --seed 3 -o irregular-lattice.h5
+    pd-bonds -q --horizon "$HORIZON" irregular-lattice.h5 -o irregular.h5
+    pd-run -q "${RUN_OPTS[@]}" --steps 50 --every 10 irregular.h5 -o irregular-run.h5
+    for r in stencil list lps irregular-run; do
+        run -0 check_damage "$r.h5"
+        assert_output "ok 6 True"
+        # and pd-damage finds nothing to change
+        pd-damage "$r.h5" -o "$r-again.h5" > /dev/null
+        run -0 h5_same "$r.h5" "$r-again.h5" 'history'
+    done
+}
+
 @test "-o OUT.h5 leaves RUN.h5 unchanged; OUT's history gains a line" {
     make_run
     before=$(digest run.h5)
     pd-damage run.h5 -o out.h5 > /dev/null
     assert_equal "$(digest run.h5)" "$before"
-    run -0 py "
-f = h5py.File(sys.argv[1], 'r')
-assert not any('damage' in g for g in f['frames'].values())
-print('ok')" run.h5
-    assert_output ok
     run -0 history out.h5
     assert_equal "${#lines[@]}" 4
     assert_line --index 2 --regexp '^pd-run '
     assert_line --index 3 "pd-damage run.h5 -o out.h5"
-    # everything else travels unchanged
-    run -0 h5_same run.h5 out.h5 'history|/damage$'
+    # everything else travels unchanged, and the damage is pd-run's own
+    run -0 h5_same run.h5 out.h5 'history'
     assert_no_temp .
 }
 
-@test "without -o, RUN.h5 is updated in place through a complete copy" {
+@test "pd-run's frames hold the damage pd-damage computes: RUN.h5 is read, not copied" {
     make_run
+    run -0 check_damage run.h5
+    assert_output "ok 6 True"
+    before=$(digest run.h5)
+    pd-damage run.h5 > table
+    run -0 check_damage run.h5 table
+    assert_output "ok 6 True"
+    assert_equal "$(digest run.h5)" "$before"
+    run -0 history run.h5
+    assert_equal "${#lines[@]}" 3
+    run -0 pd-damage -n run.h5
+    assert_equal "$output" "$(cat table)"
+    assert_no_temp .
+}
+
+@test "without -o, a RUN.h5 whose damage differs is updated in place through a complete copy" {
+    make_run
+    py "
+with h5py.File(sys.argv[1], 'a') as f:
+    f['frames/00000030/damage'][5] = 0.5" run.h5
     pd-damage run.h5 > table
     run -0 check_damage run.h5 table
     assert_output "ok 6 True"
     run -0 history run.h5
     assert_equal "${#lines[@]}" 4
     assert_line --index 3 "pd-damage run.h5"
+    # a frame without the field is one to write too
+    py "
+with h5py.File(sys.argv[1], 'a') as f:
+    del f['frames/00000040/damage']" run.h5
+    pd-damage -q run.h5
+    run -0 check_damage run.h5
+    assert_output "ok 6 True"
+    run -0 history run.h5
+    assert_equal "${#lines[@]}" 5
     assert_no_temp .
 }
 
@@ -382,12 +425,10 @@ print('ok')" run.h5
     pd-damage --no-precrack run.h5 -o out.h5 > table
     run -0 check_damage_run out.h5 table
     assert_output "ok 6 True"
-    # damage_run only: no damage field written
-    run -0 py "
-f = h5py.File(sys.argv[1], 'r')
-assert not any('damage' in g for g in f['frames'].values())
-print('ok')" out.h5
-    assert_output ok
+    # damage_run written; damage is pd-run's, with the pre-crack
+    run -0 h5_same run.h5 out.h5 'history|/damage_run$'
+    run -0 check_damage out.h5
+    assert_output "ok 6 True"
     # the default counts the pre-cracked bonds as broken
     pd-damage out.h5 > table2
     run -0 check_damage out.h5 table2

@@ -99,8 +99,12 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
     if (s == PD_OK)
         s = plan_frames(out, p, b, sc, sc->fields | (sc->has_projectile ? PD_FRAME_PROJECTILE : 0),
                         first, !restart);
+    /* two restart slots, so that a kill while one is written leaves the
+     * other, of the last complete frame; a fresh run of one frame needs
+     * one (a kill before it is complete leaves no frame to go on from) */
+    const int slots = restart || pd_frame_steps(sc, first, !restart, NULL) > 1 ? 2 : 1;
     if (s == PD_OK)
-        s = pd_plan_restart(out, p->n, sc->has_failure, sc->has_contact);
+        s = pd_plan_restart(out, p->n, sc->has_failure, sc->has_contact, slots);
     if (s == PD_OK && sc->has_projectile)
         s = pd_plan_restart_projectile(out);
     const int width = pd_model_history_width(pd_model_of(sc->model));
@@ -133,7 +137,14 @@ pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds 
         for (int64_t i = 0; i < p->n; i++)
             mises[i] = pd_von_mises(stress + 9 * i);
     }
-    pd_frame_fields ff = {density, stress, mises};
+    /* the frame's damage from its bond states, as pd-damage computes it */
+    double *damage = malloc(n * sizeof(double));
+    const uint64_t *intact = pd_sim_intact(sim);
+    if (s == PD_OK && damage == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the damage");
+    if (s == PD_OK)
+        pd_damage(p, b, intact, damage);
+    pd_frame_fields ff = {damage, density, stress, mises};
     /* what a restart needs, then the frame (marked complete last) */
     pd_restart r;
     memset(&r, 0, sizeof r);
@@ -142,7 +153,8 @@ pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds 
         s = pd_write_restart(out, p->n, fi.step, &r);
     if (s == PD_OK)
         s = pd_write_frame(out, p, &fi, pd_sim_positions(sim), pd_sim_velocities(sim),
-                           pd_sim_intact(sim), b->count, &ff);
+                           intact, b->count, &ff);
+    free(damage);
     free(density);
     free(stress);
     free(mises);

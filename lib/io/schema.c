@@ -835,6 +835,7 @@ static pd_status lay_out_frame(pd_file *f, int64_t n, int64_t nbonds, int64_t st
     if ((s = pd_h5_reserve_data(g, "displacement", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
         (s = pd_h5_reserve_data(g, "velocity", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
         (s = pd_h5_reserve_data(g, "state", H5T_STD_U8LE, 1, ds)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "damage", H5T_IEEE_F64LE, 1, d1)) == PD_OK &&
         (s = pd_h5_write_attr_int(g, "step", step)) == PD_OK &&
         (s = pd_h5_write_attr_doubles(g, "time", &time, 1)) == PD_OK &&
         (s = pd_h5_write_attr_int(g, "broken_bonds", 0)) == PD_OK &&
@@ -904,6 +905,11 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
     }
     if (s == PD_OK && nbonds > 0)
         s = pd_h5_write_into(g, "state", H5T_NATIVE_UINT8, bytes);
+    if (s == PD_OK) {
+        if (ff->damage == NULL)
+            memset(buf, 0, n * sizeof(double));
+        s = pd_h5_write_into(g, "damage", H5T_NATIVE_DOUBLE, ff->damage ? ff->damage : buf);
+    }
     if (s == PD_OK && ff->energy_density)
         s = pd_h5_write_into(g, "strain_energy_density", H5T_NATIVE_DOUBLE, ff->energy_density);
     if (s == PD_OK && ff->stress && ff->von_mises &&
@@ -1306,7 +1312,9 @@ pd_status pd_read_frame_damage_run(const pd_file *f, const pd_particles *p, cons
 /* Two restart slots, /restart/0 and /restart/1, laid out with the frames
  * and written in turn, each after its frame's data and before the frame is
  * marked complete: the slot of the last complete frame is always whole (the
- * other slot may be half written when a run is killed). */
+ * other slot may be half written when a run is killed).  A fresh run of
+ * one frame lays out the first only: killed before that frame is complete
+ * it leaves nothing to go on from. */
 
 static const char *restart_fields[4] = {"position", "force", "s0", "contact_position"};
 /* the run's accumulated energies and the last power (pd_restart) */
@@ -1320,19 +1328,21 @@ static double *restart_sum(pd_restart *r, int a)
     return v[a];
 }
 
-pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact)
+pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact, int slots)
 {
-    if (pd_h5_has_link(f->fid, "/restart"))
-        return PD_OK;
-    hid_t root = pd_h5_create_group(f->fid, "/restart");
-    if (root < 0)
-        return pd_fail(PD_ERR_IO, "cannot create /restart");
-    H5Gclose(root);
+    if (!pd_h5_has_link(f->fid, "/restart")) {
+        hid_t root = pd_h5_create_group(f->fid, "/restart");
+        if (root < 0)
+            return pd_fail(PD_ERR_IO, "cannot create /restart");
+        H5Gclose(root);
+    }
     hsize_t d2[2] = {(hsize_t)n, 3}, d1[1] = {(hsize_t)n};
     pd_status s = PD_OK;
-    for (int k = 0; k < 2 && s == PD_OK; k++) {
+    for (int k = 0; k < slots && k < 2 && s == PD_OK; k++) {
         char path[32];
         snprintf(path, sizeof path, "/restart/%d", k);
+        if (pd_h5_has_link(f->fid, path))
+            continue;
         hid_t g = pd_h5_create_group(f->fid, path);
         if (g < 0)
             return pd_fail(PD_ERR_IO, "cannot create %s", path);
@@ -1376,7 +1386,10 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
     int64_t st[2], done[2];
     slot_info(f->fid, 0, &st[0], &done[0]);
     slot_info(f->fid, 1, &st[1], &done[1]);
-    int k = !done[0] ? 0 : !done[1] ? 1 : (st[0] <= st[1] ? 0 : 1);
+    int k = !pd_h5_has_link(f->fid, "/restart/1") ? 0 /* a run of one frame */
+            : !done[0]                            ? 0
+            : !done[1]                            ? 1
+                                                  : (st[0] <= st[1] ? 0 : 1);
     char path[32];
     snprintf(path, sizeof path, "/restart/%d", k);
     hid_t g = H5Gopen2(f->fid, path, H5P_DEFAULT);
@@ -1536,9 +1549,11 @@ pd_status pd_plan_restart_projectile(pd_file *f)
     for (int k = 0; k < 2 && s == PD_OK; k++) {
         char path[32];
         snprintf(path, sizeof path, "/restart/%d", k);
-        hid_t g = pd_h5_has_link(f->fid, path) ? H5Gopen2(f->fid, path, H5P_DEFAULT) : -1;
+        if (!pd_h5_has_link(f->fid, path))
+            continue; /* a run of one frame has one slot */
+        hid_t g = H5Gopen2(f->fid, path, H5P_DEFAULT);
         if (g < 0)
-            return pd_fail(PD_ERR_IO, "'%s' has no %s", f->name, path);
+            return pd_fail(PD_ERR_IO, "'%s': cannot open %s", f->name, path);
         if (!pd_h5_has_attr(g, "projectile"))
             s = pd_h5_write_attr_doubles(g, "projectile", zeros, 9);
         H5Gclose(g);
@@ -1553,9 +1568,11 @@ pd_status pd_plan_restart_history(pd_file *f, int64_t nbonds, int width)
     for (int k = 0; k < 2 && s == PD_OK; k++) {
         char path[32];
         snprintf(path, sizeof path, "/restart/%d", k);
-        hid_t g = pd_h5_has_link(f->fid, path) ? H5Gopen2(f->fid, path, H5P_DEFAULT) : -1;
+        if (!pd_h5_has_link(f->fid, path))
+            continue; /* a run of one frame has one slot */
+        hid_t g = H5Gopen2(f->fid, path, H5P_DEFAULT);
         if (g < 0)
-            return pd_fail(PD_ERR_IO, "'%s' has no %s", f->name, path);
+            return pd_fail(PD_ERR_IO, "'%s': cannot open %s", f->name, path);
         if (!pd_h5_has_link(g, "bond_history"))
             s = pd_h5_reserve_data(g, "bond_history", H5T_IEEE_F64LE, 2, d2);
         H5Gclose(g);
