@@ -213,6 +213,7 @@ EOF
 import sys, h5py
 with h5py.File(sys.argv[1], "r+") as f:
     del f["frames/00000050/state"]
+    del f["frames/00000050/damage"]
 EOF
     expect_runtime_error "state" pd-dump2vtk broken.h5 -o out
     [ ! -e out/broken.pvd ]

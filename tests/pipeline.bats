@@ -30,10 +30,10 @@ print('ok')" piped.h5
 
 @test "the history lists every program in order" {
     make_run
-    pd-damage run.h5 > /dev/null
+    pd-damage run.h5 -o out.h5 > /dev/null
     run -0 py "
 h = h5py.File(sys.argv[1], 'r').attrs['history']
-print(h.decode() if isinstance(h, bytes) else h)" run.h5
+print(h.decode() if isinstance(h, bytes) else h)" out.h5
     assert_equal "${#lines[@]}" 4
     assert_line --index 0 --regexp '^pd-lattice '
     assert_line --index 1 --regexp '^pd-bonds '
