@@ -15,6 +15,10 @@
  */
 #include <math.h>
 #include <stdlib.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 #include <string.h>
 
 #include "pd.h"
@@ -115,8 +119,9 @@ double pd_partial_volume(double len, double horizon, double r)
 }
 
 /* The bits of `bits` set among [lo, hi), and with `skip` those whose bit
- * in skip is clear. */
-static int64_t bits_in(const uint64_t *bits, const uint64_t *skip, int64_t lo, int64_t hi)
+ * in skip is clear.  (popcnt: where the processor has it, through the
+ * clones of counted_damage.) */
+static inline __attribute__((always_inline)) int64_t bits_in(const uint64_t *bits, const uint64_t *skip, int64_t lo, int64_t hi)
 {
     int64_t c = 0;
     while (lo < hi) {
@@ -131,6 +136,27 @@ static int64_t bits_in(const uint64_t *bits, const uint64_t *skip, int64_t lo, i
         lo = end;
     }
     return c;
+}
+
+/* Hot loops are compiled for AVX-512, AVX2 and the baseline (as
+ * lib/state/sim.h's PD_VECTOR_CLONES): here for popcnt. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(PD_NO_CLONES)
+#define BONDS_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define BONDS_CLONES
+#endif
+
+/* The damage of rows [i0, i1) from their counts of bits, table[m] the sum
+ * of m volumes. */
+BONDS_CLONES static void counted_damage(const pd_bonds *b, const uint64_t *intact,
+                                        const uint64_t *skip, const double *table, int64_t i0,
+                                        int64_t i1, double *damage)
+{
+    for (int64_t i = i0; i < i1; i++) {
+        const double all = table[bits_in(NULL, skip, b->offset[i], b->offset[i + 1])];
+        const double kept = table[bits_in(intact, skip, b->offset[i], b->offset[i + 1])];
+        damage[i] = all > 0 ? 1.0 - kept / all : 0.0;
+    }
 }
 
 /* Damage (seed 000 eq. 10) over the bonds whose bit in `skip` is clear
@@ -154,11 +180,14 @@ static void damage_over(const pd_particles *p, const pd_bonds *b, const uint64_t
         table[0] = 0;
         for (int64_t m = 1; m <= longest; m++)
             table[m] = table[m - 1] + p->volume[0];
-#pragma omp parallel for schedule(static)
-        for (int64_t i = 0; i < b->n; i++) {
-            const double all = table[bits_in(NULL, skip, b->offset[i], b->offset[i + 1])];
-            const double kept = table[bits_in(intact, skip, b->offset[i], b->offset[i + 1])];
-            damage[i] = all > 0 ? 1.0 - kept / all : 0.0;
+#pragma omp parallel
+        {
+            int T = 1, t = 0;
+#ifdef _OPENMP
+            T = omp_get_num_threads();
+            t = omp_get_thread_num();
+#endif
+            counted_damage(b, intact, skip, table, b->n * t / T, b->n * (t + 1) / T, damage);
         }
         free(table);
         return;

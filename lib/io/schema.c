@@ -75,6 +75,7 @@ static void deinterleave(double *const x[3], const double *buf, int64_t n)
 /* Interleave SoA arrays into (n,3). */
 static void interleave(double *buf, double *const x[3], int64_t n)
 {
+#pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++)
         for (int d = 0; d < 3; d++)
             buf[3 * i + d] = x[d][i];
@@ -894,6 +895,7 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
     if (buf == NULL || bytes == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory writing a frame");
     if (s == PD_OK) {
+#pragma omp parallel for schedule(static)
         for (size_t i = 0; i < n; i++)
             for (int d = 0; d < 3; d++)
                 buf[3 * i + d] = y[d][i] - p->x[d][i];

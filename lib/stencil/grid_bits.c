@@ -107,7 +107,7 @@ static int offsets_of_rows(pd_grid *G, const pd_bonds *b)
     }
 GRID_ROWS(rows_plain, , gather)
 #if PD_GRID_AVX512 /* x86-64 with GCC or clang: pext where the processor has it */
-GRID_ROWS(rows_bmi2, __attribute__((target("bmi2"))), _pext_u64)
+GRID_ROWS(rows_bmi2, __attribute__((target("bmi2,popcnt"))), _pext_u64)
 #endif
 
 int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
@@ -124,7 +124,8 @@ int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
             return 0;
     }
     const int64_t n = G->n;
-    uint64_t *mirror = G->mirror;
+    uint64_t *restrict mirror = G->mirror;
+    const uint64_t *restrict mask = G->mask;
     memset(mirror, 0, (size_t)n * sizeof(uint64_t));
     /* the partners' bits at -d_k, block by block: a block's segments reach
      * only into itself and the next one, so even blocks, then odd ones */
@@ -136,8 +137,10 @@ int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
             for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++) {
                 const grid_seg *sg = &G->seg[si];
                 const int k = sg->k, up = 63 - k;
-                for (int64_t g = sg->lo; g < sg->hi; g++)
-                    mirror[g + sg->shift] |= ((G->mask[g] >> k) & 1) << up;
+                const int64_t lo = sg->lo, hi = sg->hi, shift = sg->shift;
+#pragma omp simd
+                for (int64_t g = lo; g < hi; g++)
+                    mirror[g + shift] |= ((mask[g] >> k) & 1) << up;
             }
         }
     }
@@ -152,7 +155,7 @@ int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
         const int64_t g0 = n * t / T, g1 = n * (t + 1) / T;
         if (g0 < g1 && b->offset[g1] > b->offset[g0]) {
 #if PD_GRID_AVX512
-            if (__builtin_cpu_supports("bmi2"))
+            if (__builtin_cpu_supports("bmi2") && __builtin_cpu_supports("popcnt"))
                 rows_bmi2(G, b, intact, g0, g1);
             else
 #endif
