@@ -64,6 +64,12 @@
 #       (dx 0.16 mm, delta 3 dx) under velocity pulses on two sets, PMB with
 #       failure, BENCH_STEPS steps: its bond updates per second against
 #       those of (a);
+#   (k) frames ("frames"): the full scene of (a) with a frame every 5 steps:
+#       what a frame costs (its loop time less (a)'s, per frame but the one
+#       (a) writes too; and the same from the output rows of --timing) in
+#       milliseconds and in steps of (a), the run file's size, and
+#       pd-damage on that run, in place (its frames hold their damage: the
+#       file is read, not copied) and into a new file (the better of two);
 # Wall time and peak RSS come from /usr/bin/time -f '%e %M' around pd-run,
 # around mpirun (wall) and around each LAMMPS rank (peak RSS, summed).
 #
@@ -71,7 +77,8 @@
 # BENCH_SIZES ("25k 100k 400k 1.6M": particle counts, k = 1e3, M = 1e6;
 # the 1.6M disk needs about 6 GB of memory and 3 GB in BENCH_DIR, and
 # minutes to build), BENCH_SKIP (words among lammps, lps, effects,
-# roofline, scaling, threads, kernels, files, sweep, plate: the parts left out),
+# roofline, scaling, threads, kernels, files, sweep, plate, frames: the parts
+# left out),
 # BENCH_SWEEP_STEPS (100), BENCH_DIR (cache of the
 # models and the runs, default $TMPDIR/pd-bench), PD_BIN (default: bin/ of
 # this tree), LMP (lmp), MPIRUN (mpirun), CC (cc, for share/stream.c).
@@ -112,8 +119,8 @@ case $THREADS in '' | *[!0-9]*) die "BENCH_THREADS must be a positive integer, n
 [ "$THREADS" -gt 0 ] || die "BENCH_THREADS must be a positive integer"
 for w in $SKIP; do
     case $w in
-    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep | plate) ;;
-    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate)" ;;
+    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep | plate | frames) ;;
+    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames)" ;;
     esac
 done
 # skip PART: is PART left out?
@@ -539,6 +546,21 @@ if ! skip plate; then
         --velocity-bc top,y,pulses:20,5e-6,-20,5e-6 --velocity-bc bottom,y,pulses:-20,5e-6,20,5e-6
     rm -f plate-lattice.h5
 fi
+# --- (k) frames: a frame every 5 steps against the one of (a) ------------------
+FRAME_EVERY=5
+if ! skip frames; then
+    echo "$prog: pd-run with a frame every $FRAME_EVERY steps ($STEPS steps)" >&2
+    "$TIME" -f '%e %M' -o frames.time "$PD_BIN/pd-run" --scene "$SCENE" --status "$THERMO" \
+        --threads "$THREADS" --steps "$STEPS" --every "$FRAME_EVERY" --timing model.h5 \
+        -o frames.h5 2>frames.log || { cat frames.log >&2; die "pd-run (frames) failed"; }
+    [ -n "$(pd_loop frames.log)" ] || die "no timing line in $DIR/frames.log"
+    # pd-damage on the run: in place (its frames hold their damage: read,
+    # not copied) and into a new file
+    best2 damage-in-place "$PD_BIN/pd-damage" -q frames.h5
+    best2 damage-copy "$PD_BIN/pd-damage" -q frames.h5 -o frames-damage.h5
+    echo "$(size frames.h5)" >frames.sizes
+    rm -f frames.h5 frames-damage.h5
+fi
 rm -f full.h5
 
 # --- report ---------------------------------------------------------------------
@@ -747,6 +769,30 @@ EOF
     awk -v r2="$r2" -v r3="$r3" -v t="$t2" -v n="$STEPS" 'BEGIN {
         printf "  %.2f ms/step, %.3g bond updates/s: %.0f%% of the 3-D seed'"'"'s %.3g (a)\n",
             1000 * t / n, r2, 100 * r2 / r3, r3 }'
+fi
+if ! skip frames; then
+    echo
+    read -r t1 _ <<EOF2
+$(pd_loop full.log)
+EOF2
+    read -r tf _ <<EOF2
+$(pd_loop frames.log)
+EOF2
+    nf=$(sed -n 's/^pd-run: .*[^0-9]\([0-9][0-9]*\) frames to write$/\1/p' frames.log | head -n 1)
+    read -r di _ <damage-in-place.time
+    read -r dc _ <damage-copy.time
+    read -r fs <frames.sizes
+    echo "frames: (a) with a frame every $FRAME_EVERY steps, ${nf:-?} frames against (a)'s one"
+    awk -v t1="$t1" -v tf="$tf" -v nf="$nf" -v n="$STEPS" -v of="$(pd_row frames.log output)" \
+        -v o1="$(pd_row full.log output)" -v di="$di" -v dc="$dc" -v fs="$fs" 'BEGIN {
+        step = t1 / n; f = (tf - t1) / (nf - 1); g = (of - o1) / (nf - 1)
+        printf "  %-46s %8.2f ms = %.2f steps of %.2f ms\n", "a frame, by the loop times", 1000 * f,
+            f / step, 1000 * step
+        printf "  %-46s %8.2f ms = %.2f steps\n", "a frame, by the output rows (--timing)", 1000 * g,
+            g / step
+        printf "  %-46s %8.1f MB\n", "the run file", fs / 1e6
+        printf "  %-46s %8.3f s\n", "pd-damage RUN.h5 (in place: read, not copied)", di
+        printf "  %-46s %8.3f s\n", "pd-damage RUN.h5 -o OUT.h5", dc }'
 fi
 echo
 echo "(runs and logs in $DIR; the models are kept there for the next run)"

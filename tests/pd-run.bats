@@ -877,8 +877,15 @@ with h5py.File(sys.argv[1]) as f:
     make_block
     pd-run "${RUN_OPTS[@]}" --steps 40 --every 20 --threads 2 -q model.h5 -o full.h5
     pd-run "${RUN_OPTS[@]}" --steps 0 --every 20 --threads 2 -q model.h5 -o run.h5
+    # one frame, one restart slot; the restart adds the second
+    run -0 py "print(sorted(h5py.File(sys.argv[1])['restart']))" run.h5
+    assert_output "['0']"
     run -0 pd-run --restart run.h5 --steps 40 --threads 2 -q
     for step in 20 40; do same_frame full.h5 run.h5 "$step"; done
+    run -0 py "print(sorted(h5py.File(sys.argv[1])['restart']))" run.h5
+    assert_output "['0', '1']"
+    run -0 py "print(sorted(h5py.File(sys.argv[1])['restart']))" full.h5
+    assert_output "['0', '1']"
 }
 
 @test "--restart goes on bit for bit after particles were lost" {
