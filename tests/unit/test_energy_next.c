@@ -40,14 +40,7 @@ static void model(int shuffled, pd_particles **pp, pd_bonds **bp)
     if (pd_particles_sort_spatial(p, 3.0001 * H) != PD_OK) /* lattice order */
         die("sort");
     if (shuffled)
-        for (int64_t i = p->n - 1; i > 0; i--) {
-            int64_t j = (i * 7919) % (i + 1);
-            for (int d = 0; d < 3; d++) {
-                double t = p->x[d][i];
-                p->x[d][i] = p->x[d][j];
-                p->x[d][j] = t;
-            }
-        }
+        shuffle_rows(p);
     if (pd_bonds_build(p, 3.0001 * H, bp) != PD_OK)
         die("bonds");
 }

@@ -38,14 +38,7 @@ static pd_particles *body(int kind, int shuffled, double delta)
         pd_particles_sort_spatial(p, delta) != PD_OK)
         die("lattice");
     if (shuffled)
-        for (int64_t i = p->n - 1; i > 0; i--) {
-            int64_t j = (i * 7919) % (i + 1);
-            for (int d = 0; d < 3; d++) {
-                double t = p->x[d][i];
-                p->x[d][i] = p->x[d][j];
-                p->x[d][j] = t;
-            }
-        }
+        shuffle_rows(p);
     return p;
 }
 

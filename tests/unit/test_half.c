@@ -30,18 +30,6 @@ static pd_particles *box(double h)
     return p;
 }
 
-static void shuffle(pd_particles *p)
-{
-    for (int64_t i = p->n - 1; i > 0; i--) {
-        int64_t j = (i * 7919) % (i + 1);
-        for (int d = 0; d < 3; d++) {
-            double t = p->x[d][i];
-            p->x[d][i] = p->x[d][j];
-            p->x[d][j] = t;
-        }
-    }
-}
-
 /* The directed bits the half bonds mean, one bond at a time. */
 static void expected(const pd_half_bonds *h, const pd_bonds *b, uint64_t *bits)
 {
@@ -115,7 +103,7 @@ int main(void)
 {
     pd_particles *p = box(0.001);
     check_body(p, "in lattice order");
-    shuffle(p);
+    shuffle_rows(p);
     check_body(p, "shuffled");
     pd_particles_free(p);
     return failures ? 1 : 0;

@@ -137,17 +137,7 @@ static void test_cube(void)
     st = stencil_of(p, delta, &expands);
     CHECK(st && expands, "in lattice order the stencil expands to the lists");
     pd_stencil_free(st);
-    for (int64_t i = p->n - 1; i > 0; i--) { /* a fixed shuffle of the rows */
-        int64_t j = (i * 7919) % (i + 1);
-        for (int d = 0; d < 3; d++) {
-            double t = p->x[d][i];
-            p->x[d][i] = p->x[d][j];
-            p->x[d][j] = t;
-        }
-        int64_t t = p->id[i];
-        p->id[i] = p->id[j];
-        p->id[j] = t;
-    }
+    shuffle_rows(p);
     st = stencil_of(p, delta, &expands);
     CHECK(st && expands, "in shuffled order the stencil expands to the lists");
     CHECK(same_as_cells(p, delta), "shuffled: the lattice's build is the cell lists'");
