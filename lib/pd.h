@@ -161,6 +161,11 @@ void pd_cells_locate(const pd_cells *c, const double x[3], int64_t cell[3]);
 /* The cell of x and its neighbours inside the grid (up to 27), in z, y, x
  * order; returns how many. */
 int pd_cells_adjacent(const pd_cells *c, const double x[3], int64_t cells[27]);
+/* The same cells as runs of `index`: the neighbours along x of one (z, y)
+ * row are consecutive cells, so their points are index[lo[r] .. hi[r]),
+ * rows in z, y order (pd_cells_adjacent's points in its order); returns
+ * how many rows (up to 9). */
+int pd_cells_adjacent_rows(const pd_cells *c, const double x[3], int64_t lo[9], int64_t hi[9]);
 
 /* ---------------------------------------------------------------- bonds */
 

@@ -32,6 +32,23 @@ int pd_cells_adjacent(const pd_cells *c, const double x[3], int64_t cells[27])
     return m;
 }
 
+int pd_cells_adjacent_rows(const pd_cells *c, const double x[3], int64_t lo[9], int64_t hi[9])
+{
+    int64_t k[3];
+    pd_cells_locate(c, x, k);
+    const int64_t x0 = k[0] > 0 ? k[0] - 1 : 0, x1 = k[0] + 1 < c->dim[0] ? k[0] + 1 : k[0];
+    int m = 0;
+    for (int64_t cz = k[2] - 1; cz <= k[2] + 1; cz++)
+        for (int64_t cy = k[1] - 1; cy <= k[1] + 1; cy++)
+            if (cz >= 0 && cz < c->dim[2] && cy >= 0 && cy < c->dim[1]) {
+                const int64_t row = (cz * c->dim[1] + cy) * c->dim[0];
+                lo[m] = c->start[row + x0];
+                hi[m] = c->start[row + x1 + 1];
+                m++;
+            }
+    return m;
+}
+
 static int64_t cell_of(const pd_cells *c, const double x[3])
 {
     int64_t k[3];

@@ -69,10 +69,48 @@ static pd_status contact_init(pd_sim *sim, void **state)
     return PD_OK;
 }
 
+/* The cells of a search and the positions in the cells' order (ys[d][e]
+ * is y[d][c.index[e]]: a cell's particles are read one after another, not
+ * from all over the arrays). */
+typedef struct {
+    pd_cells c;
+    double *ys[3];
+} cell_search;
+
+static void search_free(cell_search *cs)
+{
+    pd_cells_free(&cs->c);
+    for (int d = 0; d < 3; d++)
+        free(cs->ys[d]);
+}
+
+/* The cells of the particles but the lost (reach: the cell edge). */
+static pd_status search_build(const pd_sim *sim, double reach, cell_search *cs)
+{
+    memset(cs, 0, sizeof *cs);
+    pd_status s = pd_cells_build_except(&cs->c, sim->n, sim->y, reach, sim->lost);
+    if (s != PD_OK)
+        return s;
+    const int64_t m = cs->c.start[cs->c.dim[0] * cs->c.dim[1] * cs->c.dim[2]];
+    for (int d = 0; d < 3; d++)
+        if ((cs->ys[d] = malloc((size_t)(m > 0 ? m : 1) * sizeof(double))) == NULL) {
+            search_free(cs);
+            return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+        }
+    double *const *y = sim->y;
+#pragma omp parallel for schedule(static)
+    for (int64_t e = 0; e < m; e++)
+        for (int d = 0; d < 3; d++)
+            cs->ys[d][e] = y[d][cs->c.index[e]];
+    return PD_OK;
+}
+
 /* Candidates of i within cutoff + skin: count (out == NULL) or write. */
-static int64_t candidates(const pd_sim *sim, const pd_cells *c, double reach2, int64_t i,
+static int64_t candidates(const pd_sim *sim, const cell_search *cs, double reach2, int64_t i,
                           int32_t *out, double *dout)
 {
+    const pd_cells *c = &cs->c;
+    const double *ys0 = cs->ys[0], *ys1 = cs->ys[1], *ys2 = cs->ys[2];
     const pd_particles *p = sim->p;
     double *const *y = sim->y;
     if (sim->lost && sim->lost[i]) /* out of the body for good: no contact */
@@ -80,26 +118,33 @@ static int64_t candidates(const pd_sim *sim, const pd_cells *c, double reach2, i
     /* the stencil pairs' contact is the lattice kernel's (lib/stencil/grid.c) */
     const pd_grid *grid = pd_grid_contact(sim->grid) ? sim->grid : NULL;
     double yi[3] = {y[0][i], y[1][i], y[2][i]};
-    int64_t cells[27];
-    int ncells = pd_cells_adjacent(c, yi, cells);
+    int64_t lo[9], hi[9];
+    const int rows = pd_cells_adjacent_rows(c, yi, lo, hi);
     int64_t m = 0;
-    for (int q = 0; q < ncells; q++)
-        for (int64_t e = c->start[cells[q]]; e < c->start[cells[q] + 1]; e++) {
-            int32_t j = c->index[e];
-            if (j == i)
-                continue;
-            double dx = yi[0] - y[0][j], dy = yi[1] - y[1][j], dz = yi[2] - y[2][j];
-            if (dx * dx + dy * dy + dz * dz > reach2 || (grid && pd_grid_pair(grid, i, j)))
-                continue;
-            if (out) {
-                double ex = p->x[0][i] - p->x[0][j], ey = p->x[1][i] - p->x[1][j],
-                       ez = p->x[2][i] - p->x[2][j];
-                double r0 = sqrt(ex * ex + ey * ey + ez * ez);
-                out[m] = j;
-                dout[m] = fmin(PD_CONTACT_REF_FRAC * r0,
-                               PD_CONTACT_RADIUS_FAC * (p->radius[i] + p->radius[j]));
+    int64_t near[256]; /* the entries of a stretch of a row within reach */
+    for (int q = 0; q < rows; q++)
+        for (int64_t e0 = lo[q]; e0 < hi[q]; e0 += 256) {
+            const int64_t e1 = hi[q] - e0 > 256 ? e0 + 256 : hi[q];
+            int nn = 0; /* most are out of reach: kept or not without a branch */
+            for (int64_t e = e0; e < e1; e++) {
+                const double dx = yi[0] - ys0[e], dy = yi[1] - ys1[e], dz = yi[2] - ys2[e];
+                near[nn] = e;
+                nn += !(dx * dx + dy * dy + dz * dz > reach2);
             }
-            m++;
+            for (int a = 0; a < nn; a++) {
+                const int32_t j = c->index[near[a]];
+                if (j == i || (grid && pd_grid_pair(grid, i, j)))
+                    continue;
+                if (out) {
+                    double ex = p->x[0][i] - p->x[0][j], ey = p->x[1][i] - p->x[1][j],
+                           ez = p->x[2][i] - p->x[2][j];
+                    double r0 = sqrt(ex * ex + ey * ey + ez * ez);
+                    out[m] = j;
+                    dout[m] = fmin(PD_CONTACT_REF_FRAC * r0,
+                                   PD_CONTACT_RADIUS_FAC * (p->radius[i] + p->radius[j]));
+                }
+                m++;
+            }
         }
     return m;
 }
@@ -126,8 +171,8 @@ static pd_status list_room(contact_list *cl, int64_t total)
  * ends): without the lattice stencil. */
 static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
 {
-    pd_cells c = {0};
-    pd_status s = pd_cells_build_except(&c, sim->n, sim->y, reach, sim->lost);
+    cell_search c;
+    pd_status s = search_build(sim, reach, &c);
     if (s != PD_OK)
         return s;
     const int64_t n = sim->n;
@@ -142,7 +187,7 @@ static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
         for (int64_t i = 0; i < n; i++)
             candidates(sim, &c, reach * reach, i, cl->partner + cl->offset[i],
                        cl->d + cl->offset[i]);
-    pd_cells_free(&c);
+    search_free(&c);
     return s;
 }
 
@@ -179,11 +224,12 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
         free(mv);
         return PD_OK;
     }
-    pd_cells c = {0};
+    cell_search c;
+    memset(&c, 0, sizeof c);
     int64_t *who = malloc((size_t)nm * sizeof(int64_t)), *toff = malloc((size_t)(nm + 1) * sizeof(int64_t));
     int32_t *tp = NULL;
     double *td = NULL;
-    pd_status s = who && toff ? pd_cells_build_except(&c, n, sim->y, reach, sim->lost)
+    pd_status s = who && toff ? search_build(sim, reach, &c)
                               : pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
     if (s == PD_OK) {
         for (int64_t i = 0, k = 0; i < n; i++)
@@ -215,10 +261,10 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
                 /* room for every particle of the mover's 27 cells */
                 const int64_t i = who[k];
                 const double yi[3] = {y[0][i], y[1][i], y[2][i]};
-                int64_t cells[27], most = 0;
-                const int nc = pd_cells_adjacent(&c, yi, cells);
-                for (int q = 0; q < nc; q++)
-                    most += c.start[cells[q] + 1] - c.start[cells[q]];
+                int64_t lo[9], hi[9], most = 0;
+                const int rows = pd_cells_adjacent_rows(&c.c, yi, lo, hi);
+                for (int q = 0; q < rows; q++)
+                    most += hi[q] - lo[q];
                 if (bn[t] + most > cap) {
                     cap = 2 * (bn[t] + most) + 1024;
                     int32_t *np = realloc(bp[t], (size_t)cap * sizeof(int32_t));
@@ -290,8 +336,7 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
     }
     if (s != PD_OK) /* no half-built list */
         memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
-    if (who && toff)
-        pd_cells_free(&c);
+    search_free(&c);
     free(mv);
     free(who);
     free(toff);

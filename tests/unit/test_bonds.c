@@ -8,8 +8,10 @@
  * partial-volume factor is 1 for |xi| <= delta - r, (delta + r - |xi|)/(2r)
  * beyond, and exactly 1/2 for a bond at exactly the horizon; cell lists give
  * the same families as a brute-force all-pairs search on a perturbed, uneven
- * cloud; the spatial sort is a permutation that keeps ids with positions;
- * state bits start set and count broken bonds.
+ * cloud; the cells' rows (pd_cells_adjacent_rows) hold the points of the
+ * adjacent cells in their order, at the grid's corners, edges and inside;
+ * the spatial sort is a permutation that keeps ids with positions; state
+ * bits start set and count broken bonds.
  */
 #include <math.h>
 #include <stdio.h>
@@ -285,9 +287,56 @@ static void test_errors(void)
     proved(f0, "bad horizons are refused; free accepts NULL");
 }
 
+/* The rows of index runs hold the points of pd_cells_adjacent's cells, in
+ * its order, for points all over (and beyond) an uneven cloud's grid. */
+static void test_cell_rows(void)
+{
+    int f0 = failures;
+    enum { N = 3000 };
+    double *x[3];
+    for (int d = 0; d < 3; d++)
+        if ((x[d] = malloc(N * sizeof(double))) == NULL)
+            die("memory");
+    uint64_t s = 12345;
+    for (int i = 0; i < N; i++)
+        for (int d = 0; d < 3; d++) {
+            s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+            x[d][i] = (d + 1) * 0.01 * (double)(s >> 11) / 9007199254740992.0;
+        }
+    pd_cells c;
+    if (pd_cells_build(&c, N, x, 0.0013) != PD_OK)
+        die("cells");
+    int bad = 0, probes = 0;
+    for (int q = 0; q < 2000; q++) {
+        double at[3];
+        for (int d = 0; d < 3; d++) {
+            s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+            at[d] = (d + 1) * 0.012 * (double)(s >> 11) / 9007199254740992.0 - 0.001;
+        }
+        int64_t cells[27], lo[9], hi[9];
+        const int nc = pd_cells_adjacent(&c, at, cells), nr = pd_cells_adjacent_rows(&c, at, lo, hi);
+        int64_t want[27 * 64], got[27 * 64], nw = 0, ng = 0;
+        for (int k = 0; k < nc; k++)
+            for (int64_t e = c.start[cells[k]]; e < c.start[cells[k] + 1] && nw < 27 * 64; e++)
+                want[nw++] = e;
+        for (int r = 0; r < nr; r++)
+            for (int64_t e = lo[r]; e < hi[r] && ng < 27 * 64; e++)
+                got[ng++] = e;
+        bad += nw != ng || memcmp(want, got, (size_t)nw * sizeof(int64_t)) != 0;
+        probes += nw > 0;
+    }
+    CHECK(bad == 0, "%d of 2000 probes: the rows are not the adjacent cells' points", bad);
+    CHECK(probes > 1500, "only %d probes met points", probes);
+    pd_cells_free(&c);
+    for (int d = 0; d < 3; d++)
+        free(x[d]);
+    proved(f0, "the cells' rows hold the adjacent cells' points in their order");
+}
+
 int main(void)
 {
     test_family_sizes();
+    test_cell_rows();
     test_volume_factors();
     test_cells_vs_brute_force();
     test_state_bits();
