@@ -70,6 +70,10 @@
 #       milliseconds and in steps of (a), the run file's size, and
 #       pd-damage on that run, in place (its frames hold their damage: the
 #       file is read, not copied) and into a new file (the better of two);
+#   (l) shattered ("shattered"; minutes): the whole demo, impact.scene as it
+#       is (2000 steps, a frame every 100: the disk shatters, fragments fly
+#       and the contact list is rebuilt hundreds of times) against the seed
+#       script in.impact as it is (its dump every 100 steps);
 # Wall time and peak RSS come from /usr/bin/time -f '%e %M' around pd-run,
 # around mpirun (wall) and around each LAMMPS rank (peak RSS, summed).
 #
@@ -77,8 +81,8 @@
 # BENCH_SIZES ("25k 100k 400k 1.6M": particle counts, k = 1e3, M = 1e6;
 # the 1.6M disk needs about 6 GB of memory and 3 GB in BENCH_DIR, and
 # minutes to build), BENCH_SKIP (words among lammps, lps, effects,
-# roofline, scaling, threads, kernels, files, sweep, plate, frames: the parts
-# left out),
+# roofline, scaling, threads, kernels, files, sweep, plate, frames,
+# shattered: the parts left out),
 # BENCH_SWEEP_STEPS (100), BENCH_DIR (cache of the
 # models and the runs, default $TMPDIR/pd-bench), PD_BIN (default: bin/ of
 # this tree), LMP (lmp), MPIRUN (mpirun), CC (cc, for share/stream.c).
@@ -119,8 +123,8 @@ case $THREADS in '' | *[!0-9]*) die "BENCH_THREADS must be a positive integer, n
 [ "$THREADS" -gt 0 ] || die "BENCH_THREADS must be a positive integer"
 for w in $SKIP; do
     case $w in
-    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep | plate | frames) ;;
-    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames)" ;;
+    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep | plate | frames | shattered) ;;
+    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames, shattered)" ;;
     esac
 done
 # skip PART: is PART left out?
@@ -264,8 +268,9 @@ lmp_bench() {
 lmp_loop() {
     sed -n 's/^Loop time of \([0-9.eE+-]*\) on .*/\1/p' "$1.lammps" | tail -n 1
 }
-# versus TITLE PD LMP: the table of pd-run (PD.log, PD.time) against
-# LAMMPS (LMP.lammps, LMP.time, LMP.ranks; LMP empty: pd-run alone)
+# versus TITLE PD LMP [STEPS]: the table of pd-run (PD.log, PD.time)
+# against LAMMPS (LMP.lammps, LMP.time, LMP.ranks; LMP empty: pd-run
+# alone), runs of STEPS steps (default BENCH_STEPS)
 versus() {
     read -r pw pk <"$2.time"
     read -r pl pr <<EOF
@@ -280,7 +285,7 @@ EOF
     fi
     echo "$1"
     awk -v pw="$pw" -v pl="$pl" -v pk="$pk" -v pr="$pr" -v lw="$lw" -v ll="$ll" -v lk="$lk" \
-        -v lr="$lr" -v n="$STEPS" -v th="$THREADS" -v np="$NP" -v b="$B0" 'BEGIN {
+        -v lr="$lr" -v n="${4:-$STEPS}" -v th="$THREADS" -v np="$NP" -v b="$B0" 'BEGIN {
         if (ll == "") {
             printf "  %-34s %12s\n", "", "pd-run"
             printf "  %-34s %12.2f\n", "wall time, whole process (s)", pw
@@ -561,6 +566,21 @@ if ! skip frames; then
     echo "$(size frames.h5)" >frames.sizes
     rm -f frames.h5 frames-damage.h5
 fi
+# --- (l) shattered: the whole 2000-step demo against in.impact as it is -------
+if ! skip shattered; then
+    echo "$prog: pd-run, the whole demo (impact.scene, 2000 steps, a frame every 100)" >&2
+    "$TIME" -f '%e %M' -o shattered.time "$PD_BIN/pd-run" --scene "$SCENE" --threads "$THREADS" \
+        --timing model.h5 -o shattered.h5 2>shattered.log ||
+        { cat shattered.log >&2; die "pd-run (shattered) failed"; }
+    [ -n "$(pd_loop shattered.log)" ] || die "no timing line in $DIR/shattered.log"
+    rm -f shattered.h5
+    if ! skip lammps; then
+        # the seed script verbatim: its dump every 100 steps, into this folder
+        cp "$EX/in.impact" in.shattered
+        lmp_bench lmp-shattered in.shattered
+        rm -f dump.peri
+    fi
+fi
 rm -f full.h5
 
 # --- report ---------------------------------------------------------------------
@@ -793,6 +813,13 @@ EOF2
         printf "  %-46s %8.1f MB\n", "the run file", fs / 1e6
         printf "  %-46s %8.3f s\n", "pd-damage RUN.h5 (in place: read, not copied)", di
         printf "  %-46s %8.3f s\n", "pd-damage RUN.h5 -o OUT.h5", dc }'
+fi
+if ! skip shattered; then
+    echo
+    lmp='lmp-shattered'
+    skip lammps && lmp=
+    versus "shattered: the whole demo, 2000 steps, the disk shattered (pd: a frame every 100 steps; LAMMPS: in.impact, its dump every 100):" shattered "$lmp" 2000
+    sed -n 's/^pd-run: .*contact list builds \([0-9]*\)$/  pd-run contact list builds: \1/p' shattered.log
 fi
 echo
 echo "(runs and logs in $DIR; the models are kept there for the next run)"
