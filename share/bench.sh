@@ -251,11 +251,12 @@ pd_bench() {
     [ -n "$keep" ] || rm -f "$name.h5"
     [ -n "$(pd_loop "$name.log")" ] || die "no timing line in $DIR/$name.log"
 }
-# lmp_bench NAME SCRIPT: mpirun -np NP lmp on SCRIPT; NAME.time (wall),
+# lmp_bench NAME SCRIPT [STEPS]: mpirun -np NP lmp on SCRIPT (of STEPS
+# steps, default BENCH_STEPS: for the message); NAME.time (wall),
 # NAME.ranks (wall, peak kB of each rank), NAME.lammps (its log)
 lmp_bench() {
     rm -f "$1.ranks"
-    echo "$prog: $MPIRUN -np $NP $LMP, $1 ($STEPS steps)" >&2
+    echo "$prog: $MPIRUN -np $NP $LMP, $1 (${3:-$STEPS} steps)" >&2
     # one OpenMP thread per rank (LAMMPS's default, said so when unset)
     OMP_NUM_THREADS=1 "$TIME" -f '%e %M' -o "$1.time" "$MPIRUN" -np "$NP" \
         "$TIME" -a -o "$1.ranks" -f '%e %M' "$LMP" -in "$2" -log "$1.lammps" -screen none \
@@ -577,7 +578,7 @@ if ! skip shattered; then
     if ! skip lammps; then
         # the seed script verbatim: its dump every 100 steps, into this folder
         cp "$EX/in.impact" in.shattered
-        lmp_bench lmp-shattered in.shattered
+        lmp_bench lmp-shattered in.shattered 2000
         rm -f dump.peri
     fi
 fi
