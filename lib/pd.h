@@ -1151,6 +1151,10 @@ double pd_wtime(void);
  * (the chunks in parallel): the same bits at any thread count. */
 #define PD_SUM_CHUNK 4096
 double pd_sum_fixed(const double *x, int64_t n);
+/* The calling thread's share [*lo, *hi) of n items in a parallel region:
+ * equal contiguous parts, as OpenMP's static schedule cuts a loop (all of
+ * them outside one). */
+void pd_thread_share(int64_t n, int64_t *lo, int64_t *hi);
 /* Peak resident memory of this process, bytes (0 if unknown). */
 int64_t pd_peak_rss(void);
 

@@ -11,6 +11,10 @@
 #include <time.h>
 #include <unistd.h>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "pd.h"
 
 int pd_parse_double(const char *s, double *out)
@@ -82,6 +86,17 @@ int64_t pd_peak_rss(void)
     if (getrusage(RUSAGE_SELF, &ru) != 0)
         return 0;
     return (int64_t)ru.ru_maxrss * 1024;
+}
+
+void pd_thread_share(int64_t n, int64_t *lo, int64_t *hi)
+{
+#ifdef _OPENMP
+    const int64_t T = omp_get_num_threads(), t = omp_get_thread_num();
+#else
+    const int64_t T = 1, t = 0;
+#endif
+    *lo = n * t / T;
+    *hi = n * (t + 1) / T;
 }
 
 double pd_sum_fixed(const double *x, int64_t n)

@@ -15,10 +15,6 @@
  */
 #include <math.h>
 #include <stdlib.h>
-
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 #include <string.h>
 
 #include "pd.h"
@@ -121,7 +117,9 @@ double pd_partial_volume(double len, double horizon, double r)
 /* The bits of `bits` set among [lo, hi), and with `skip` those whose bit
  * in skip is clear.  (popcnt: where the processor has it, through the
  * clones of counted_damage.) */
-static inline __attribute__((always_inline)) int64_t bits_in(const uint64_t *bits, const uint64_t *skip, int64_t lo, int64_t hi)
+static inline __attribute__((always_inline)) int64_t bits_in(const uint64_t *bits,
+                                                            const uint64_t *skip, int64_t lo,
+                                                            int64_t hi)
 {
     int64_t c = 0;
     while (lo < hi) {
@@ -182,12 +180,9 @@ static void damage_over(const pd_particles *p, const pd_bonds *b, const uint64_t
             table[m] = table[m - 1] + p->volume[0];
 #pragma omp parallel
         {
-            int T = 1, t = 0;
-#ifdef _OPENMP
-            T = omp_get_num_threads();
-            t = omp_get_thread_num();
-#endif
-            counted_damage(b, intact, skip, table, b->n * t / T, b->n * (t + 1) / T, damage);
+            int64_t i0, i1;
+            pd_thread_share(b->n, &i0, &i1);
+            counted_damage(b, intact, skip, table, i0, i1, damage);
         }
         free(table);
         return;

@@ -201,18 +201,8 @@ void pd_half_expand(const pd_half_bonds *h, const pd_bonds *b, uint64_t *intact)
             expand_rows(h, b, i0, i1, before, intact);
         free(before);
     }
-    if (failed) { /* out of memory for a few cursors: one serial walk */
-        for (int64_t i = 0; i < h->n; i++)
-            h->cursor[i] = h->offset[i];
-        for (int64_t i = 0; i < h->n; i++) {
-            int64_t own = h->offset[i];
-            for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-                int32_t j = b->neighbor[k];
-                int64_t q = j < i ? h->cursor[j]++ : own++;
-                if (pd_bond_intact(h->intact, q))
-                    intact[k >> 6] |= UINT64_C(1) << (k & 63);
-            }
-        }
-    }
+    if (failed) /* out of memory for a few cursors: all rows as one range
+                   (no row before the first: no cursor of `before`) */
+        expand_rows(h, b, 0, b->n, NULL, intact);
 }
 

@@ -17,10 +17,6 @@
 #include "models/model.h"
 #include "stencil/grid.h"
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 static pd_status add_effect(pd_sim *sim, const pd_effect *e)
 {
     if (sim->neffects == PD_MAX_EFFECTS)
@@ -280,29 +276,17 @@ PD_VECTOR_CLONES static int half_kick_block(pd_sim *sim, int64_t lo, int64_t hi)
     return bad;
 }
 
-/* The calling thread's share of n particles in a parallel region: equal
- * contiguous parts, as OpenMP's static schedule cuts a loop (the lattice
- * stencil's blocks are split over the threads likewise, lib/stencil/grid.c), so
- * that a thread walks what it touched in the pass before. */
-static void my_share(int64_t n, int64_t *lo, int64_t *hi)
-{
-#ifdef _OPENMP
-    const int64_t T = omp_get_num_threads(), t = omp_get_thread_num();
-#else
-    const int64_t T = 1, t = 0;
-#endif
-    *lo = n * t / T;
-    *hi = n * (t + 1) / T;
-}
-
 /* Half a kick of every particle; 1 when some velocity is not finite. */
 static int half_kick(pd_sim *sim)
 {
+    /* each thread its static share (pd_thread_share), as the passes
+     * before and after cut the particles: a thread walks what it touched
+     * last (the stencil's blocks are split likewise, lib/stencil/grid.c) */
     int bad = 0;
 #pragma omp parallel reduction(| : bad)
     {
         int64_t lo, hi;
-        my_share(sim->n, &lo, &hi);
+        pd_thread_share(sim->n, &lo, &hi);
         bad |= half_kick_block(sim, lo, hi);
     }
     return bad;
@@ -382,7 +366,7 @@ static int drift(pd_sim *sim, int kick)
 #pragma omp parallel reduction(| : away)
     {
         int64_t lo, hi;
-        my_share(sim->n, &lo, &hi);
+        pd_thread_share(sim->n, &lo, &hi);
         away |= drift_block(sim, lo, hi, kick, lost_any);
     }
     return away;

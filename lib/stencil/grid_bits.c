@@ -147,12 +147,8 @@ int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
     memset(intact, 0, (size_t)pd_bits_words(b->count) * sizeof(uint64_t));
 #pragma omp parallel
     {
-        int T = 1, t = 0;
-#ifdef _OPENMP
-        T = omp_get_num_threads();
-        t = omp_get_thread_num();
-#endif
-        const int64_t g0 = n * t / T, g1 = n * (t + 1) / T;
+        int64_t g0, g1;
+        pd_thread_share(n, &g0, &g1);
         if (g0 < g1 && b->offset[g1] > b->offset[g0]) {
 #if PD_GRID_AVX512
             if (__builtin_cpu_supports("bmi2") && __builtin_cpu_supports("popcnt"))
