@@ -13,18 +13,6 @@
  * pairs closer than d_k (lib/effects/contact.c's), else e_i += 1/4 c s^2 |xi| nu
  * V_i V_j over the intact bonds (lib/models/pmb.c's pmb_energy).  Even blocks,
  * then odd ones, so that no two threads add to one particle. */
-/* The energy of a pair of squared length r2 and length r, half to each end
- * (0 outside contact with `contact`). */
-static inline __attribute__((always_inline)) double pair_x(const int contact, double r2, double r,
-                                                          double c, double L, double iL, double dc)
-{
-    if (contact)
-        return r2 < dc * dc && r < dc ? c * (dc - r) * (dc - r) : 0.0;
-    double dr = r - L;
-    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-    return c * ((dr * iL) * (dr * iL));
-}
-
 static inline __attribute__((always_inline)) void
 seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, const int contact)
 {
@@ -33,7 +21,7 @@ seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, c
     const uint64_t bit = UINT64_C(1) << (k & 63);
     const uint64_t *bits = (contact ? G->cmask : G->mask) + (k >> 6);
     const double L = G->len[k], iL = G->inv_len[k], dc = G->dc[k];
-    const double c = contact ? 0.25 * G->kc * V : 0.25 * G->w[k] * L * V;
+    const double c = grid_energy_c(G, k, V, contact);
     const double *restrict y0 = sim->y[0], *restrict y1 = sim->y[1], *restrict y2 = sim->y[2];
     const int64_t shift = sg->shift;
     if (G->perm == NULL && shift >= GRID_SAFE) { /* the two ends never share a vector */
@@ -42,7 +30,7 @@ seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, c
             const int64_t j = g + shift;
             const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
             const double r2 = dx * dx + dy * dy + dz * dz;
-            const double x = (bits[g * W] & bit) ? pair_x(contact, r2, sqrt(r2), c, L, iL, dc) : 0.0;
+            const double x = (bits[g * W] & bit) ? grid_pair_energy(contact, r2, sqrt(r2), c, L, iL, dc) : 0.0;
             e[g] += x;
             e[j] += x;
         }
@@ -57,7 +45,7 @@ seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, c
         const double r2 = dx * dx + dy * dy + dz * dz;
         if (contact && !(r2 < dc * dc)) /* the most, no square root */
             continue;
-        const double x = pair_x(contact, r2, sqrt(r2), c, L, iL, dc);
+        const double x = grid_pair_energy(contact, r2, sqrt(r2), c, L, iL, dc);
         e[i] += x;
         e[j] += x;
     }

@@ -194,6 +194,29 @@ void pd_grid_sync(pd_sim *sim, pd_grid *G);
  * the kernels compile to the same instructions.  (unused: grid.c and
  * grid_energy.c do not call them.) */
 
+/* The energy of a stencil pair of squared length r2 and length r, half to
+ * each end, J, with c = grid_energy_c: with `contact`, 1/4 (c_S/delta)
+ * (d_k - r)^2 V V when closer than d_k (else 0); otherwise 1/4 c s^2 |xi|
+ * nu V V (lib/models/pmb.c's pmb_energy).  The energy pass (grid_energy.c)
+ * and the bond pass that counts the energies (grid_pmb.c) both take it,
+ * so that they agree bit for bit. */
+static inline __attribute__((always_inline)) double grid_pair_energy(const int contact, double r2,
+                                                                   double r, double c, double L,
+                                                                   double iL, double dc)
+{
+    if (contact)
+        return r2 < dc * dc && r < dc ? c * (dc - r) * (dc - r) : 0.0;
+    double dr = r - L;
+    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+    return c * ((dr * iL) * (dr * iL));
+}
+
+/* grid_pair_energy's c for offset k and particle volume V. */
+static inline double grid_energy_c(const pd_grid *G, int k, double V, const int contact)
+{
+    return contact ? 0.25 * G->kc * V : 0.25 * G->w[k] * G->len[k] * V;
+}
+
 /* The broken bond g-j at offset k into a block's list (PMB and LPS):
  * 0, or -1 when out of memory. */
 static __attribute__((unused)) int record_break(grid_breaks *bl, int64_t g, int32_t k, int64_t j)
@@ -222,15 +245,14 @@ static __attribute__((unused)) int record_break(grid_breaks *bl, int64_t g, int3
 
 /* The contact forces of the pairs of a segment's chunk [c0, c0 + m) that
  * are closer than d_k (seed 000 eqs. 13-15), both ends; with A->ec their
- * energy too, 1/4 (c_S/delta) (d_k - r)^2 V V to each end (grid_energy.c's
- * pair_x, bit for bit and in its order). */
+ * energy too (grid_pair_energy, in the energy pass's order). */
 static __attribute__((unused)) void seg_contact(pd_grid *G, const grid_seg *sg,
                                                 const grid_arrays *A, int64_t c0, int64_t m,
                                                 int W)
 {
     const int k = sg->k;
     const uint64_t bit = UINT64_C(1) << (k & 63);
-    const double dc = G->dc[k], kc = G->kc, ce = 0.25 * G->kc * A->V;
+    const double dc = G->dc[k], kc = G->kc, ce = grid_energy_c(G, k, A->V, 1);
     const double *y0 = A->y0, *y1 = A->y1, *y2 = A->y2;
     double *ec = A->ec;
     for (int64_t q = 0; q < m; q++) {
@@ -240,8 +262,8 @@ static __attribute__((unused)) void seg_contact(pd_grid *G, const grid_seg *sg,
         const double r = sqrt(r2);
         if (!(r < dc) || !(G->cmask[g * W + (k >> 6)] & bit))
             continue;
-        if (ec && r2 < dc * dc) {
-            const double x = ce * (dc - r) * (dc - r);
+        if (ec) {
+            const double x = grid_pair_energy(1, r2, r, ce, 0, 0, dc);
             ec[g] += x;
             ec[j] += x;
         }

@@ -65,11 +65,10 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
     const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
     const double *restrict s0 = A->s0;
     double *f0 = A->f0, *f1 = A->f1, *f2 = A->f2, *s0n = A->s0n, *eb = A->eb;
-    /* grid_energy.c's c of the offset: e = ce s^2 to each end */
-    const double ce = energy ? 0.25 * w * L * A->V : 0.0;
+    const double ce = energy ? grid_energy_c(G, k, A->V, 0) : 0.0;
     const uint64_t *restrict mask = G->mask + word;
     double brk[GRID_CHUNK], gx[GRID_CHUNK], gy[GRID_CHUNK], gz[GRID_CHUNK], t[GRID_CHUNK];
-    double xe[energy ? GRID_CHUNK : 1];
+    double xe[GRID_CHUNK];
     const int fused = shift >= GRID_SAFE;
     for (int64_t c0 = sg->lo; c0 < sg->hi; c0 += GRID_CHUNK) {
         const int64_t m = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;
@@ -95,7 +94,7 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
                     nbreak += b;
                 }
                 if (energy) { /* intact after this pass: mu 1, not broken */
-                    const double x = mu > b ? ce * (s * s) : 0.0;
+                    const double x = mu > b ? grid_pair_energy(0, 0, r, ce, L, iL, dc) : 0.0;
                     eb[g] += x;
                     eb[j] += x;
                 }
@@ -114,7 +113,7 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
                     nbreak += brk[q];
                 }
                 if (energy)
-                    xe[q] = mu > b ? ce * (s * s) : 0.0;
+                    xe[q] = mu > b ? grid_pair_energy(0, 0, r, ce, L, iL, dc) : 0.0;
             }
             for (int64_t q = 0; q < m; q++) {
                 f0[c0 + q] += gx[q];
