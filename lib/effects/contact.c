@@ -105,9 +105,23 @@ static pd_status search_build(const pd_sim *sim, double reach, cell_search *cs)
     return PD_OK;
 }
 
-/* Candidates of i within cutoff + skin: count (out == NULL) or write. */
-static int64_t candidates(const pd_sim *sim, const cell_search *cs, double reach2, int64_t i,
-                          int32_t *out, double *dout)
+/* The points of the cells around particle i, as pd_cells_adjacent_rows
+ * gives them: rows [lo[q], hi[q]) of the cells' index. */
+typedef struct {
+    int n;
+    int64_t lo[9], hi[9];
+} cell_rows;
+
+static void rows_around(const pd_sim *sim, const cell_search *cs, int64_t i, cell_rows *r)
+{
+    const double yi[3] = {sim->y[0][i], sim->y[1][i], sim->y[2][i]};
+    r->n = pd_cells_adjacent_rows(&cs->c, yi, r->lo, r->hi);
+}
+
+/* Candidates of i within cutoff + skin among the points of `rows` (i's
+ * rows_around): count (out == NULL) or write. */
+static int64_t candidates(const pd_sim *sim, const cell_search *cs, const cell_rows *rows,
+                          double reach2, int64_t i, int32_t *out, double *dout)
 {
     const pd_cells *c = &cs->c;
     const double *ys0 = cs->ys[0], *ys1 = cs->ys[1], *ys2 = cs->ys[2];
@@ -117,12 +131,11 @@ static int64_t candidates(const pd_sim *sim, const cell_search *cs, double reach
         return 0;
     /* the stencil pairs' contact is the lattice kernel's (lib/stencil/grid.c) */
     const pd_grid *grid = pd_grid_contact(sim->grid) ? sim->grid : NULL;
-    double yi[3] = {y[0][i], y[1][i], y[2][i]};
-    int64_t lo[9], hi[9];
-    const int rows = pd_cells_adjacent_rows(c, yi, lo, hi);
+    const double yi[3] = {y[0][i], y[1][i], y[2][i]};
+    const int64_t *lo = rows->lo, *hi = rows->hi;
     int64_t m = 0;
     int64_t near[256]; /* the entries of a stretch of a row within reach */
-    for (int q = 0; q < rows; q++)
+    for (int q = 0; q < rows->n; q++)
         for (int64_t e0 = lo[q]; e0 < hi[q]; e0 += 256) {
             const int64_t e1 = hi[q] - e0 > 256 ? e0 + 256 : hi[q];
             int nn = 0; /* most are out of reach: kept or not without a branch */
@@ -177,16 +190,22 @@ static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
         return s;
     const int64_t n = sim->n;
 #pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < n; i++)
-        cl->offset[i + 1] = candidates(sim, &c, reach * reach, i, NULL, NULL);
+    for (int64_t i = 0; i < n; i++) {
+        cell_rows r;
+        rows_around(sim, &c, i, &r);
+        cl->offset[i + 1] = candidates(sim, &c, &r, reach * reach, i, NULL, NULL);
+    }
     cl->offset[0] = 0;
     for (int64_t i = 0; i < n; i++)
         cl->offset[i + 1] += cl->offset[i];
     if ((s = list_room(cl, cl->offset[n])) == PD_OK)
 #pragma omp parallel for schedule(static)
-        for (int64_t i = 0; i < n; i++)
-            candidates(sim, &c, reach * reach, i, cl->partner + cl->offset[i],
+        for (int64_t i = 0; i < n; i++) {
+            cell_rows r;
+            rows_around(sim, &c, i, &r);
+            candidates(sim, &c, &r, reach * reach, i, cl->partner + cl->offset[i],
                        cl->d + cl->offset[i]);
+        }
     search_free(&c);
     return s;
 }
@@ -260,11 +279,11 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
             for (int64_t k = nm * t / T; k < nm * (t + 1) / T && !bad; k++) {
                 /* room for every particle of the mover's 27 cells */
                 const int64_t i = who[k];
-                const double yi[3] = {y[0][i], y[1][i], y[2][i]};
-                int64_t lo[9], hi[9], most = 0;
-                const int rows = pd_cells_adjacent_rows(&c.c, yi, lo, hi);
-                for (int q = 0; q < rows; q++)
-                    most += hi[q] - lo[q];
+                cell_rows r;
+                rows_around(sim, &c, i, &r);
+                int64_t most = 0;
+                for (int q = 0; q < r.n; q++)
+                    most += r.hi[q] - r.lo[q];
                 if (bn[t] + most > cap) {
                     cap = 2 * (bn[t] + most) + 1024;
                     int32_t *np = realloc(bp[t], (size_t)cap * sizeof(int32_t));
@@ -277,7 +296,8 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
                     if (bad)
                         break;
                 }
-                toff[k + 1] = candidates(sim, &c, reach * reach, i, bp[t] + bn[t], bd[t] + bn[t]);
+                toff[k + 1] =
+                    candidates(sim, &c, &r, reach * reach, i, bp[t] + bn[t], bd[t] + bn[t]);
                 bn[t] += toff[k + 1];
             }
         }
