@@ -140,14 +140,17 @@ static void usage(FILE *out)
             "Other:\n"
             "  --restart RUN.h5      go on from the last complete frame of RUN.h5 for N\n"
             "                        more steps, with its scene (only --steps, --every,\n"
-            "                        --threads, --status, --timing, --strict, -q, -o may\n"
-            "                        be given);\n"
+            "                        --threads, --status, --timing, --strict,\n"
+            "                        --balance-limit, -q, -o may be given);\n"
             "                        RUN.h5 is updated unless -o names another file\n"
             "  --scene FILE          read options from FILE ('option value' lines);\n"
             "                        the command line overrides it\n"
             "  --threads N           OpenMP threads (default: all cores)\n"
             "  --allow-overlap       let a projectile or indenter start inside the body\n"
             "                        (else an error naming the depth and the particle)\n"
+            "  --balance-limit F     stop (exit 1, the frames before kept) when the energy\n"
+            "                        balance drifts from step 0 by more than F times the\n"
+            "                        energy put in; 'off': never (default 1)\n"
             "  --strict              a warning about the scene (a value no solid has, a\n"
             "                        run that ends before first contact, ...) is an\n"
             "                        error\n"
@@ -311,7 +314,7 @@ static int restart_safe(const char *arg)
 {
     static const char *safe[] = {"--restart", "--steps", "--every", "--threads", "--status",
                                  "--timing",  "-q",      "--quiet", "-o",        "--output",
-                                 "--debug",   "--strict", NULL};
+                                 "--debug",   "--strict", "--balance-limit", NULL};
     for (int k = 0; safe[k]; k++) {
         size_t len = strlen(safe[k]);
         if (strncmp(arg, safe[k], len) == 0 && (arg[len] == '\0' || arg[len] == '='))
@@ -404,7 +407,7 @@ static int parse_options(int argc, char **argv, struct options *o)
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
            OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID, OPT_MATERIAL,
            OPT_INTERFACE, OPT_FIBRE, OPT_LAMBDA, OPT_TAU, OPT_YIELD, OPT_BONDLIST,
-           OPT_OVERLAP, OPT_STRICT };
+           OPT_OVERLAP, OPT_STRICT, OPT_BALANCE };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -423,6 +426,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"force-dt", no_argument, 0, OPT_FORCE_DT},
         {"bond-list", no_argument, 0, OPT_BONDLIST},
         {"allow-overlap", no_argument, 0, OPT_OVERLAP},
+        {"balance-limit", required_argument, 0, OPT_BALANCE},
         {"strict", no_argument, 0, OPT_STRICT},
         {"every", required_argument, 0, OPT_EVERY},
         {"threads", required_argument, 0, OPT_THREADS},
@@ -590,6 +594,14 @@ static int parse_options(int argc, char **argv, struct options *o)
         case OPT_STRICT:
             o->strict = 1;
             break;
+        case OPT_BALANCE:
+            if (strcmp(optarg, "off") == 0)
+                o->spec.sc.balance_limit = -1;
+            else if (!pd_parse_double(optarg, &o->spec.sc.balance_limit) ||
+                     !(o->spec.sc.balance_limit > 0))
+                return usage_error("--balance-limit must be a positive number or 'off', not",
+                                   optarg);
+            break;
         case OPT_FORCE_DT:
             o->spec.force_dt = 1;
             break;
@@ -715,19 +727,16 @@ static void progress(int64_t step, int64_t steps, double elapsed)
     fflush(stderr);
 }
 
-/* The status line, with the energy balance (`known`: the energies of
- * this step, already taken for its frame; NULL: taken here); a kinetic
- * energy that ran away from the energy put in is flagged (once). */
-static void status_line(const pd_sim *sim, int64_t steps, int tty, const pd_energy *known)
+/* The status line, with the energy balance of this step's energies e; a
+ * kinetic energy that ran away from the energy put in is flagged (once,
+ * when `flag`: the energy alarm has not stopped the run). */
+static void status_line(const pd_sim *sim, int64_t steps, int tty, const pd_energy *energy,
+                        int flag)
 {
     static int flagged;
-    pd_energy e;
+    const pd_energy e = *energy;
     double ratio;
-    if (known)
-        e = *known;
-    else if (pd_sim_energy(sim, &e, NULL) != PD_OK)
-        return;
-    if (!flagged && pd_energy_runaway(sim, &e, &ratio)) {
+    if (flag && !flagged && pd_energy_runaway(sim, &e, &ratio)) {
         fprintf(stderr,
                 "%s" PROG ": warning: at step %lld the kinetic energy is %.3g times the energy "
                 "put in (step 0 and the work done): the run is unstable; try a smaller time "
@@ -811,6 +820,7 @@ struct held {
     char *cmdline, *text;
     struct options *opts; /* its profiles */
     pd_scene_report report; /* a fresh run's scene at t = 0 */
+    double t_setup;          /* its step 0 (pd_sim_setup), s */
 };
 
 static void release(struct held *h)
@@ -912,6 +922,20 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
                 h->report.frames == 1 ? "" : "s");
 }
 
+/* A fresh run's step 0 (pd_sim_setup), before its file is made: a start
+ * that is mostly penalty energy is one more warning of the scene's. */
+static pd_status start_energy(struct held *h)
+{
+    double t0 = pd_wtime();
+    pd_status s = pd_sim_setup(h->sim);
+    h->t_setup = pd_wtime() - t0; /* the run's wall clock, as before */
+    pd_scene_report *r = &h->report;
+    if (s == PD_OK && r->nwarnings < PD_SCENE_WARNINGS &&
+        pd_sim_start_penalty(h->sim, r->warning[r->nwarnings], sizeof r->warning[0]))
+        r->nwarnings++;
+    return s;
+}
+
 /* Read the body (a restart: the run and its last frame), resolve the
  * scene, set up the run and its file (published before the first step).
  * Returns 0, or the exit status after printing the error. */
@@ -935,8 +959,6 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_scene_resolve(&o->spec, h->p, h->b, o->input);
     if (s == PD_OK && !restart)
         s = pd_scene_inspect(&o->spec, h->p, h->b, &h->report);
-    if (s == PD_OK && o->strict && h->report.nwarnings > 0)
-        s = pd_fail(PD_ERR_INVALID, "%s (--strict)", h->report.warning[0]);
     if (s == PD_OK && restart) {
         s = pd_run_file_load(h->in, h->p, h->b, first, &h->r, h->v0, &h->bits0);
         sc->steps += *first; /* --steps N more */
@@ -945,6 +967,10 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_sim_new(h->p, h->b, sc, &h->sim);
     if (s == PD_OK && restart)
         s = pd_sim_restore(h->sim, *first, &h->r, h->v0, h->bits0);
+    else if (s == PD_OK) /* step 0's forces, and the check of its energy */
+        s = start_energy(h);
+    if (s == PD_OK && o->strict && h->report.nwarnings > 0)
+        s = pd_fail(PD_ERR_INVALID, "%s (--strict)", h->report.warning[0]);
     if (s == PD_OK && (h->text = pd_scene_text(sc)) == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory for the scene's text");
     if (s == PD_OK && restart)
@@ -981,11 +1007,8 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
     const int tty = isatty(STDERR_FILENO) && !o->quiet;
     double t_start = pd_wtime(), t_shown = 0;
     pd_status s = PD_OK;
-    if (!o->restart) {
-        s = pd_sim_setup(sim);
-        if (s == PD_OK && pd_frame_at(sc, 0))
-            s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, NULL);
-    }
+    if (!o->restart && pd_frame_at(sc, 0)) /* pd_sim_setup came in start() */
+        s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, NULL);
     int64_t lost = pd_sim_lost(sim);
     for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
         const int status = ((n - first) % status_every == 0 || n == sc->steps) && !o->quiet;
@@ -1009,11 +1032,14 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
             s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, &e);
             known = s == PD_OK;
         }
-        if (status) {
-            double t0 = pd_wtime(); /* its energy pass is output's time */
-            status_line(sim, sc->steps, tty, known ? &e : NULL);
-            *t_output += pd_wtime() - t0;
-        }
+        double t0 = pd_wtime(); /* a status line's energy pass is output's time */
+        if (s == PD_OK && status && !known)
+            known = pd_sim_energy(sim, &e, NULL) == PD_OK;
+        if (s == PD_OK && known) /* the energy alarm, on every balance taken */
+            s = pd_sim_check_balance(sim, &e);
+        if (status && known) /* with the alarm's step too */
+            status_line(sim, sc->steps, tty, &e, s == PD_OK);
+        *t_output += pd_wtime() - t0;
         if (tty) {
             double now = pd_wtime();
             if (now - t_shown > 0.2 || n == sc->steps) {
@@ -1070,7 +1096,7 @@ int main(int argc, char **argv)
         log_scene(&o, &h, first, nsteps);
     double t_output = 0, t0 = pd_wtime();
     pd_status s = run_steps(&o, &h, first, &t_output);
-    const double wall = pd_wtime() - t0;
+    const double wall = pd_wtime() - t0 + h.t_setup;
     s = finish(&h, s);
     if (s == PD_OK && !o.quiet)
         fprintf(stderr, PROG ": %lld steps in %.3f s (%.3g bond updates/s), contact list builds %lld\n",

@@ -73,6 +73,15 @@ void pd_h5_debug(int on);
 #define PD_LOST_MARGIN_FAC 10.0 /* lost beyond 10 box edges outside the body */
 #define PD_KE_GROWTH 100.0      /* kinetic energy above 100 times the energy
                                    put in: a runaway (unstable) run        */
+#define PD_BALANCE_LIMIT 1.0    /* the energy alarm: the balance drifted from
+                                   step 0 by more than the energy put in
+                                   (pd-run --balance-limit; the evidence is
+                                   in pd-run(1), ENERGY ALARM)              */
+#define PD_PENALTY_STRAIN 1e-6  /* penalty energy at step 0 below that of a
+                                   uniform strain of 1e-6 of the whole body
+                                   is negligible (pd_sim_start_penalty)     */
+#define PD_BALANCE_EVERY 8      /* steps between the alarm's cheap test of
+                                   the kinetic energy (pd_sim_step)         */
 
 /* ---------------------------------------------------------------- particles */
 
@@ -409,6 +418,9 @@ typedef struct {
     double lost_margin;    /* a particle farther than this outside the
                               reference bounding box is lost, m (0: ten
                               times the box's largest edge)              */
+    double balance_limit;  /* the energy alarm's limit, a fraction of the
+                              energy put in (pd_sim_check_balance; 0:
+                              PD_BALANCE_LIMIT, negative: no alarm)      */
     int threads;
     double youngs_modulus; /* E, Pa (0 unless --youngs-modulus gave K)   */
     int nbc;                     /* boundary conditions (pd_bc), in order   */
@@ -736,6 +748,26 @@ double pd_lost_margin_default(const pd_particles *p);
 /* Has the kinetic energy grown past PD_KE_GROWTH times the energy put in
  * (that of step 0 plus the work done)?  Then *ratio says by how much. */
 int pd_energy_runaway(const pd_sim *sim, const pd_energy *e, double *ratio);
+/* The balance's drift from step 0, pd_energy_total(e) - (its value at step
+ * 0), as a fraction of the energy put in (step 0's and the work done):
+ * positive when the run made energy, negative when it lost some. */
+double pd_energy_drift(const pd_sim *sim, const pd_energy *e);
+/* The energy alarm on the energies e of the current step:
+ * PD_ERR_UNSTABLE, naming the step and the drift, when the balance gained
+ * more than sc.balance_limit times the energy put in, or lost as much with
+ * a model that books all its energy (a dissipative one, VES or EPS, loses
+ * what it does not book).  pd_sim_step itself tests every
+ * PD_BALANCE_EVERY steps, on the kinetic energy alone, whether the alarm
+ * must fire (kinetic > (1 + limit) x energy put in bounds the gain from
+ * below), so that a run gone unstable stops before it turns NaN. */
+pd_status pd_sim_check_balance(const pd_sim *sim, const pd_energy *e);
+/* Is the energy of step 0 mostly penalty energy (the contact of pairs, a
+ * projectile's or indenter's overlap) rather than motion?  Then 1 and one
+ * line of text saying so; the scene then starts compressed, not loaded.
+ * Less than the energy of a uniform strain of PD_PENALTY_STRAIN of the
+ * whole body is no penalty (spheres that touch to rounding).
+ * After pd_sim_setup of a fresh run. */
+int pd_sim_start_penalty(const pd_sim *sim, char *text, size_t len);
 
 double *const *pd_sim_forces(const pd_sim *sim);
 const double *pd_sim_s0(const pd_sim *sim);

@@ -33,11 +33,47 @@ with h5py.File(sys.argv[1]) as f:
     i = np.nonzero(f['particles/id'][:] == int(sys.argv[2]))[0][0]
     print(' '.join('%.6f' % v for v in x[i]))" model.h5 "$id"
     assert_output "0.005000 0.005000 0.004000"
-    # meant: it runs, and the scene keeps the choice for a rerun
-    run -0 pd-run -q "${GLASS[@]}" --steps 5 --allow-overlap \
+    # meant: it runs (the energy alarm off: see the next test), and the
+    # scene keeps the choice for a rerun
+    run -0 pd-run -q "${GLASS[@]}" --steps 5 --allow-overlap --balance-limit off \
         --projectile sphere,0.005,0.005,0.0045,0.002,0.001,0,0,-5 model.h5 -o run.h5
     run -0 h5dump -a /scene/options run.h5
     assert_output --partial "allow-overlap"
+}
+
+@test "scene: a start that is mostly penalty energy is said before step 1; the alarm stops its gain" {
+    local deep=(--projectile sphere,0.005,0.005,0.0045,0.002,0.001,0,0,-5 --allow-overlap)
+    # the overlap of the sphere 1.5 mm deep holds 1.19e3 J at step 0, the
+    # sphere's motion 1.25e-2 J: the log says so before the first step
+    run -0 --separate-stderr pd-run "${GLASS[@]}" --steps 20 --balance-limit off "${deep[@]}" \
+        model.h5 -o run.h5
+    [ "$(grep -c warning <<<"$stderr")" -eq 1 ]
+    line=$(grep -n 'warning' <<<"$stderr" | cut -d: -f1)
+    first=$(grep -n 'step 2/20' <<<"$stderr" | cut -d: -f1)
+    [ "$line" -lt "$first" ]
+    [[ "$stderr" =~ warning:\ 1.19e\+03\ J\ of\ the\ 1.19e\+03\ J\ at\ step\ 0\ \(100%\)\ is\ penalty\ energy\ of\ contact\ or\ of\ an\ overlap,\ not\ motion ]]
+    # its explosive first steps make energy: the balance ends at 2.1 times
+    # what it held at step 0, which the alarm (on by default) stops
+    run -0 py "
+with h5py.File(sys.argv[1]) as f:
+    g = max(f['frames'].values(), key=lambda g: g.attrs['step'])
+    a = g.attrs
+    total = sum(a[k] for k in ('kinetic_energy', 'elastic_energy', 'contact_energy',
+                               'released_energy', 'lost_energy', 'projectile_energy')) - a['external_work']
+    print('%.1f' % (total / 1.19e3))" run.h5
+    assert_output "2.1"
+    run -1 --separate-stderr pd-run -q "${GLASS[@]}" --steps 20 "${deep[@]}" model.h5 -o run2.h5
+    assert_one_error '^pd-run: error: at step [0-9]+ the energy balance gained 1.[0-9]+e\+03 J since step 0, 1.[0-9]+ times the energy put in \(1.19e\+03 J\), above --balance-limit 1: the run is unstable'
+    # --strict refuses the start itself, leaving no file
+    run -1 --separate-stderr pd-run -q --strict "${GLASS[@]}" --steps 20 "${deep[@]}" \
+        model.h5 -o run3.h5
+    assert_one_error '^pd-run: error: 1.19e\+03 J of the 1.19e\+03 J at step 0 \(100%\) is penalty energy .* \(--strict\)$'
+    [ ! -e run3.h5 ]
+    assert_no_temp .
+    # a sphere that only touches the body holds no penalty worth a word
+    run -0 --separate-stderr pd-run "${GLASS[@]}" --steps 5 \
+        --projectile sphere,0.005,0.005,0.006,0.002,0.001,0,0,-5 model.h5 -o run4.h5
+    [[ "$stderr" != *"warning"* ]]
 }
 
 @test "scene: an indenter inside the body is refused; one touching the face is not" {

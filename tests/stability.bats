@@ -147,17 +147,101 @@ with h5py.File(sys.argv[1]) as f:
 
 @test "the kinetic energy running away is flagged in the log" {
     make_block
-    # twenty times the stable step: unstable from the first steps
-    run --separate-stderr pd-run --bulk-modulus "$BULK" --status 1 \
+    # twenty times the stable step: unstable from the first steps; with the
+    # energy alarm off, the flag is the warning
+    run --separate-stderr pd-run --bulk-modulus "$BULK" --status 1 --balance-limit off \
         --allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --dt 5e-6 --force-dt \
         --steps 50 model.h5 -o r.h5
     [ "$status" -eq 1 ]
     [[ "$stderr" =~ warning:\ at\ step\ [0-9]+\ the\ kinetic\ energy\ is\ [0-9.e+]+\ times\ the\ energy\ put\ in ]]
-    # and a stable run is never flagged
+    # with the alarm on (the default) it stops the run at step 1 instead,
+    # after that step's status line, without the warning
+    run -1 --separate-stderr pd-run --bulk-modulus "$BULK" --status 1 \
+        --allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --dt 5e-6 --force-dt \
+        --steps 50 model.h5 -o r.h5
+    [[ "${stderr_lines[-1]}" =~ ^pd-run:\ error:\ at\ step\ 1\ the\ energy\ balance\ gained\ .*\ above\ --balance-limit\ 1:\ the\ run\ is\ unstable ]]
+    [[ "${stderr_lines[-2]}" == "pd-run: step 1/50 "* ]]
+    [[ "$stderr" != *"kinetic energy is"* ]]
+    # and a stable run is never flagged, nor stopped (its start is mostly
+    # the overlap's penalty energy, which the log says)
     run --separate-stderr pd-run --bulk-modulus "$BULK" --status 1 \
         --allow-overlap --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 --steps 50 model.h5 -o s.h5
     [ "$status" -eq 0 ]
-    [[ ! "$stderr" =~ warning ]]
+    [[ "$stderr" != *"kinetic energy is"* && "$stderr" != *"error"* ]]
+    [ "$(grep -c warning <<<"$stderr")" -eq 1 ]
+    [[ "$stderr" == *"warning: "*" J at step 0 (100%) is penalty energy"* ]]
+}
+
+# The block at 3 x the stable step of eq. 46 (no failure, nothing lost):
+# pd-run --balance-limit LIMIT STEPS EVERY [OPTIONS...] into three.h5.
+three_times() {
+    local limit=$1 steps=$2 every=$3
+    shift 3
+    local dt
+    dt=$(py "print(repr(3 * float(sys.argv[1])))" "$(stable_dt model.h5)")
+    run --separate-stderr pd-run --bulk-modulus "$BULK" --force-dt --dt "$dt" \
+        --indenter sphere,0.005,0.005,0.013,0.003,1e17,0,0,-10 --lost-margin 1e300 \
+        --balance-limit "$limit" --steps "$steps" --every "$every" "$@" model.h5 -o three.h5
+}
+
+@test "the energy alarm stops a run at 3 x the stable step long before it turns NaN" {
+    make_block
+    # without the alarm the indenter's run at 3 x dt goes NaN (step 143)
+    three_times off 400 4 -q
+    [ "$status" -eq 1 ]
+    assert_one_error '^pd-run: error: the .* of particle [0-9]+ \(id [0-9]+\) is not finite at step ([0-9]+)'
+    nan=$(printf '%s\n' "$stderr" | sed 's/.* at step \([0-9]*\):.*/\1/')
+    # with it (the default limit) the run stops at the first of the alarm's
+    # kinetic-energy tests (every 8 steps; no status line with -q) that sees
+    # the balance gained more than the energy put in
+    three_times 1 400 4 -q
+    [ "$status" -eq 1 ]
+    assert_one_error '^pd-run: error: at step ([0-9]+) the energy balance gained .* J since step 0, .* times the energy put in \(.* J\), above --balance-limit 1: the run is unstable; try a smaller time step'
+    at=$(printf '%s\n' "$stderr" | sed 's/.* at step \([0-9]*\) the.*/\1/')
+    [ "$at" -gt 0 ] && [ $((at % 8)) -eq 0 ] && [ "$at" -lt $((nan / 4)) ]
+    # the frames before it are kept, complete, with a balance that had
+    # already drifted less than the limit; nothing after it
+    run -0 py "
+with h5py.File(sys.argv[1]) as f:
+    done = sorted(g.attrs['step'] for g in f['frames'].values() if g.attrs['complete'] == 1)
+    print(done)" three.h5
+    assert_output "$(py "print(list(range(0, int(sys.argv[1]), 4)))" "$at")"
+    # a status line every step finds it at the first step past the limit,
+    # one step before or at the kinetic test's; its status line is printed
+    three_times 1 400 4 --status 1
+    [ "$status" -eq 1 ]
+    first=$(printf '%s\n' "$stderr" | sed -n 's/.*error: at step \([0-9]*\) the energy balance gained.*/\1/p')
+    [ "$first" -le "$at" ] && [ "$first" -gt $((at - 8)) ]
+    [[ "$stderr" == *"pd-run: step $first/400 "* ]]
+    # even a limit of 1e300 stops it before the NaN: the energy grows
+    # through 1e300 times the energy put in before it overflows
+    three_times 1e300 400 4 -q
+    [ "$status" -eq 1 ]
+    huge=$(printf '%s\n' "$stderr" | sed -n 's/.*error: at step \([0-9]*\) the energy balance gained.*above --balance-limit 1e+300:.*/\1/p')
+    [ "$huge" -gt "$at" ] && [ "$huge" -lt "$nan" ]
+}
+
+@test "--balance-limit: its values, /scene, a restart may change it" {
+    make_block
+    local ind=(--bulk-modulus "$BULK" --indenter sphere,0.005,0.005,0.013,0.003,1e17,0,0,-10)
+    for bad in 0 -1 abc 1e400 ""; do
+        run -2 --separate-stderr pd-run "${ind[@]}" --steps 5 --balance-limit "$bad" model.h5 -o r.h5
+        assert_one_error "^pd-run: error: --balance-limit must be a positive number or 'off', not"
+    done
+    # the default is not written into the scene; another limit, or off, is
+    run -0 pd-run -q "${ind[@]}" --steps 5 model.h5 -o r.h5
+    run -0 h5dump -a /scene/options r.h5
+    refute_output --partial "balance-limit"
+    run -0 pd-run -q "${ind[@]}" --steps 5 --balance-limit 0.5 model.h5 -o r.h5
+    run -0 h5dump -a /scene/options r.h5
+    assert_output --partial 'balance-limit 0.5'
+    run -0 pd-run -q "${ind[@]}" --steps 5 --balance-limit off model.h5 -o r.h5
+    run -0 h5dump -a /scene/options r.h5
+    assert_output --partial 'balance-limit off'
+    # a restart keeps it, or takes another (it changes no physics)
+    run -0 pd-run -q --restart r.h5 --steps 5 --balance-limit 2
+    run -0 h5dump -a /scene/options r.h5
+    assert_output --partial 'balance-limit 2'
 }
 
 @test "--fields energy writes the strain energy density, summing to the elastic energy" {

@@ -1062,12 +1062,12 @@ const pd_model pd_model_lps = {
 const pd_model pd_model_ves = {
     .name = "ves", .kind = PD_MODEL_VES, .state_based = 1, .force = &pd_effect_ves,
     .force_failure = &pd_effect_ves_failure, .stable_dt = pd_lps_stable_dt,
-    .stencil = no_stencil, .history_width = 2, .needs = ves_needs, .takes = lps_takes,
+    .stencil = no_stencil, .dissipative = 1, .history_width = 2, .needs = ves_needs, .takes = lps_takes,
     .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .params = ves_params,
     .describe = ves_describe};
 const pd_model pd_model_eps = {
     .name = "eps", .kind = PD_MODEL_EPS, .state_based = 1, .force = &pd_effect_eps,
     .force_failure = &pd_effect_eps_failure, .stable_dt = pd_lps_stable_dt,
-    .stencil = no_stencil, .history_width = 1, .needs = eps_needs, .takes = lps_takes,
+    .stencil = no_stencil, .dissipative = 1, .history_width = 1, .needs = eps_needs, .takes = lps_takes,
     .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .params = eps_params,
     .describe = eps_describe};

@@ -33,6 +33,9 @@ struct pd_model {
     /* The stencil that can walk the scene's bonds (any body; lib/stencil/
      * checks the body). */
     pd_stencil_kind (*stencil)(const pd_scene *s);
+    int dissipative;         /* 1: it dissipates energy the balance does not
+                                book (a dashpot, plastic flow), so the energy
+                                alarm watches gains only                    */
     int history_width;       /* doubles per directed bond it keeps from step
                                 to step (a restart's bond history); 0: none */
     /* Its own long options (NULL-terminated): those it needs, those it

@@ -171,6 +171,8 @@ pd_status pd_scene_resolve(pd_scene_spec *o, const pd_particles *p, const pd_bon
         sc->contact_skin = PD_CONTACT_SKIN_SPACINGS * p->spacing;
     if (!(sc->lost_margin > 0))
         sc->lost_margin = pd_lost_margin_default(p);
+    if (sc->balance_limit == 0)
+        sc->balance_limit = PD_BALANCE_LIMIT;
     sc->dt_stable = pd_stable_dt(p, b, sc);
     if (sc->has_projectile && !o->has_proj_k)
         sc->proj_k = pd_projectile_default_k(p, b, sc);
@@ -408,6 +410,10 @@ char *pd_scene_text(const pd_scene *s)
                      s->fields == (PD_FIELD_ENERGY | PD_FIELD_STRESS) ? "," : "",
                      s->fields & PD_FIELD_STRESS ? "stress" : "");
     p += sprintf(p, "lost-margin %.17g\n", s->lost_margin);
+    if (s->balance_limit < 0) /* the default is not written: a rerun takes the default */
+        p += sprintf(p, "balance-limit off\n");
+    else if (s->balance_limit != PD_BALANCE_LIMIT)
+        p += sprintf(p, "balance-limit %.17g\n", s->balance_limit);
     if (s->dt > s->dt_stable)
         p += sprintf(p, "force-dt\n");
     if (s->bond_list)

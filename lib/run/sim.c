@@ -10,6 +10,7 @@
  */
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -213,14 +214,86 @@ pd_status pd_sim_setup(pd_sim *sim)
     pd_energy e;
     if (s == PD_OK && (s = pd_sim_energy(sim, &e, NULL)) == PD_OK)
         sim->energy0 = e.kinetic + e.elastic + e.contact + e.projectile;
+    if (s == PD_OK)
+        sim->penalty0 = e.contact;
     return s;
+}
+
+/* The energy of straining the whole body uniformly by PD_PENALTY_STRAIN,
+ * 1/2 K (3 s)^2 V: a penalty energy below it is negligible (two spheres
+ * that touch to rounding). */
+static double strain_energy_scale(const pd_sim *sim)
+{
+    double k = sim->sc.bulk_modulus;
+    if (!(k > 0)) /* c given: c is linear in K */
+        k = sim->sc.c / pd_pmb_c_for(sim->p, 1.0, sim->b->horizon);
+    const double s = PD_PENALTY_STRAIN;
+    return 0.5 * k * 9.0 * s * s * pd_sum_fixed(sim->p->volume, sim->n);
+}
+
+int pd_sim_start_penalty(const pd_sim *sim, char *text, size_t len)
+{
+    const double penalty = sim->penalty0, rest = sim->energy0 - penalty;
+    if (!(penalty > rest) || !(penalty > strain_energy_scale(sim)))
+        return 0;
+    snprintf(text, len,
+             "%.3g J of the %.3g J at step 0 (%.0f%%) is penalty energy of contact or of an "
+             "overlap, not motion: the body starts compressed rather than loaded by the "
+             "scene, and the energy balance counts it as energy put in",
+             penalty, sim->energy0, 100.0 * penalty / sim->energy0);
+    return 1;
+}
+
+/* The energy put in: that of step 0 and the work done on the body. */
+static double energy_in(const pd_sim *sim, double work)
+{
+    return sim->energy0 + fmax(work, 0.0);
 }
 
 int pd_energy_runaway(const pd_sim *sim, const pd_energy *e, double *ratio)
 {
-    double in = sim->energy0 + fmax(e->work, 0.0);
+    double in = energy_in(sim, e->work);
     *ratio = in > 0 ? e->kinetic / in : INFINITY;
     return e->kinetic > PD_KE_GROWTH * in;
+}
+
+double pd_energy_drift(const pd_sim *sim, const pd_energy *e)
+{
+    const double in = energy_in(sim, e->work), d = pd_energy_total(e) - sim->energy0;
+    if (in > 0)
+        return d / in;
+    return d == 0 ? 0 : copysign(INFINITY, d);
+}
+
+pd_status pd_sim_check_balance(const pd_sim *sim, const pd_energy *e)
+{
+    const double limit = sim->sc.balance_limit, drift = pd_energy_drift(sim, e);
+    const int gain = drift > limit, loss = -drift > limit && !pd_model_of(sim->sc.model)->dissipative;
+    if (!(limit > 0) || !(gain || loss))
+        return PD_OK;
+    return pd_fail(PD_ERR_UNSTABLE,
+                   "at step %lld the energy balance %s %.3g J since step 0, %.3g times the "
+                   "energy put in (%.3g J), above --balance-limit %g: the run is unstable; try "
+                   "a smaller time step (--dt, --safety) or contact stiffness",
+                   (long long)sim->step, gain ? "gained" : "lost",
+                   fabs(pd_energy_total(e) - sim->energy0), fabs(drift),
+                   energy_in(sim, e->work), limit);
+}
+
+/* The alarm's test between status lines: a kinetic energy above (1 +
+ * limit) times the energy put in means the balance gained more than the
+ * limit (every other term of pd_energy_total is non-negative, and -work
+ * is at least -max(work, 0)); only then are the energies taken. */
+static pd_status watch_balance(const pd_sim *sim)
+{
+    const double limit = sim->sc.balance_limit;
+    if (!(limit > 0) || sim->step % PD_BALANCE_EVERY != 0)
+        return PD_OK;
+    if (!(pd_sim_kinetic(sim) > (1.0 + limit) * energy_in(sim, sim->work)))
+        return PD_OK;
+    pd_energy e;
+    pd_status s = pd_sim_energy(sim, &e, NULL);
+    return s == PD_OK ? pd_sim_check_balance(sim, &e) : s;
 }
 
 /* Particles that left the box: lost, when the energy is sane (their bonds
@@ -417,7 +490,7 @@ pd_status pd_sim_step(pd_sim *sim)
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
     if (!bad && (s = constrain(sim, PD_PHASE_KICK2)) != PD_OK)
         return s;
-    return bad ? not_finite(sim) : PD_OK;
+    return bad ? not_finite(sim) : watch_balance(sim);
 }
 
 int pd_sim_stencil(const pd_sim *sim)
