@@ -366,6 +366,14 @@ static pd_status write_path(const struct options *o, const pd_particles *p, doub
         free(path);
         return pd_fail(PD_ERR_NOMEM, "out of memory");
     }
+    if (slash && slash != o->path) { /* PREFIX's folder, as pd-dump2vtk -o makes its own */
+        snprintf(path, len, "%.*s", (int)(slash - o->path), o->path);
+        pd_status s = pd_make_dirs(path);
+        if (s != PD_OK) {
+            free(path);
+            return s;
+        }
+    }
     snprintf(path, len, "%s_%08lld.vtu", o->path, (long long)step);
     snprintf(*file, len, "%s", slash ? path + (slash - o->path) + 1 : path);
     pd_vtk_frame fr = {.n = p->n, .position = pos, .displacement = disp, .damage = damage,

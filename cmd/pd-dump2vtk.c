@@ -14,12 +14,10 @@
  * Every optional field a frame holds (pd-run --fields) goes along:
  * strain_energy_density, stress (a 9-component tensor) and von_mises.
  */
-#include <errno.h>
 #include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "pd.h"
 
@@ -115,33 +113,6 @@ static char *output_name(const struct options *o)
     return name;
 }
 
-/* mkdir -p: create `dir` and its missing parents; an existing path must be a
- * directory. */
-static pd_status make_dirs(const char *dir)
-{
-    char *path = strdup(dir);
-    if (path == NULL)
-        return pd_fail(PD_ERR_NOMEM, "out of memory");
-    pd_status s = PD_OK;
-    size_t len = strlen(path);
-    for (size_t k = 1; k <= len && s == PD_OK; k++) {
-        if (path[k] != '/' && path[k] != '\0')
-            continue;
-        char keep = path[k];
-        path[k] = '\0';
-        struct stat st;
-        if (stat(path, &st) == 0) {
-            if (!S_ISDIR(st.st_mode))
-                s = pd_fail(PD_ERR_IO, "cannot make directory '%s': '%s' is not a directory",
-                            dir, path);
-        } else if (mkdir(path, 0777) != 0 && errno != EEXIST) {
-            s = pd_fail(PD_ERR_IO, "cannot make directory '%s': %s", path, strerror(errno));
-        }
-        path[k] = keep;
-    }
-    free(path);
-    return s;
-}
 
 
 /* Per-particle work arrays of one frame. */
@@ -255,7 +226,7 @@ int main(int argc, char **argv)
             s = pd_fail(PD_ERR_NOMEM, "out of memory");
     }
     if (s == PD_OK)
-        s = make_dirs(o.dir);
+        s = pd_make_dirs(o.dir);
     for (int64_t k = 0; k < nframes && s == PD_OK; k++)
         s = dump_frame(f, p, frames[k], o.dir, name, &d, &b, &intact, &files[k], &times[k]);
     size_t len = strlen(o.dir) + strlen(name) + 8;

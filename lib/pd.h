@@ -1187,6 +1187,9 @@ double pd_sum_fixed(const double *x, int64_t n);
  * equal contiguous parts, as OpenMP's static schedule cuts a loop (all of
  * them outside one). */
 void pd_thread_share(int64_t n, int64_t *lo, int64_t *hi);
+/* mkdir -p: create `dir` and its missing parents (mode 0777 less the
+ * umask); an existing path must be a directory.  PD_ERR_IO naming it. */
+pd_status pd_make_dirs(const char *dir);
 /* Peak resident memory of this process, bytes (0 if unknown). */
 int64_t pd_peak_rss(void);
 

@@ -437,12 +437,18 @@ EOF
         run -0 read_vtu "out/$file"
         assert_output "$count displacement damage material id Points connectivity offsets types"
     done < both.txt
-    # with --front a front flag; no directory is created
+    # with --front a front flag
     pd-crack-tip --front --path out/front "$RUN" > /dev/null
     run -0 read_vtu out/front_00000100.vtu
     assert_output --regexp '^[1-9][0-9]* displacement damage material id front Points'
-    expect_runtime_error "nodir" pd-crack-tip --path nodir/crack "$RUN"
-    [ ! -e nodir ]
+    # PREFIX's folder is made, with its parents, as pd-dump2vtk -o does
+    pd-crack-tip --path new/deeper/crack "$RUN" > /dev/null
+    [ -d new/deeper ] && [ -s new/deeper/crack.pvd ]
+    run -0 read_vtu new/deeper/crack_00000100.vtu
+    # a part of it that is a file is one error line
+    touch plain
+    expect_runtime_error "cannot make directory 'plain/sub': 'plain' is not a directory" \
+        pd-crack-tip --path plain/sub/crack "$RUN"
 }
 
 @test "a missing input or one that is not a pd-h5 run is a runtime error with one line" {

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -118,4 +119,30 @@ double pd_sum_fixed(const double *x, int64_t n)
             total += part[c];
     }
     return total;
+}
+
+pd_status pd_make_dirs(const char *dir)
+{
+    char *path = strdup(dir);
+    if (path == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    pd_status s = PD_OK;
+    size_t len = strlen(path);
+    for (size_t k = 1; k <= len && s == PD_OK; k++) {
+        if (path[k] != '/' && path[k] != '\0')
+            continue;
+        char keep = path[k];
+        path[k] = '\0';
+        struct stat st;
+        if (stat(path, &st) == 0) {
+            if (!S_ISDIR(st.st_mode))
+                s = pd_fail(PD_ERR_IO, "cannot make directory '%s': '%s' is not a directory",
+                            dir, path);
+        } else if (mkdir(path, 0777) != 0 && errno != EEXIST) {
+            s = pd_fail(PD_ERR_IO, "cannot make directory '%s': %s", path, strerror(errno));
+        }
+        path[k] = keep;
+    }
+    free(path);
+    return s;
 }
