@@ -11,22 +11,81 @@
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <unistd.h>
 
 #include "pd.h"
 
+/* Where the option being read came from, "FILE:LINE: " of a scene file
+ * (pd-run --scene), or NULL: the command line. */
+static const char *cli_where;
+/* The arguments a scene file gave (pd-run: pd_scene_args), each with its
+ * line, for cli_where. */
+static struct {
+    const char *file;
+    char *const *args;
+    const int *line;
+    int count;
+    char where[512];
+} cli_scene;
+
+
 /* A usage error: one line on stderr, exit status 2. */
 static inline int usage_error(const char *msg, const char *arg)
 {
-    fprintf(stderr, PROG ": error: %s%s%s%s (see '" PROG " --help')\n", msg, arg ? " '" : "",
-            arg ? arg : "", arg ? "'" : "");
+    fprintf(stderr, PROG ": error: %s%s%s%s%s (see '" PROG " --help')\n",
+            cli_where ? cli_where : "", msg, arg ? " '" : "", arg ? arg : "", arg ? "'" : "");
     return 2;
 }
 
-/* getopt_long's '?' (its own message is switched off by opterr = 0). */
-static inline int option_error(char **argv)
+/* cli_where of argv[k]: a scene's argument is found by its address, which
+ * getopt's permutation of argv keeps.  Returns 0, or 2 after a usage
+ * error when a scene's option took its value from past its own line. */
+static inline int cli_locate(char **argv, int k, const char *value)
 {
-    return usage_error("unknown option or missing value in", argv[optind - 1]);
+    cli_where = NULL;
+    for (int m = 0; k >= 1 && m < cli_scene.count; m++)
+        if (cli_scene.args[m] == argv[k]) {
+            snprintf(cli_scene.where, sizeof cli_scene.where, "%s:%d: ", cli_scene.file,
+                     cli_scene.line[m]);
+            cli_where = cli_scene.where;
+            if (value && !(m + 1 < cli_scene.count && cli_scene.args[m + 1] == value &&
+                           cli_scene.line[m + 1] == cli_scene.line[m]))
+                return usage_error("missing value for", argv[k]);
+            return 0;
+        }
+    return 0;
+}
+
+/* getopt_long's '?' (its own message is switched off by opterr = 0): a
+ * known option without its value, or an unknown one, with the nearest
+ * long option when one is near (a typo). */
+static inline int option_error(char **argv, const struct option *longopts)
+{
+    const char *arg = argv[optind - 1];
+    if (strncmp(arg, "--", 2) != 0 || arg[2] == '\0')
+        return usage_error("unknown option or missing value in", arg);
+    const size_t len = strcspn(arg + 2, "=");
+    const char *best = NULL;
+    size_t best_d = (size_t)-1;
+    char msg[256];
+    for (const struct option *o = longopts; o->name; o++) {
+        if (strlen(o->name) == len && strncmp(o->name, arg + 2, len) == 0) {
+            if (arg[2 + len] != '=')
+                return usage_error("missing value for", arg);
+            snprintf(msg, sizeof msg, "--%s takes no value, not '%s'", o->name, arg);
+            return usage_error(msg, NULL);
+        }
+        size_t d = pd_edit_distance(arg + 2, len, o->name, strlen(o->name));
+        if (d < best_d) {
+            best_d = d;
+            best = o->name;
+        }
+    }
+    if (best == NULL || best_d > 1 + len / 4)
+        return usage_error("unknown option", arg);
+    snprintf(msg, sizeof msg, "unknown option '%.*s'; did you mean '--%s'?", (int)(len + 2) > 200 ? 200 : (int)len + 2, arg, best);
+    return usage_error(msg, NULL);
 }
 
 /* The long options every program has, with codes above any program's own. */
@@ -37,7 +96,8 @@ enum { OPT_DEBUG = 1000 };
 
 /* --help and --version (both exit 0), --debug, and what getopt_long could
  * not parse (exit status 2); -1 when `c` is one of the program's own. */
-static inline int common_option(int c, char **argv, void (*usage)(FILE *), int *debug)
+static inline int common_option(int c, char **argv, const struct option *longopts,
+                                void (*usage)(FILE *), int *debug)
 {
     switch (c) {
     case 'h':
@@ -51,7 +111,7 @@ static inline int common_option(int c, char **argv, void (*usage)(FILE *), int *
         return 0;
     case '?':
     case ':':
-        return option_error(argv);
+        return option_error(argv, longopts);
     }
     return -1;
 }
@@ -93,9 +153,18 @@ static inline int next_option(int argc, char **argv, const char *shortopts,
     opterr = 0;
     for (;;) {
         int c = getopt_long(argc, argv, shortopts, longopts, NULL);
-        if (c == -1)
+        if (c == -1) {
+            cli_where = NULL; /* what follows is about the whole command */
             return -1;
-        int rc = common_option(c, argv, usage, debug);
+        }
+        /* the option's argument (its value may be the next one) */
+        const int apart = optarg && optind >= 2 && optarg == argv[optind - 1] && c != '?';
+        int rc = cli_locate(argv, apart ? optind - 2 : optind - 1, apart ? optarg : NULL);
+        if (rc) {
+            *status = rc;
+            return -1;
+        }
+        rc = common_option(c, argv, longopts, usage, debug);
         if (rc < 0)
             return c;
         if (rc > 0) {

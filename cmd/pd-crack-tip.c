@@ -155,7 +155,7 @@ static int parse_options(int argc, char **argv, struct options *o)
             o->path = optarg;
             break;
         default:
-            return option_error(argv);
+            return option_error(argv, longopts);
         }
     }
     if (status)

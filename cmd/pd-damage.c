@@ -87,7 +87,7 @@ static int parse_options(int argc, char **argv, struct options *o)
             o->no_precrack = 1;
             break;
         default:
-            return option_error(argv);
+            return option_error(argv, longopts);
         }
     }
     if (status)

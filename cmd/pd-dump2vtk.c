@@ -75,7 +75,7 @@ static int parse_options(int argc, char **argv, struct options *o)
             o->quiet = 1;
             break;
         default:
-            return option_error(argv);
+            return option_error(argv, longopts);
         }
     }
     if (status)

@@ -298,12 +298,14 @@ static int parse_fields(const char *arg, unsigned *fields)
 /* The strings read from the scene file, freed at exit. */
 static char **scene_strings;
 static int scene_count;
+static int *scene_lines;
 
 static void free_scene_strings(void)
 {
     for (int k = 0; k < scene_count; k++)
         free(scene_strings[k]);
     free(scene_strings);
+    free(scene_lines);
 }
 
 /* argv with the scene file's options first, then the command line's (so the
@@ -369,15 +371,19 @@ static int expand_scene(int argc, char **argv, int *nargc, char ***nargv)
     char **sv = NULL;
     pd_status st = PD_OK;
     if (text)
-        st = pd_scene_args_text(text, restart, &sc, &sv);
+        st = pd_scene_args_text(text, restart, &sc, &sv, &scene_lines);
     else if (scene)
-        st = pd_scene_args(scene, &sc, &sv);
+        st = pd_scene_args(scene, &sc, &sv, &scene_lines);
     free(text);
     if (st != PD_OK)
         return fail();
     scene_strings = sv;
     scene_count = sc;
     atexit(free_scene_strings);
+    cli_scene.file = restart ? restart : scene; /* its errors name FILE:LINE */
+    cli_scene.args = sv;
+    cli_scene.line = scene_lines;
+    cli_scene.count = sc;
     char **v = malloc((size_t)(argc + sc + 1) * sizeof *v);
     if (v == NULL)
         return 1;
@@ -691,7 +697,7 @@ static int parse_options(int argc, char **argv, struct options *o)
             o->quiet = 1;
             break;
         default:
-            return option_error(argv);
+            return option_error(argv, longopts);
         }
     }
     if (status)

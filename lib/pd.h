@@ -1171,12 +1171,14 @@ int pd_parse_doubles(const char *s, double *out, int n);
 /* The command line as one line of history (quoted where needed); free it. */
 char *pd_join_argv(int argc, char **argv);
 /* A scene file as long options: "option value" lines become "--option",
- * "value"; `#` starts a comment.  *argv and its strings are malloc'ed. */
-pd_status pd_scene_args(const char *path, int *argc, char ***argv);
+ * "value"; `#` starts a comment.  *argv and its strings are malloc'ed;
+ * with `lines`, so is *lines, the line of the file each of them came from. */
+pd_status pd_scene_args(const char *path, int *argc, char ***argv, int **lines);
 /* Physical memory of this machine, bytes (a large guess if unknown). */
 double pd_memory_bytes(void);
 /* The same from a scene's text (the /scene/options of a run). */
-pd_status pd_scene_args_text(const char *text, const char *name, int *argc, char ***argv);
+pd_status pd_scene_args_text(const char *text, const char *name, int *argc, char ***argv,
+                             int **lines);
 /* Wall clock, s. */
 double pd_wtime(void);
 /* The sum of x[0..n-1] in fixed chunks of PD_SUM_CHUNK, summed in order
@@ -1187,6 +1189,10 @@ double pd_sum_fixed(const double *x, int64_t n);
  * equal contiguous parts, as OpenMP's static schedule cuts a loop (all of
  * them outside one). */
 void pd_thread_share(int64_t n, int64_t *lo, int64_t *hi);
+/* The Levenshtein distance between a[0..la) and b[0..lb): the fewest
+ * insertions, deletions and substitutions that turn one into the other
+ * (the nearest option to a typo); lengths up to 63, longer ones are far. */
+size_t pd_edit_distance(const char *a, size_t la, const char *b, size_t lb);
 /* mkdir -p: create `dir` and its missing parents (mode 0777 less the
  * umask); an existing path must be a directory.  PD_ERR_IO naming it. */
 pd_status pd_make_dirs(const char *dir);

@@ -255,6 +255,43 @@ with h5py.File(sys.argv[1], 'a') as f:
     expect_runtime_error "id [0-9]+ appears twice" pd-run --c 1e21 --steps 1 model.h5 -o r.h5
 }
 
+@test "a typo suggests the nearest option; a missing or stray value is named" {
+    make_block
+    expect_usage_error "unknown option '--stps'; did you mean '--steps'\?" \
+        pd-run --c 1e21 --stps 1 model.h5 -o r.h5
+    expect_usage_error "unknown option '--balnce-limit'; did you mean '--balance-limit'\?" \
+        pd-run --c 1e21 --steps 1 --balnce-limit=2 model.h5 -o r.h5
+    # far from every option: no guess
+    expect_usage_error "unknown option '--frobnicate' \(see" pd-run --frobnicate model.h5
+    expect_usage_error "missing value for '--dt'" pd-run --c 1e21 --steps 1 model.h5 --dt
+    expect_usage_error "--contact takes no value, not '--contact=yes'" \
+        pd-run --c 1e21 --steps 1 --contact=yes model.h5
+    # the other programs share it
+    expect_usage_error "unknown option '--spcing'; did you mean '--spacing'\?" \
+        pd-lattice --spcing 0.001 -o x.h5
+    expect_usage_error "unknown option '--horizn'; did you mean '--horizon'\?" \
+        pd-bonds --horizn 0.0015 lattice.h5 -o x.h5
+    [ ! -e r.h5 ] && [ ! -e x.h5 ]
+}
+
+@test "an error from a scene file names FILE:LINE" {
+    make_block
+    printf 'c 1e21\n# a comment\n\ndt abc\nsteps 5\n' > a.scene
+    expect_usage_error "a.scene:4: --dt must be a positive number, not 'abc'" \
+        pd-run --scene a.scene model.h5 -o r.h5
+    printf 'c 1e21\nstrcit\nsteps 5\n' > b.scene
+    expect_usage_error "b.scene:2: unknown option '--strcit'; did you mean '--strict'\?" \
+        pd-run --scene b.scene model.h5 -o r.h5
+    # an option without its value does not take the command line's next word
+    printf 'c 1e21\nsteps\n' > c.scene
+    expect_usage_error "c.scene:2: missing value for '--steps'" pd-run --scene c.scene model.h5 -o r.h5
+    # the command line's own errors name no line, wherever --scene stands
+    printf 'c 1e21\nsteps 5\n' > good.scene
+    run -2 --separate-stderr pd-run --dt abc --scene good.scene model.h5 -o r.h5
+    assert_one_error "^pd-run: error: --dt must be a positive number, not 'abc'"
+    [ ! -e r.h5 ]
+}
+
 @test "a missing --scene file is a runtime error naming it" {
     make_block
     expect_runtime_error "nosuch\.scene" pd-run --scene nosuch.scene --c 1e21 --steps 1 model.h5 -o r.h5

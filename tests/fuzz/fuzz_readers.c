@@ -489,7 +489,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         text[size - at] = '\0';
         int argc = 0;
         char **argv = NULL;
-        if (pd_scene_args_text(text, "fuzz.h5", &argc, &argv) == PD_OK) {
+        if (pd_scene_args_text(text, "fuzz.h5", &argc, &argv, NULL) == PD_OK) {
             for (int k = 0; k < argc; k++)
                 free(argv[k]);
             free(argv);
