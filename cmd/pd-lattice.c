@@ -272,6 +272,28 @@ static void free_set_names(struct options *o)
         free(o->set_names[k]);
 }
 
+/* One warning per region with a face on a lattice plane to rounding. */
+static void warn_rounding(const struct options *o)
+{
+    static const char *kind[] = {"--box", "--cylinder", "--sphere"};
+    char what[PD_SET_NAME_MAX + 32], text[512];
+    for (int k = 0; k < o->nregions; k++)
+        if (pd_region_rounding(&o->regions[k], o->lp.spacing,
+                               o->regions[k].subtract ? "--subtract" : kind[o->regions[k].kind],
+                               text, sizeof text))
+            fprintf(stderr, PROG ": warning: %s\n", text);
+    for (int k = 0; k < o->nsets; k++) {
+        snprintf(what, sizeof what, "--set %s", o->set_names[k]);
+        if (pd_region_rounding(&o->set_regions[k], o->lp.spacing, what, text, sizeof text))
+            fprintf(stderr, PROG ": warning: %s\n", text);
+    }
+    for (int k = 0; k < o->npaints; k++) {
+        snprintf(what, sizeof what, "--material-region %d", (int)o->paint_ids[k]);
+        if (pd_region_rounding(&o->paint_regions[k], o->lp.spacing, what, text, sizeof text))
+            fprintf(stderr, PROG ": warning: %s\n", text);
+    }
+}
+
 int main(int argc, char **argv)
 {
     /* before getopt_long permutes argv */
@@ -291,6 +313,8 @@ int main(int argc, char **argv)
     pd_status s = o.dimension == 2
                       ? pd_plate_make(o.regions, o.nregions, &o.lp, o.thickness, &p)
                       : pd_lattice_make(o.regions, o.nregions, &o.lp, &p);
+    if (s == PD_OK && !o.quiet)
+        warn_rounding(&o);
     for (int k = 0; k < o.npaints && s == PD_OK; k++)
         pd_material_paint(p, &o.paint_regions[k], o.paint_ids[k]);
     if (s == PD_OK && (sets = pd_sets_new()) == NULL)

@@ -140,6 +140,14 @@ typedef struct {
  * every subtract region; z outermost, x innermost, as LAMMPS create_atoms. */
 pd_status pd_lattice_make(const pd_region *regions, int nregions,
                           const pd_lattice_params *lp, pd_particles **out);
+/* Does a plane face of region r (a box's faces, a cylinder's ends) lie
+ * within PD_LATTICE_ROUNDING spacings h of a lattice plane n h without
+ * being on it, so that whether that plane's sites are in is decided by
+ * rounding (--box 0,0.0045,... at 0.0005: 9 x 0.0005 is
+ * 0.0045000000000000005, beyond the face)?  Then 1 and one line of text
+ * (`what` names the region, e.g. "--box") on the first such face. */
+#define PD_LATTICE_ROUNDING 1e-6
+int pd_region_rounding(const pd_region *r, double h, const char *what, char *text, size_t len);
 /* A 2-D plate of thickness H (m, > 0): the square lattice of sites
  * (i spacing, j spacing, 0), anchored at the origin, where the point
  * (x, y, 0) is in the body (the regions are cut at z = 0; none there is an

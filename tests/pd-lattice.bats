@@ -159,6 +159,33 @@ print('ok')" b.h5
     assert_output ok
 }
 
+@test "a face on a lattice plane only to rounding is warned about, with the exact remedy" {
+    # 9 x 0.0005 = 0.0045000000000000005 > 0.0045: 9 planes in y and z, not 10
+    run -0 --separate-stderr pd-lattice --spacing 0.0005 --density 1 \
+        --box 0,0.0195,0,0.0045,0,0.0045 -o a.h5
+    [ "$(grep -c warning <<<"$stderr")" -eq 1 ]
+    [[ "$stderr" == *"warning: --box: its face y = 0.0045 lies 1.7e-15 spacings from the lattice plane y = 9 x 0.0005 = 0.0045000000000000005, whose sites rounding puts outside; to say which you mean, give the face half a spacing away (0.00475 keeps them, 0.00425 leaves them out); 1 more face like it"* ]]
+    [[ "$stderr" == *"3240 particles"* ]]
+    # the remedy: faces half a spacing beyond the planes meant, no warning
+    run -0 --separate-stderr pd-lattice --spacing 0.0005 --density 1 \
+        --box -0.00025,0.01975,-0.00025,0.00475,-0.00025,0.00475 -o b.h5
+    [[ "$stderr" != *warning* && "$stderr" == *"4000 particles"* ]]
+    # a face exactly on its plane (10 x 0.001 is 0.01) is not warned about
+    run -0 --separate-stderr pd-lattice --spacing 0.001 --density 1 "${BOX[@]}" -o c.h5
+    [[ "$stderr" != *warning* ]]
+    # sets, material regions and cylinder ends are checked too; -q is quiet
+    run -0 --separate-stderr pd-lattice --spacing 0.0001 --density 1 \
+        --cylinder z,0,0,0.0005,0,0.0003 --set low=box,-1,1,-1,1,-1,0.0003 \
+        --material-region 2=box,-1,1,-1,1,-1,0.0003 -o d.h5
+    [ "$(grep -c warning <<<"$stderr")" -eq 3 ]
+    [[ "$stderr" == *"warning: --cylinder: its face z = 0.0003 "*"puts outside"* ]]
+    [[ "$stderr" == *"warning: --set low: its face z = 0.0003 "*"puts outside"* ]]
+    [[ "$stderr" == *"warning: --material-region 2: its face z = 0.0003 "*"puts outside"* ]]
+    run -0 --separate-stderr pd-lattice -q --spacing 0.0005 --density 1 \
+        --box 0,0.0195,0,0.0045,0,0.0045 -o e.h5
+    [ -z "$stderr" ]
+}
+
 @test "a sphere holds exactly the sites within its radius, surface included" {
     # radius 3 spacings around a site: the 123 integer points with
     # i^2 + j^2 + k^2 <= 9 (spacing 0.5 so that every value is exact)

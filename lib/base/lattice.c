@@ -16,7 +16,9 @@
  * spacing^2 H; the perturbation stays in the plane.
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include <gsl/gsl_rng.h>
 
@@ -259,4 +261,47 @@ pd_status pd_lattice_order(const pd_particles *p, int64_t **order)
     for (int d = 0; d < 3; d++)
         free(lc[d]);
     return s;
+}
+
+int pd_region_rounding(const pd_region *r, double h, const char *what, char *text, size_t len)
+{
+    double face[6];
+    int axis[6], upper[6], nf = 0;
+    if (r->kind == PD_REGION_BOX)
+        for (int k = 0; k < 6; k++) {
+            face[nf] = r->p[k];
+            axis[nf] = k / 2;
+            upper[nf++] = k % 2;
+        }
+    else if (r->kind == PD_REGION_CYLINDER)
+        for (int k = 0; k < 2; k++) {
+            face[nf] = r->p[3 + k];
+            axis[nf] = r->axis;
+            upper[nf++] = k;
+        }
+    int found = 0, more = 0;
+    for (int k = 0; k < nf; k++) {
+        const double n = nearbyint(face[k] / h), site = n * h;
+        const double off = fabs(site - face[k]) / h;
+        if (site == face[k] || !(off < PD_LATTICE_ROUNDING))
+            continue;
+        if (found++) {
+            more++;
+            continue;
+        }
+        const int in = upper[k] ? site <= face[k] : site >= face[k];
+        const double out = face[k] + (upper[k] ? -0.5 : 0.5) * h,
+                     keep = face[k] + (upper[k] ? 0.5 : -0.5) * h;
+        snprintf(text, len,
+                 "%s: its face %c = %g lies %.2g spacings from the lattice plane %c = %.0f x "
+                 "%g = %.17g, whose sites rounding puts %s; to say which you mean, give the "
+                 "face half a spacing away (%g keeps them, %g leaves them out)",
+                 what, 'x' + axis[k], face[k], off, 'x' + axis[k], n, h, site,
+                 in ? "inside" : "outside", keep, out);
+    }
+    if (more) {
+        size_t used = strlen(text);
+        snprintf(text + used, len - used, "; %d more face%s like it", more, more > 1 ? "s" : "");
+    }
+    return found > 0;
 }
