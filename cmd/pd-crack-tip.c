@@ -34,6 +34,7 @@
 #include "cli.h"
 
 #define MAX_WINDOW 100000 /* frames on each side of a speed's window */
+#define MAX_REGIONS 16    /* --region, at most                       */
 
 struct options {
     const char *input;
@@ -46,6 +47,9 @@ struct options {
     int from_point;    /* --distance point (else from the axis line)   */
     const char *plot;  /* --plot FILE.png, or NULL                     */
     const char *path;  /* --path PREFIX, or NULL                       */
+    pd_region regions[MAX_REGIONS]; /* --region: damage only inside their union */
+    int nregions;
+    int connected;     /* --connected: only the pre-crack's damaged cluster */
     int debug;
 };
 
@@ -77,6 +81,13 @@ static void usage(FILE *out)
             "      --plot FILE.png draw the crack extension against time (gnuplot)\n"
             "      --path PREFIX   the damaged zone of each frame as PREFIX_STEP.vtu and\n"
             "                      PREFIX.pvd for ParaView (with --front, a front flag)\n"
+            "      --region KIND,...  only the damage inside a region of the reference\n"
+            "                      body: box,XLO,XHI,YLO,YHI,ZLO,ZHI, cylinder,AXIS,C1,C2,\n"
+            "                      R,LO,HI or sphere,X,Y,Z,R, m, as pd-lattice's (several:\n"
+            "                      their union)\n"
+            "      --connected     only the damaged cluster of the pre-crack: particles\n"
+            "                      reached from it through damaged neighbours within the\n"
+            "                      horizon (needs pd-bonds --crack)\n"
             "      --debug         print HDF5's own error stack (and gnuplot's messages)\n"
             "  -h, --help          show this help\n"
             "  -V, --version       show the version\n",
@@ -96,7 +107,8 @@ static int parse_axis(const char *s, int *axis)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_FRONT = 256, OPT_CENTER, OPT_DISTANCE, OPT_PLOT, OPT_PATH };
+    enum { OPT_FRONT = 256, OPT_CENTER, OPT_DISTANCE, OPT_PLOT, OPT_PATH, OPT_REGION,
+           OPT_CONNECTED };
     static const struct option longopts[] = {
         {"axis", required_argument, 0, 'a'},
         {"threshold", required_argument, 0, 't'},
@@ -106,6 +118,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"distance", required_argument, 0, OPT_DISTANCE},
         {"plot", required_argument, 0, OPT_PLOT},
         {"path", required_argument, 0, OPT_PATH},
+        {"region", required_argument, 0, OPT_REGION},
+        {"connected", no_argument, 0, OPT_CONNECTED},
         COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
@@ -153,6 +167,19 @@ static int parse_options(int argc, char **argv, struct options *o)
             if (optarg[0] == '\0' || optarg[strlen(optarg) - 1] == '/')
                 return usage_error("--path needs a file name prefix, not", optarg);
             o->path = optarg;
+            break;
+        case OPT_REGION:
+            if (o->nregions == MAX_REGIONS)
+                return usage_error("--region is given at most 16 times; one more:", optarg);
+            if (pd_region_parse_tagged(optarg, &o->regions[o->nregions]) != PD_OK ||
+                o->regions[o->nregions].subtract)
+                return usage_error("--region needs box,..., cylinder,... or sphere,... as "
+                                   "pd-lattice's regions, not",
+                                   optarg);
+            o->nregions++;
+            break;
+        case OPT_CONNECTED:
+            o->connected = 1;
             break;
         default:
             return option_error(argv, longopts);
@@ -389,7 +416,7 @@ static pd_status write_path(const struct options *o, const pd_particles *p, doub
 /* Per-particle work arrays of one frame. */
 struct frame_data {
     double *disp[3], *pos[3], *damage;
-    uint8_t *front;
+    uint8_t *front, *keep;
     int64_t *rows;
 };
 
@@ -398,7 +425,8 @@ static pd_status frame_data_alloc(struct frame_data *d, int64_t n)
     memset(d, 0, sizeof *d);
     size_t m = (size_t)(n > 0 ? n : 1);
     int ok = (d->damage = malloc(m * sizeof(double))) != NULL &&
-             (d->front = calloc(m, 1)) != NULL && (d->rows = malloc(m * sizeof(int64_t))) != NULL;
+             (d->front = calloc(m, 1)) != NULL && (d->keep = calloc(m, 1)) != NULL &&
+             (d->rows = malloc(m * sizeof(int64_t))) != NULL;
     for (int k = 0; k < 3; k++)
         ok &= (d->disp[k] = malloc(m * sizeof(double))) != NULL &&
               (d->pos[k] = malloc(m * sizeof(double))) != NULL;
@@ -413,6 +441,7 @@ static void frame_data_free(struct frame_data *d)
     }
     free(d->damage);
     free(d->front);
+    free(d->keep);
     free(d->rows);
 }
 
@@ -432,6 +461,32 @@ static pd_status check_damage_data(const pd_file *f, const char *name, int64_t *
     return pd_list_frames(f, nframes, frames);
 }
 
+/* --region and --connected: the damage of the particles they leave out is
+ * set to 0, below any threshold, for the tips, the front and the path. */
+static pd_status only_chosen(const struct options *o, const pd_file *f, const pd_particles *p,
+                             pd_bonds **b, struct frame_data *d)
+{
+    for (int64_t i = 0; i < p->n; i++) {
+        const double x[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
+        int in = o->nregions == 0;
+        for (int r = 0; r < o->nregions && !in; r++)
+            in = pd_region_inside(&o->regions[r], x);
+        d->keep[i] = (uint8_t)in;
+    }
+    pd_status st = PD_OK;
+    int64_t nkept;
+    if (o->connected && *b == NULL)
+        st = pd_read_bonds(f, p, b);
+    if (st == PD_OK && o->connected)
+        st = pd_crack_connected(p, *b, d->damage, o->threshold, d->keep, &nkept);
+    if (st != PD_OK)
+        return st;
+    for (int64_t i = 0; i < p->n; i++)
+        if (!d->keep[i])
+            d->damage[i] = 0;
+    return PD_OK;
+}
+
 /* Read frame k and put its tips or front into the series. */
 static pd_status one_frame(const struct options *o, const pd_file *f, const pd_particles *p,
                            const char *frame, int64_t k, struct frame_data *d, pd_bonds **b,
@@ -442,6 +497,8 @@ static pd_status one_frame(const struct options *o, const pd_file *f, const pd_p
     if ((st = pd_read_frame_info(f, frame, &fi)) != PD_OK ||
         (st = pd_read_frame_vectors(f, frame, p->n, d->disp, NULL)) != PD_OK ||
         (st = pd_read_frame_damage(f, p, frame, b, intact, d->damage)) != PD_OK)
+        return st;
+    if ((o->nregions > 0 || o->connected) && (st = only_chosen(o, f, p, b, d)) != PD_OK)
         return st;
     s->step[k] = fi.step;
     s->time[k] = fi.time;

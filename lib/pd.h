@@ -1155,6 +1155,16 @@ pd_status pd_crack_speed(int64_t n, const double *time, const double *da, int wi
  * threshold; else 0.  *nfront counts the front. */
 pd_status pd_crack_front(const pd_particles *p, const pd_bonds *b, const double *damage,
                          double threshold, uint8_t *front, int64_t *nfront);
+/* The damaged cluster of the pre-crack (pd-crack-tip --connected): on
+ * entry keep[i] = 1 where particle i may belong (all, or those inside a
+ * region), on return keep[i] = 1 for the particles with damage > threshold,
+ * allowed by keep, that are reached from a pre-cracked particle (one with a
+ * bond of b->precrack; itself damaged and allowed) through such particles
+ * in each other's reference families (every bond of b, intact or not, so
+ * within the horizon); 0 elsewhere.  *nkept counts them.  PD_ERR_INVALID
+ * when b has no pre-crack. */
+pd_status pd_crack_connected(const pd_particles *p, const pd_bonds *b, const double *damage,
+                             double threshold, uint8_t *keep, int64_t *nkept);
 /* Measures of a front at the current positions y = x + u (u NULL:
  * reference positions).  With from_axis, r is the distance of y from the
  * line through `center` along `axis` (the radius of a ring or penny crack

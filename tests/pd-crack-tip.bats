@@ -318,6 +318,62 @@ EOF
     assert_output "$(printf '0.000000000e+00 %.0s0.000000000e+00 0.000000000e+00 0.000000000e+00\n' 1 2 3)"
 }
 
+@test "--connected and --region: the notch crack's tip and speed come out alone" {
+    # the pre-cracked plate of the test above (crack ends at 7 and 13 mm
+    # on y = 5.5 mm); by hand, in the frames of step 2 and 4: damage at a
+    # loaded point (a blob at x <= 1 mm, y >= 9 mm, more than a horizon from
+    # the crack), a damaged bottom face (y = 0) that moves down 0.1 mm a
+    # frame, and in frame 4 the crack grown to x = 15 mm
+    pd-lattice -q --spacing 0.001 --density 2200 --box 0,0.02,0,0.01,0,0.002 -o plate.h5
+    pd-bonds -q --horizon 0.0030001 --crack segment,0.0065,0.0055,0.0135,0.0055 plate.h5 \
+        -o cracked.h5
+    pd-run -q --bulk-modulus 14.9e9 --steps 4 --every 2 cracked.h5 -o beam.h5
+    run -0 "$PY" - beam.h5 <<'EOF'
+import sys, h5py, numpy as np
+with h5py.File(sys.argv[1], "r+") as f:
+    x = f["particles/position"][:]
+    n = x.shape[0]
+    fr = f["frames"]
+    blob = (x[:, 0] <= 0.0010001) & (x[:, 1] >= 0.0089999)
+    face = x[:, 1] <= 1e-9
+    grown = (x[:, 0] >= 0.0139999) & (x[:, 0] <= 0.0150001) & (np.abs(x[:, 1] - 0.0055) < 0.0006)
+    for key, k in (("00000002", 1), ("00000004", 2)):
+        d = fr[key]["damage"][:]
+        d[blob | face] = 0.8
+        if k == 2:
+            d[grown] = 0.5
+        del fr[key]["damage"]
+        fr[key]["damage"] = d
+        u = np.zeros((n, 3))
+        u[face, 1] = -1e-4 * k
+        fr[key]["displacement"][...] = u
+    print(blob.sum(), face.sum(), grown.sum())
+EOF
+    read -r nblob nface ngrown <<<"$output"
+    [ "$nblob" -eq 12 ] && [ "$nface" -eq 63 ] && [ "$ngrown" -eq 12 ]
+    # all the damage: the blob and the face pull the lower tips away
+    pd-crack-tip beam.h5 > all.txt
+    run -0 check_table all.txt "0 0.007 0.013 39" "2 0 0.02 $((39 + nblob + nface))" \
+        "4 0 0.02 $((39 + nblob + nface + ngrown))"
+    # the pre-crack's cluster: its ends, and the growth to 15 mm
+    pd-crack-tip --connected beam.h5 > one.txt
+    run -0 check_table one.txt "0 0.007 0.013 39" "2 0.007 0.013 39" "4 0.007 0.015 $((39 + ngrown))"
+    # along y the face moving down at 0.1 mm a frame is a "speed" of the
+    # lower tip; the crack's own lower tip stands still
+    pd-crack-tip --axis y beam.h5 > ya.txt
+    run -0 awk 'NR == 4 { print $3, $7 }' ya.txt
+    [[ "$output" == "-2.000000000e-04 "* && "$output" != *" 0.000000000e+00" ]]
+    pd-crack-tip --axis y --connected beam.h5 > yc.txt
+    run -0 awk 'NR > 1 { print $3, $4, $7, $8 }' yc.txt
+    assert_output "$(printf '5.000000000e-03 6.000000000e-03 0.000000000e+00 0.000000000e+00\n%.0s' 1 2 3)"
+    # a region keeps only what is inside it (reference positions)
+    pd-crack-tip --region box,0.004,0.02,0.002,0.01,-1,1 beam.h5 > r.txt
+    run -0 check_table r.txt "0 0.007 0.013 39" "2 0.007 0.013 39" "4 0.007 0.015 $((39 + ngrown))"
+    # a body without a pre-crack has no cluster to follow
+    expect_runtime_error "has no pre-crack" pd-crack-tip --connected "$RUN"
+    expect_usage_error "--region needs box" pd-crack-tip --region cube,1 beam.h5
+}
+
 @test "a stored damage field and a recomputed one give the same table; stdin works" {
     pd-crack-tip --threshold 0.1 "$RUN" > computed.txt
     pd-damage "$RUN" -o with.h5 > /dev/null

@@ -182,3 +182,47 @@ pd_status pd_crack_front_stats(const pd_particles *p, double *const u[3], const 
     }
     return PD_OK;
 }
+
+pd_status pd_crack_connected(const pd_particles *p, const pd_bonds *b, const double *damage,
+                             double threshold, uint8_t *keep, int64_t *nkept)
+{
+    *nkept = 0;
+    if (b == NULL || b->n != p->n)
+        return pd_fail(PD_ERR_INVALID, "the damaged cluster needs the bonds of the particles");
+    if (b->precrack == NULL)
+        return pd_fail(PD_ERR_INVALID,
+                       "the body has no pre-crack (pd-bonds --crack) for a cluster to grow from");
+    int64_t *queue = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof *queue);
+    if (queue == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld particles", (long long)p->n);
+    int64_t head = 0, tail = 0;
+    /* keep: 1 allowed and not reached, 2 reached; the pre-cracked first */
+    for (int64_t i = 0; i < p->n; i++) {
+        if (!(keep[i] && damage[i] > threshold)) {
+            keep[i] = 0;
+            continue;
+        }
+        int cracked = 0;
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1] && !cracked; k++)
+            cracked = (int)((b->precrack[k >> 6] >> (k & 63)) & 1);
+        if (cracked) {
+            keep[i] = 2;
+            queue[tail++] = i;
+        }
+    }
+    while (head < tail) { /* breadth first through damaged neighbours */
+        const int64_t i = queue[head++];
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            const int64_t j = b->neighbor[k];
+            if (keep[j] == 1) {
+                keep[j] = 2;
+                queue[tail++] = j;
+            }
+        }
+    }
+    for (int64_t i = 0; i < p->n; i++)
+        keep[i] = keep[i] == 2;
+    free(queue);
+    *nkept = tail;
+    return PD_OK;
+}
