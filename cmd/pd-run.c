@@ -104,6 +104,9 @@ static void usage(FILE *out)
             "                        PROFILE: a number; points:T0,V0,T1,V1,... (piecewise\n"
             "                        linear); table:FILE ('time value' lines); or\n"
             "                        pulses:V1,D1,V2,D2,... (V1 for D1 s from t = 0, ...)\n"
+            "  --damping C[,SET]     viscous damping, the force density -C rho v (C in 1/s)\n"
+            "                        on every particle or on those of SET; the energy it\n"
+            "                        takes is booked as damped=\n"
             "  --projectile sphere,X,Y,Z,R,MASS,VX,VY,VZ[,K]\n"
             "                        rigid sphere the body pushes back: centre X,Y,Z (m)\n"
             "                        at t = 0, radius R (m), mass MASS (kg), velocity\n"
@@ -413,7 +416,7 @@ static int parse_options(int argc, char **argv, struct options *o)
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
            OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID, OPT_MATERIAL,
            OPT_INTERFACE, OPT_FIBRE, OPT_LAMBDA, OPT_TAU, OPT_YIELD, OPT_BONDLIST,
-           OPT_OVERLAP, OPT_STRICT, OPT_BALANCE };
+           OPT_OVERLAP, OPT_STRICT, OPT_BALANCE, OPT_DAMPING };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -433,6 +436,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"bond-list", no_argument, 0, OPT_BONDLIST},
         {"allow-overlap", no_argument, 0, OPT_OVERLAP},
         {"balance-limit", required_argument, 0, OPT_BALANCE},
+        {"damping", required_argument, 0, OPT_DAMPING},
         {"strict", no_argument, 0, OPT_STRICT},
         {"every", required_argument, 0, OPT_EVERY},
         {"threads", required_argument, 0, OPT_THREADS},
@@ -600,6 +604,19 @@ static int parse_options(int argc, char **argv, struct options *o)
         case OPT_STRICT:
             o->strict = 1;
             break;
+        case OPT_DAMPING: {
+            const char *comma = strchr(optarg, ',');
+            char num[64];
+            size_t len = comma ? (size_t)(comma - optarg) : strlen(optarg);
+            snprintf(num, sizeof num, "%.*s", (int)(len < 63 ? len : 63), optarg);
+            double *c = &o->spec.sc.damping;
+            if (len >= 63 || !pd_parse_double(num, c) || !(*c > 0) ||
+                (comma && (strlen(comma + 1) >= PD_SET_NAME_MAX || !pd_set_name_ok(comma + 1))))
+                return usage_error("--damping needs C[,SET], C > 0 in 1/s and SET a set name, not",
+                                   optarg);
+            snprintf(o->spec.sc.damping_set, PD_SET_NAME_MAX, "%s", comma ? comma + 1 : "");
+            break;
+        }
         case OPT_BALANCE:
             if (strcmp(optarg, "off") == 0)
                 o->spec.sc.balance_limit = -1;
@@ -761,6 +778,8 @@ static void status_line(const pd_sim *sim, int64_t steps, int tty, const pd_ener
         fprintf(stderr, PROG ": projectile at (%.6e, %.6e, %.6e) m, velocity (%.6e, %.6e, %.6e) "
                         "m/s, kinetic energy %.6e J\n",
                 px[0], px[1], px[2], pv[0], pv[1], pv[2], e.projectile);
+    if (pd_sim_damping(sim) > 0)
+        fprintf(stderr, PROG ": damping took %.6e J so far\n", e.damped);
     if (e.lost > 0 || pd_sim_lost(sim) > 0)
         fprintf(stderr, PROG ": %lld particles lost so far, carrying %.6e J\n",
                 (long long)pd_sim_lost(sim), e.lost);
@@ -891,6 +910,9 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
                 pd_sim_stencil(sim), pd_sim_stencil_tiles(sim) ? " in AVX-512 tiles" : "",
                 sc->has_contact ? ", with the contact of its pairs" : "");
     log_constants(p, sc, o);
+    if (sc->damping > 0)
+        fprintf(stderr, PROG ": --damping %g 1/s (-C rho v) on %s\n", sc->damping,
+                sc->damping_set[0] ? sc->damping_set : "every particle");
     for (int k = 0; k < o->nbc; k++) {
         const pd_set *set = pd_sets_find(h->sets, o->bc[k].set);
         char *prof = pd_profile_text(&o->bc[k].profile);

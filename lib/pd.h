@@ -426,6 +426,10 @@ typedef struct {
     double lost_margin;    /* a particle farther than this outside the
                               reference bounding box is lost, m (0: ten
                               times the box's largest edge)              */
+    double damping;        /* C of the viscous damping -C rho v, 1/s (0:
+                              none; pd-run --damping, lib/effects/damping.c) */
+    char damping_set[64];  /* its set (PD_SET_NAME_MAX), or "": every
+                              particle                                  */
     double balance_limit;  /* the energy alarm's limit, a fraction of the
                               energy put in (pd_sim_check_balance; 0:
                               PD_BALANCE_LIMIT, negative: no alarm)      */
@@ -687,6 +691,7 @@ typedef struct {
     double lost;     /* the kinetic energy lost particles carried away        */
     double work;     /* work done on the body by the moving indenter          */
     double projectile; /* kinetic energy of the projectile, 1/2 M |V|^2     */
+    double damped;   /* the energy --damping took (its power integrated)     */
 } pd_energy;
 
 /* The energies of the current state; with `density` (n values, may be
@@ -710,7 +715,8 @@ pd_status pd_sim_stress(const pd_sim *sim, double *stress);
 /* The von Mises stress of a 3x3 tensor (of its symmetric part), Pa. */
 double pd_von_mises(const double s[9]);
 /* The balance kinetic + elastic + contact + released + lost - work
- * (+ projectile, the sphere's kinetic energy, with --projectile). */
+ * (+ projectile, the sphere's kinetic energy, with --projectile; + damped,
+ * with --damping). */
 double pd_energy_total(const pd_energy *e);
 int64_t pd_sim_broken(const pd_sim *sim);      /* broken bonds (pairs) */
 double pd_sim_max_damage(const pd_sim *sim);
@@ -733,6 +739,10 @@ typedef struct {
     double lost_energy;          /* pd_energy.lost so far, J          */
     double energy0;              /* kinetic + elastic + contact at
                                     step 0, J                         */
+    int has_damping;
+    double damping[2];           /* pd_energy.damped so far, J, and the
+                                    damping's power at the last force
+                                    evaluation, W                     */
     uint8_t *lost;               /* n flags: particle lost (NULL: none) */
     int has_projectile;
     double projectile[9];        /* the projectile's centre (m), velocity
@@ -897,6 +907,8 @@ const char *pd_bc_option(pd_bc_kind kind);
 double pd_projectile_default_k(const pd_particles *p, const pd_bonds *b, const pd_scene *s);
 /* The projectile's centre (m) and velocity (m/s) now; 0 when there is none. */
 int pd_sim_projectile(const pd_sim *sim, double x[3], double v[3]);
+/* The scene's --damping C, 1/s (0: none). */
+double pd_sim_damping(const pd_sim *sim);
 
 /* ---------------------------------------------------------------- files */
 
@@ -963,6 +975,7 @@ typedef struct {
     int has_projectile;             /* attributes projectile_position, */
     double projectile_position[3];  /* m, and projectile_velocity, m/s */
     double projectile_velocity[3];
+    int has_damping;                /* attribute damped_energy          */
 } pd_frame_info;
 
 /* Optional per-particle fields of frames, asked for with pd-run --fields. */
@@ -982,7 +995,7 @@ typedef struct {
     const double *von_mises;      /* N values, Pa                           */
 } pd_frame_fields;
 /* Not a field: frames laid out with the projectile's attributes. */
-enum { PD_FRAME_PROJECTILE = 1u << 16 };
+enum { PD_FRAME_PROJECTILE = 1u << 16, PD_FRAME_DAMPING = 1u << 17 };
 
 /* Lay out every frame a run will write (steps[k] at times[k]) before the
  * first step, so that writing them later changes no structure of the file;
@@ -999,6 +1012,8 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
 /* Lay out the projectile's state in the restart slots (after
  * pd_plan_restart; nothing when it is there already). */
 pd_status pd_plan_restart_projectile(pd_file *f);
+/* Lay out the damping's sums (pd_restart.damping) in the restart slots. */
+pd_status pd_plan_restart_damping(pd_file *f);
 /* Lay out the model's bond history, `width` doubles for each of `nbonds`
  * directed bonds, in the restart slots (nothing when it is there). */
 pd_status pd_plan_restart_history(pd_file *f, int64_t nbonds, int width);

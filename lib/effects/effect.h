@@ -20,6 +20,7 @@ extern const pd_effect pd_effect_indenter;
 extern const pd_effect pd_effect_body_force;
 extern const pd_effect pd_effect_prescribed;
 extern const pd_effect pd_effect_projectile;
+extern const pd_effect pd_effect_damping;
 
 /* The declarable effects in step order, NULL-terminated (effects.c). */
 extern const pd_effect *const pd_effects[];

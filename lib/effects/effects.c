@@ -7,4 +7,4 @@
 
 const pd_effect *const pd_effects[] = {&pd_effect_contact,    &pd_effect_indenter,
                                        &pd_effect_body_force, &pd_effect_prescribed,
-                                       &pd_effect_projectile, NULL};
+                                       &pd_effect_projectile, &pd_effect_damping, NULL};

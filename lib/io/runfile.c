@@ -97,7 +97,9 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
     /* every frame laid out now, then the file under its final name: a run
      * killed at any moment leaves it readable with its complete frames */
     if (s == PD_OK)
-        s = plan_frames(out, p, b, sc, sc->fields | (sc->has_projectile ? PD_FRAME_PROJECTILE : 0),
+        s = plan_frames(out, p, b, sc,
+                        sc->fields | (sc->has_projectile ? PD_FRAME_PROJECTILE : 0) |
+                            (sc->damping > 0 ? PD_FRAME_DAMPING : 0),
                         first, !restart);
     /* two restart slots, so that a kill while one is written leaves the
      * other, of the last complete frame; a fresh run of one frame needs
@@ -107,6 +109,8 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
         s = pd_plan_restart(out, p->n, sc->has_failure, sc->has_contact, slots);
     if (s == PD_OK && sc->has_projectile)
         s = pd_plan_restart_projectile(out);
+    if (s == PD_OK && sc->damping > 0)
+        s = pd_plan_restart_damping(out);
     const int width = pd_model_history_width(pd_model_of(sc->model));
     if (s == PD_OK && width > 0 && b->count > 0)
         s = pd_plan_restart_history(out, b->count, width);
@@ -121,6 +125,7 @@ pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds 
     pd_frame_info fi = {.step = pd_sim_stepno(sim), .time = pd_sim_time(sim),
                         .broken = pd_sim_broken(sim), .lost = pd_sim_lost(sim)};
     fi.has_projectile = pd_sim_projectile(sim, fi.projectile_position, fi.projectile_velocity);
+    fi.has_damping = pd_sim_damping(sim) > 0;
     size_t n = (size_t)(p->n > 0 ? p->n : 1);
     double *density = NULL, *stress = NULL, *mises = NULL;
     if ((fields & PD_FIELD_ENERGY) && (density = malloc(n * sizeof(double))) == NULL)

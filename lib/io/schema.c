@@ -855,6 +855,8 @@ static pd_status lay_out_frame(pd_file *f, int64_t n, int64_t nbonds, int64_t st
         (s = pd_h5_write_attr_doubles(g, "projectile_position", zeros, 3)) == PD_OK &&
         (s = pd_h5_write_attr_doubles(g, "projectile_velocity", zeros, 3)) == PD_OK)
         s = pd_h5_write_attr_doubles(g, "projectile_energy", zeros, 1);
+    if (s == PD_OK && (fields & PD_FRAME_DAMPING))
+        s = pd_h5_write_attr_doubles(g, "damped_energy", zeros, 1);
     H5Gclose(g);
     return s;
 }
@@ -880,7 +882,8 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
     if (!pd_h5_has_link(f->fid, path)) { /* not laid out: lay out this one */
         unsigned fields = (ff->energy_density ? PD_FIELD_ENERGY : 0) |
                           (ff->stress && ff->von_mises ? PD_FIELD_STRESS : 0) |
-                          (fi->has_projectile ? PD_FRAME_PROJECTILE : 0);
+                          (fi->has_projectile ? PD_FRAME_PROJECTILE : 0) |
+                          (fi->has_damping ? PD_FRAME_DAMPING : 0);
         pd_status s = lay_out_frame(f, p->n, nbonds, fi->step, fi->time, fields);
         if (s != PD_OK)
             return s;
@@ -933,6 +936,8 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
             s = pd_h5_update_attr(g, "projectile_energy", H5T_NATIVE_DOUBLE,
                                   &pf.energy.projectile);
     }
+    if (s == PD_OK && fi->has_damping)
+        s = pd_h5_update_attr(g, "damped_energy", H5T_NATIVE_DOUBLE, &e.damped);
     /* the frame whole on disk first, then marked complete */
     if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
         s = pd_fail(PD_ERR_IO, "cannot write frame %s (disk full?)", path);
@@ -1146,6 +1151,10 @@ pd_status pd_read_frame_info(const pd_file *f, const char *name, pd_frame_info *
             (s = pd_h5_read_attr_doubles(g, "projectile_velocity", fi->projectile_velocity, 3)) ==
                 PD_OK)
             s = pd_h5_read_attr_double(g, "projectile_energy", &fi->energy.projectile);
+    }
+    if (s == PD_OK && pd_h5_has_attr(g, "damped_energy")) {
+        fi->has_damping = 1;
+        s = pd_h5_read_attr_double(g, "damped_energy", &fi->energy.damped);
     }
     H5Gclose(g);
     if (s != PD_OK)
@@ -1434,6 +1443,8 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
         s = pd_h5_update_attr(g, "lost_particles", H5T_NATIVE_INT64, &nlost);
     if (s == PD_OK && r->has_projectile)
         s = pd_h5_update_attr(g, "projectile", H5T_NATIVE_DOUBLE, sums.projectile);
+    if (s == PD_OK && r->has_damping)
+        s = pd_h5_update_attr(g, "damping", H5T_NATIVE_DOUBLE, sums.damping);
     if (s == PD_OK && r->bond_history)
         s = pd_h5_write_into(g, "bond_history", H5T_NATIVE_DOUBLE, r->bond_history);
     if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
@@ -1510,6 +1521,10 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
         int64_t nlost = 0;
         if (s == PD_OK && pd_h5_has_attr(g, "lost_particles"))
             s = pd_h5_read_attr_int(g, "lost_particles", &nlost);
+        if (s == PD_OK && pd_h5_has_attr(g, "damping")) {
+            r->has_damping = 1;
+            s = pd_h5_read_attr_doubles(g, "damping", r->damping, 2);
+        }
         if (s == PD_OK && pd_h5_has_attr(g, "projectile")) {
             r->has_projectile = 1;
             s = pd_h5_read_attr_doubles(g, "projectile", r->projectile, 9);
@@ -1544,7 +1559,8 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
     return s;
 }
 
-pd_status pd_plan_restart_projectile(pd_file *f)
+/* Restart attribute `name` of `count` zeros in each slot that lacks it. */
+static pd_status plan_restart_attr(pd_file *f, const char *name, int count)
 {
     double zeros[9] = {0};
     pd_status s = PD_OK;
@@ -1556,11 +1572,21 @@ pd_status pd_plan_restart_projectile(pd_file *f)
         hid_t g = H5Gopen2(f->fid, path, H5P_DEFAULT);
         if (g < 0)
             return pd_fail(PD_ERR_IO, "'%s': cannot open %s", f->name, path);
-        if (!pd_h5_has_attr(g, "projectile"))
-            s = pd_h5_write_attr_doubles(g, "projectile", zeros, 9);
+        if (!pd_h5_has_attr(g, name))
+            s = pd_h5_write_attr_doubles(g, name, zeros, count);
         H5Gclose(g);
     }
     return s;
+}
+
+pd_status pd_plan_restart_damping(pd_file *f)
+{
+    return plan_restart_attr(f, "damping", 2);
+}
+
+pd_status pd_plan_restart_projectile(pd_file *f)
+{
+    return plan_restart_attr(f, "projectile", 9);
 }
 
 pd_status pd_plan_restart_history(pd_file *f, int64_t nbonds, int width)

@@ -409,6 +409,9 @@ char *pd_scene_text(const pd_scene *s)
         p += sprintf(p, "fields %s%s%s\n", s->fields & PD_FIELD_ENERGY ? "energy" : "",
                      s->fields == (PD_FIELD_ENERGY | PD_FIELD_STRESS) ? "," : "",
                      s->fields & PD_FIELD_STRESS ? "stress" : "");
+    if (s->damping > 0)
+        p += sprintf(p, "damping %.17g%s%s\n", s->damping, s->damping_set[0] ? "," : "",
+                     s->damping_set);
     p += sprintf(p, "lost-margin %.17g\n", s->lost_margin);
     if (s->balance_limit < 0) /* the default is not written: a rerun takes the default */
         p += sprintf(p, "balance-limit off\n");

@@ -148,8 +148,8 @@ void pd_sim_free(pd_sim *sim)
  * in is integrated into the work with the trapezoidal rule over the step. */
 static pd_status compute_forces(pd_sim *sim)
 {
-    double before = sim->power;
-    sim->power = 0;
+    double before = sim->power, damp_before = sim->damp_power;
+    sim->power = sim->damp_power = 0;
     if (!sim->f_zeroed)
         for (int d = 0; d < 3; d++)
             memset(sim->f[d], 0, (size_t)sim->n * sizeof(double));
@@ -168,8 +168,10 @@ static pd_status compute_forces(pd_sim *sim)
         for (int64_t i = 0; i < sim->n; i++)
             if (sim->lost[i])
                 sim->f[0][i] = sim->f[1][i] = sim->f[2][i] = 0;
-    if (!sim->setup)
+    if (!sim->setup) {
         sim->work += 0.5 * sim->sc.dt * (before + sim->power);
+        sim->damped += 0.5 * sim->sc.dt * (damp_before + sim->damp_power);
+    }
     return PD_OK;
 }
 
@@ -243,6 +245,9 @@ int pd_sim_start_penalty(const pd_sim *sim, char *text, size_t len)
              penalty, sim->energy0, 100.0 * penalty / sim->energy0);
     return 1;
 }
+
+_Static_assert(sizeof(((pd_scene *)0)->damping_set) == PD_SET_NAME_MAX,
+              "pd_scene.damping_set holds a set name");
 
 /* The energy put in: that of step 0 and the work done on the body. */
 static double energy_in(const pd_sim *sim, double work)
@@ -553,6 +558,7 @@ pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density)
     e->released = sim->released;
     e->lost = sim->lost_energy;
     e->work = sim->work;
+    e->damped = sim->damped;
     if (sim->has_projectile)
         e->projectile = 0.5 * sim->sc.proj_mass *
                         (sim->proj_v[0] * sim->proj_v[0] + sim->proj_v[1] * sim->proj_v[1] +
@@ -580,7 +586,7 @@ double pd_von_mises(const double s[9])
 double pd_energy_total(const pd_energy *e)
 {
     return e->kinetic + e->elastic + e->contact + e->released + e->lost - e->work +
-           e->projectile;
+           e->projectile + e->damped;
 }
 
 void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
@@ -590,6 +596,9 @@ void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
     r->power = sim->power;
     r->lost_energy = sim->lost_energy;
     r->energy0 = sim->energy0;
+    r->has_damping = sim->sc.damping > 0;
+    r->damping[0] = sim->damped;
+    r->damping[1] = sim->damp_power;
     r->lost = sim->lost;
     for (int d = 0; d < 3; d++) {
         r->position[d] = sim->y[d];
@@ -642,6 +651,10 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
     sim->power = r->power;
     sim->lost_energy = r->lost_energy;
     sim->energy0 = r->energy0;
+    if (r->has_damping) {
+        sim->damped = r->damping[0];
+        sim->damp_power = r->damping[1];
+    }
     if (r->lost) {
         free(sim->lost);
         if ((sim->lost = malloc((size_t)sim->n)) == NULL)
@@ -656,4 +669,9 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
         if (sim->effects[k]->restore)
             s = sim->effects[k]->restore(sim, sim->state[k], r);
     return s;
+}
+
+double pd_sim_damping(const pd_sim *sim)
+{
+    return sim->sc.damping;
 }

@@ -107,6 +107,8 @@ struct pd_sim {
     double released;    /* energy of the bonds broken so far, J          */
     double energy0;     /* kinetic + elastic + contact at step 0, J      */
     double penalty0;    /* its contact share (pairs, overlaps), J        */
+    double damped;      /* the energy --damping took so far, J           */
+    double damp_power;  /* its power at this step's forces, W            */
     double box_lo[3];   /* a particle outside [box_lo, box_hi] is lost, m */
     double box_hi[3];   /* m                                             */
     uint8_t *lost;      /* n flags (1: lost), NULL until the first loss  */
