@@ -145,7 +145,8 @@ void pd_sim_free(pd_sim *sim)
 }
 
 /* All force densities at the current positions; the power the effects put
- * in is integrated into the work with the trapezoidal rule over the step. */
+ * in is integrated into the work, and the power --damping takes into
+ * pd_energy.damped, with the trapezoidal rule over the step. */
 static pd_status compute_forces(pd_sim *sim)
 {
     double before = sim->power, damp_before = sim->damp_power;
