@@ -34,6 +34,7 @@ struct options {
     pd_scene_spec spec; /* the scene as given (lib/run/scene.c)      */
     int has_steps, has_status, has_output;
     int64_t status_every;
+    int64_t series_every; /* --series N; 0: the status interval */
     const char *input;
     const char *output;
     const char *restart; /* --restart RUN.h5: go on from its last frame */
@@ -136,6 +137,11 @@ static void usage(FILE *out)
             "                        at rest (default 10 x the box's largest edge)\n"
             "  --every N             a frame every N steps; 0 = only the last (default 0)\n"
             "Output:\n"
+            "  --series N            a row of the time series (/series: energies, damage,\n"
+            "                        each set's displacement and reaction force, the\n"
+            "                        projectile's and indenter's motion and force; read\n"
+            "                        with pd-series) every N steps and at the last\n"
+            "                        (default: the status interval)\n"
             "  --fields LIST         optional per-particle fields of each frame, a comma\n"
             "                        list of: energy (strain_energy_density, J/m^3),\n"
             "                        stress (the peridynamic stress tensor and its von\n"
@@ -143,7 +149,7 @@ static void usage(FILE *out)
             "Other:\n"
             "  --restart RUN.h5      go on from the last complete frame of RUN.h5 for N\n"
             "                        more steps, with its scene (only --steps, --every,\n"
-            "                        --threads, --status, --timing, --strict,\n"
+            "                        --series, --threads, --status, --timing, --strict,\n"
             "                        --balance-limit, -q, -o may be given);\n"
             "                        RUN.h5 is updated unless -o names another file\n"
             "  --scene FILE          read options from FILE ('option value' lines);\n"
@@ -317,9 +323,10 @@ static void free_scene_strings(void)
  * neither the physics nor the steps already taken. */
 static int restart_safe(const char *arg)
 {
-    static const char *safe[] = {"--restart", "--steps", "--every", "--threads", "--status",
-                                 "--timing",  "-q",      "--quiet", "-o",        "--output",
-                                 "--debug",   "--strict", "--balance-limit", NULL};
+    static const char *safe[] = {"--restart", "--steps",  "--every",         "--threads",
+                                 "--status",  "--series", "--timing",        "-q",
+                                 "--quiet",   "-o",       "--output",        "--debug",
+                                 "--strict",  "--balance-limit", NULL};
     for (int k = 0; safe[k]; k++) {
         size_t len = strlen(safe[k]);
         if (strncmp(arg, safe[k], len) == 0 && (arg[len] == '\0' || arg[len] == '='))
@@ -416,7 +423,7 @@ static int parse_options(int argc, char **argv, struct options *o)
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
            OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID, OPT_MATERIAL,
            OPT_INTERFACE, OPT_FIBRE, OPT_LAMBDA, OPT_TAU, OPT_YIELD, OPT_BONDLIST,
-           OPT_OVERLAP, OPT_STRICT, OPT_BALANCE, OPT_DAMPING };
+           OPT_OVERLAP, OPT_STRICT, OPT_BALANCE, OPT_DAMPING, OPT_SERIES };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -439,6 +446,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"damping", required_argument, 0, OPT_DAMPING},
         {"strict", no_argument, 0, OPT_STRICT},
         {"every", required_argument, 0, OPT_EVERY},
+        {"series", required_argument, 0, OPT_SERIES},
         {"threads", required_argument, 0, OPT_THREADS},
         {"status", required_argument, 0, OPT_STATUS},
         {"timing", no_argument, 0, OPT_TIMING},
@@ -644,6 +652,11 @@ static int parse_options(int argc, char **argv, struct options *o)
             o->status_every = iv;
             o->has_status = 1;
             break;
+        case OPT_SERIES:
+            if (!pd_parse_int64(optarg, &iv) || iv < 1)
+                return usage_error("--series must be a positive integer, not", optarg);
+            o->series_every = iv;
+            break;
         case OPT_TIMING:
             o->timing = 1;
             break;
@@ -791,6 +804,20 @@ static pd_status timed_frame(pd_file *out, const pd_particles *p, const pd_bonds
 {
     double t0 = pd_wtime();
     pd_status s = pd_run_file_frame(out, p, b, sim, fields, energy);
+    *t_out += pd_wtime() - t0;
+    return s;
+}
+
+/* The time series' row of the step, with the energies it took (e may be
+ * NULL), its time booked as output's. */
+static pd_status timed_sample(pd_file *out, pd_sim *sim, double *t_out, pd_energy *e)
+{
+    double t0 = pd_wtime();
+    pd_energy mine;
+    pd_energy *energy = e ? e : &mine;
+    pd_status s = pd_sim_energy(sim, energy, NULL);
+    if (s == PD_OK)
+        s = pd_run_file_sample(out, sim, energy);
     *t_out += pd_wtime() - t0;
     return s;
 }
@@ -964,6 +991,12 @@ static pd_status start_energy(struct held *h)
     return s;
 }
 
+/* A status line every this many steps of a run of nsteps. */
+static int64_t status_interval(const struct options *o, int64_t nsteps)
+{
+    return o->has_status ? o->status_every : (nsteps >= 10 ? nsteps / 10 : 1);
+}
+
 /* Read the body (a restart: the run and its last frame), resolve the
  * scene, set up the run and its file (published before the first step).
  * Returns 0, or the exit status after printing the error. */
@@ -991,6 +1024,9 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_run_file_load(h->in, h->p, h->b, first, &h->r, h->v0, &h->bits0);
         sc->steps += *first; /* --steps N more */
     }
+    /* a row of the series every --series N steps, by default the status
+     * interval (not a line of the scene's text: a restart takes its own) */
+    sc->series = o->series_every > 0 ? o->series_every : status_interval(o, sc->steps - *first);
     if (s == PD_OK)
         s = pd_sim_new(h->p, h->b, sc, &h->sim);
     if (s == PD_OK && restart)
@@ -1024,23 +1060,26 @@ static int start(struct options *o, struct held *h, int64_t *first)
     return 0;
 }
 
-/* The steps from first + 1, with frames, status lines and the progress
- * bar; the file stays open. */
+/* The steps from first + 1, with frames, status lines, the time series'
+ * rows and the progress bar; the file stays open. */
 static pd_status run_steps(const struct options *o, struct held *h, int64_t first, double *t_output)
 {
     const pd_scene *sc = &o->spec.sc;
     pd_sim *sim = h->sim;
     const int64_t nsteps = sc->steps - first;
-    const int64_t status_every = o->has_status ? o->status_every : (nsteps >= 10 ? nsteps / 10 : 1);
+    const int64_t status_every = status_interval(o, nsteps);
     const int tty = isatty(STDERR_FILENO) && !o->quiet;
     double t_start = pd_wtime(), t_shown = 0;
     pd_status s = PD_OK;
     if (!o->restart && pd_frame_at(sc, 0)) /* pd_sim_setup came in start() */
         s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, NULL);
+    else if (!o->restart) /* the series' row of step 0 */
+        s = timed_sample(h->out, sim, t_output, NULL);
     int64_t lost = pd_sim_lost(sim);
     for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
         const int status = ((n - first) % status_every == 0 || n == sc->steps) && !o->quiet;
-        if (status || pd_frame_at(sc, n)) /* the step's bond pass counts the energies */
+        const int row = pd_run_file_sample_due(h->out, n);
+        if (status || row || pd_frame_at(sc, n)) /* the bond pass counts the energies */
             pd_sim_energy_next(sim);
         s = pd_sim_step(sim);
         if (s != PD_OK)
@@ -1056,8 +1095,11 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
          * energies instead of another pass over the bonds */
         pd_energy e;
         int known = 0;
-        if (pd_frame_at(sc, n)) {
+        if (pd_frame_at(sc, n)) { /* with the series' row of the step */
             s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, &e);
+            known = s == PD_OK;
+        } else if (row) {
+            s = timed_sample(h->out, sim, t_output, &e);
             known = s == PD_OK;
         }
         double t0 = pd_wtime(); /* a status line's energy pass is output's time */

@@ -422,6 +422,10 @@ typedef struct {
     double safety;         /* dt = safety * dt_stable when dt not given     */
     int64_t steps;
     int64_t every;         /* frame every N steps; 0 = last step only      */
+    int64_t series;        /* a row of the time series (/series) every N
+                              steps and at the last; 0: no series (pd-run
+                              --series, by default its status interval;
+                              not a line of the scene's text)             */
     unsigned fields;       /* optional frame fields, PD_FIELD_* bits       */
     double lost_margin;    /* a particle farther than this outside the
                               reference bounding box is lost, m (0: ten
@@ -622,6 +626,11 @@ pd_status pd_scene_resolve(pd_scene_spec *spec, const pd_particles *p, const pd_
  * many. */
 int pd_frame_at(const pd_scene *sc, int64_t n);
 int64_t pd_frame_steps(const pd_scene *sc, int64_t first, int fresh, int64_t *steps);
+/* The same for the rows of the time series (pd-run --series): step n gets
+ * one when it is a multiple of sc->series or the last step; none when
+ * sc->series is 0. */
+int pd_series_at(const pd_scene *sc, int64_t n);
+int64_t pd_series_steps(const pd_scene *sc, int64_t first, int fresh, int64_t *steps);
 
 /* What pd_scene_inspect finds in a resolved scene that is valid but
  * likely wrong, before step 1. */
@@ -720,6 +729,37 @@ double pd_von_mises(const double s[9]);
 double pd_energy_total(const pd_energy *e);
 int64_t pd_sim_broken(const pd_sim *sim);      /* broken bonds (pairs) */
 double pd_sim_max_damage(const pd_sim *sim);
+/* The largest damage of the current state and the number of particles
+ * whose damage is above `threshold` (pd_damage; on the stencil from its
+ * masks, in parallel). */
+pd_status pd_sim_damage_stats(const pd_sim *sim, double threshold, double *max_damage,
+                              int64_t *above);
+
+/* The time series of a run (lib/run/series.c; pd-run --series, /series of
+ * the run file, man 5 pd-h5): one row per sampled step of
+ *   step, time, kinetic_energy, elastic_energy, contact_energy,
+ *   released_energy, lost_energy, external_work, [projectile_energy],
+ *   [damped_energy], balance (pd_energy_total), broken_bonds,
+ *   damaged_particles (damage above PD_DAMAGE_THRESHOLD), max_damage,
+ *   lost_particles, px, py, pz (the body's momentum, kg m/s),
+ * then for each named set S of the scene (sc.sets, in order)
+ *   S.ux, S.uy, S.uz   the mean displacement y - x of its particles not
+ *                      lost, m,
+ *   S.fx, S.fy, S.fz   the force the boundary conditions apply to its
+ *                      particles, N: on a held component V_i (rho_i a_i
+ *                      - f_i), a_i the prescribed acceleration (the
+ *                      reaction that holds it), under a body force V_i b,
+ * and for the projectile and the indenter (projectile.*, indenter.*)
+ *   x, y, z, vx, vy, vz, fx, fy, fz   centre (m), velocity (m/s) and the
+ *                      force the body puts on it (N). */
+#define PD_SERIES_NAME 72 /* bytes of a column name, NUL included: a set's
+                             name (PD_SET_NAME_MAX) and ".ux"           */
+/* The columns of a scene's series: their number, and their names into
+ * names[0..] when names is not NULL. */
+int pd_series_columns(const pd_scene *sc, char (*names)[PD_SERIES_NAME]);
+/* The row of the current state, pd_series_columns(&scene) values; e: the
+ * energies of the current state (pd_sim_energy). */
+pd_status pd_sim_series_row(const pd_sim *sim, const pd_energy *e, double *row);
 int64_t pd_sim_contact_builds(const pd_sim *sim);
 const double *pd_sim_timers(const pd_sim *sim); /* seconds per pd_timer */
 /* What a run needs beyond a frame to go on bit for bit (pd-run --restart):
@@ -1002,6 +1042,11 @@ enum { PD_FRAME_PROJECTILE = 1u << 16, PD_FRAME_DAMPING = 1u << 17 };
  * see schema.c on crash safety. */
 pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
                          const int64_t *steps, const double *times, unsigned fields);
+/* Lay out the time series (lib/io/series_io.c) for the rows of
+ * pd_series_steps(sc, first, fresh): a fresh run's, or a restart's after
+ * step `first` (the rows of the file's series up to `first` are kept; its
+ * columns must be the scene's); nothing when there are none. */
+pd_status pd_plan_series(pd_file *f, const pd_scene *sc, int64_t first, int fresh);
 /* Restart slots (see schema.c): lay out `slots` of them (1: a run that
  * writes one frame needs no second; 2 else; those there already stay),
  * write (in turn), read the one of `step` (arrays allocated;
@@ -1043,6 +1088,29 @@ pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b,
  * and its restart data; the energies also go to *energy (may be NULL). */
 pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
                             const pd_sim *sim, unsigned fields, pd_energy *energy);
+/* The row of the time series (/series, laid out by pd_run_file_start when
+ * sc->series > 0) of the run's current step, when it is one of the
+ * series' steps (pd_series_at; else nothing is written): computed from the
+ * energies e of the current state, written, flushed, then counted in
+ * /series@rows.  pd_run_file_frame writes the row of its step itself,
+ * before the frame, so that a restart from a frame finds the row of its
+ * step.  pd_run_file_sample_due: is step one of those still to write? */
+pd_status pd_run_file_sample(pd_file *out, const pd_sim *sim, const pd_energy *e);
+int pd_run_file_sample_due(const pd_file *out, int64_t step);
+/* A run's time series as read (pd_read_series; pd_series_free). */
+typedef struct {
+    int ncols;
+    char (*name)[PD_SERIES_NAME]; /* ncols column names                 */
+    int64_t nrows;                /* complete rows                      */
+    double *value;                /* nrows x ncols, row-major           */
+} pd_series;
+/* Read /series: its complete rows (/series@rows of them), checked: the
+ * columns' names, a step column first, steps ascending.  PD_ERR_FORMAT
+ * when the file has none (a run of a pd before the series). */
+pd_status pd_read_series(const pd_file *f, pd_series *out);
+void pd_series_free(pd_series *s);
+/* The index of the column called `name`, or -1. */
+int pd_series_column(const pd_series *s, const char *name);
 /* Remove frames laid out but never completed. */
 pd_status pd_drop_incomplete_frames(pd_file *f);
 /* Write a frame (into its place when planned), then mark it complete;

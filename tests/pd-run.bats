@@ -762,13 +762,13 @@ assert_kills_landed() {
     fi
 }
 
-@test "a run killed by SIGKILL at 5 seeded moments after it is published reads with whole frames" {
+@test "a run killed by SIGKILL at 5 seeded moments after it is published reads with whole frames and series rows" {
     make_block
     py "
 import numpy as np
 with h5py.File('model.h5') as f:
     print(len(f['particles/id']))" >/dev/null
-    local opts=("${RUN_OPTS[@]}" --steps 3000 --every 20 --threads 1 -q model.h5 -o k.h5)
+    local opts=("${RUN_OPTS[@]}" --steps 3000 --every 20 --series 10 --threads 1 -q model.h5 -o k.h5)
     took=$(run_after_publish k.h5 "${opts[@]}")
     kill_delays "$took"
     landed=0
@@ -791,7 +791,15 @@ with h5py.File(sys.argv[1]) as f:
     for g in frames:
         assert np.isfinite(g['displacement'][:]).all() and np.isfinite(g['velocity'][:]).all()
     d = f['frames'][max(f['frames'], key=lambda n: f['frames'][n].attrs['step'])]
-    print(len(steps), 'frames')" k.h5
+    # the counted rows of the series are whole, a prefix of its plan, and
+    # the row of each complete frame's step was written before the frame
+    g = f['series']
+    rows = g.attrs['rows']
+    v = g['values'][:rows]
+    assert list(v[:, 0]) == list(range(0, 10 * rows, 10)), v[:, 0]
+    assert np.isfinite(v).all()
+    assert rows > 0 and v[-1, 0] >= max(steps), (rows, steps)
+    print(len(steps), 'frames,', rows, 'rows')" k.h5
         if [ "$KILL_STATUS" -eq 137 ]; then landed=$((landed + 1)); fi
     done
     assert_kills_landed "$landed"
@@ -869,14 +877,14 @@ with h5py.File(sys.argv[1]) as f:
 
 @test "--restart of a run killed by SIGKILL goes on from the last complete frame to the uninterrupted result" {
     make_block
-    took=$(run_after_publish full.h5 "${RUN_OPTS[@]}" --steps 3000 --every 100 --threads 2 -q \
-        model.h5 -o full.h5)
+    took=$(run_after_publish full.h5 "${RUN_OPTS[@]}" --steps 3000 --every 100 --series 50 \
+        --threads 2 -q model.h5 -o full.h5)
     kill_delays "$took"
     landed=0
     for k in $(seq "$KILLS"); do
         rm -f k.h5 .k.h5.tmp.*
         kill_after_publish k.h5 "${DELAYS[k - 1]}" "${RUN_OPTS[@]}" --steps 3000 --every 100 \
-            --threads 2 -q model.h5 -o k.h5
+            --series 50 --threads 2 -q model.h5 -o k.h5
         rm -f .k.h5.tmp.*
         [ -e k.h5 ]
         last=$(py "
@@ -885,8 +893,16 @@ with h5py.File(sys.argv[1]) as f:
     print(max(done) if done else -1)" k.h5)
         echo "kill $k, ${DELAYS[k - 1]} s after publishing: pd-run exit $KILL_STATUS, last complete frame $last"
         [ "$last" -ge 0 ] || continue # killed before its first frame: nothing to go on from
-        run -0 pd-run --restart k.h5 --steps $((3000 - last)) --threads 1 -q
+        run -0 pd-run --restart k.h5 --steps $((3000 - last)) --series 50 --threads 1 -q
         same_frame full.h5 k.h5 3000
+        # and the time series, its rows after the frame written again
+        py "
+import numpy as np
+with h5py.File(sys.argv[1]) as a, h5py.File(sys.argv[2]) as b:
+    x = a['series/values'][: a['series'].attrs['rows']]
+    y = b['series/values'][: b['series'].attrs['rows']]
+    assert x.shape == y.shape == (61, x.shape[1]), (x.shape, y.shape)
+    assert np.array_equal(x.view(np.uint8), y.view(np.uint8))" full.h5 k.h5
         if [ "$KILL_STATUS" -eq 137 ]; then landed=$((landed + 1)); fi
     done
     assert_kills_landed "$landed"

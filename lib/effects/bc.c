@@ -25,6 +25,14 @@
  *                 - V_i (f_i^n + f_i^{n+1})/2 (P_{n+1} - P_n)],
  *   so that kinetic + elastic - work stays constant to the integrator's
  *   error, jumps of the velocity (square pulses) included.
+ *
+ * Reactions (the time series' SET.fx, ...): the force a condition applies
+ * to a particle, N.  Under a body force V_i b(t).  On a held component
+ * the force that, with the body's f_i, gives the prescribed acceleration:
+ *   R_i = V_i (rho_i a_i - f_i),
+ *   a_i = g'(t) for velocity-bc, 0 for displacement-bc (a piecewise linear
+ *   g has no second derivative between its corners),
+ * at the state of the step (after its forces).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -209,9 +217,23 @@ static int body_declared(const pd_scene *s)
     return has_bc(s, 1);
 }
 
+static void body_reaction(const pd_sim *sim, void *state, double *const r[3])
+{
+    const bc_state *st = state;
+    for (int k = 0; k < st->count; k++) {
+        const cond *c = &st->c[k];
+        const double b = pd_profile_value(&c->bc->profile, sim->time);
+        for (int64_t m = 0; m < c->n; m++) {
+            const int64_t i = c->rows[m];
+            if (!(sim->lost && sim->lost[i]))
+                r[c->bc->axis][i] += sim->p->volume[i] * b;
+        }
+    }
+}
+
 const pd_effect pd_effect_body_force = {
     .name = "body-force", .timer = PD_T_INTEGRATE, .init = body_init, .force = body_force,
-    .free = bc_free, .declared = body_declared};
+    .free = bc_free, .declared = body_declared, .reaction = body_reaction};
 
 /* ------------------------------------------------------------ prescribed motion */
 
@@ -300,6 +322,23 @@ static int held_declared(const pd_scene *s)
     return has_bc(s, 0);
 }
 
+static void held_reaction(const pd_sim *sim, void *state, double *const r[3])
+{
+    const bc_state *st = state;
+    const double *V = sim->p->volume, *rho = sim->p->density;
+    for (int k = 0; k < st->count; k++) {
+        const cond *c = &st->c[k];
+        const int a = c->bc->axis;
+        const double acc =
+            c->bc->kind == PD_BC_VELOCITY ? pd_profile_rate(&c->bc->profile, sim->time) : 0.0;
+        for (int64_t m = 0; m < c->n; m++) {
+            const int64_t i = c->rows[m];
+            if (!(sim->lost && sim->lost[i]))
+                r[a][i] += V[i] * (rho[i] * acc - sim->f[a][i]);
+        }
+    }
+}
+
 const pd_effect pd_effect_prescribed = {
     .name = "prescribed-motion", .timer = PD_T_INTEGRATE, .init = held_init, .free = bc_free,
-    .constrain = held_constrain, .declared = held_declared};
+    .constrain = held_constrain, .declared = held_declared, .reaction = held_reaction};

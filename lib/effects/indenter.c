@@ -87,6 +87,8 @@ static pd_status indenter_force(pd_sim *sim, void *state)
     double c[3], F[3];
     centre(sim, c);
     pd_sphere_push(sim, c, s->ind_radius, s->ind_k, F);
+    for (int d = 0; d < 3; d++)
+        sim->ind_f[d] = -F[d];
     sim->power += s->ind_velocity[0] * F[0] + s->ind_velocity[1] * F[1] +
                   s->ind_velocity[2] * F[2];
     return PD_OK;

@@ -134,6 +134,7 @@ static void file_free(pd_file *f)
     if (f == NULL)
         return;
     temp_forget(f->tmp);
+    pd_series_plan_free(f->series);
     free(f->name);
     free(f->path);
     free(f->tmp);

@@ -18,7 +18,11 @@ struct pd_file {
     int to_stdout;
     int readonly;
     int published;        /* renamed to `path` while still open    */
+    struct pd_series_plan *series; /* the rows of /series still to
+                                      write (series_io.c), or NULL     */
 };
+
+void pd_series_plan_free(struct pd_series_plan *plan);
 
 int pd_h5_has_attr(hid_t loc, const char *name);
 int pd_h5_has_link(hid_t loc, const char *path);

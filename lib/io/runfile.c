@@ -101,6 +101,8 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
                         sc->fields | (sc->has_projectile ? PD_FRAME_PROJECTILE : 0) |
                             (sc->damping > 0 ? PD_FRAME_DAMPING : 0),
                         first, !restart);
+    if (s == PD_OK) /* the time series' rows too */
+        s = pd_plan_series(out, sc, first, !restart);
     /* two restart slots, so that a kill while one is written leaves the
      * other, of the last complete frame; a fresh run of one frame needs
      * one (a kill before it is complete leaves no frame to go on from) */
@@ -137,6 +139,9 @@ pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds 
         return pd_fail(PD_ERR_NOMEM, "out of memory for the stress");
     }
     pd_status s = pd_sim_energy(sim, &fi.energy, density);
+    if (s == PD_OK) /* the series' row of the step before the frame: a
+                       restart from the frame finds it */
+        s = pd_run_file_sample(out, sim, &fi.energy);
     if (s == PD_OK && stress) {
         s = pd_sim_stress(sim, stress);
         for (int64_t i = 0; i < p->n; i++)

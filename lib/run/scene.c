@@ -193,24 +193,41 @@ int pd_frame_at(const pd_scene *sc, int64_t n)
     return (sc->every > 0 && n % sc->every == 0) || n == sc->steps;
 }
 
-int64_t pd_frame_steps(const pd_scene *sc, int64_t first, int fresh, int64_t *steps)
+/* The multiples of `every` (none when 0) and the last step of a run of
+ * `total` steps, from step `first` + 1 (0 when `fresh`); how many. */
+static int64_t sampled_steps(int64_t every, int64_t total, int64_t first, int fresh,
+                             int64_t *steps)
 {
     const int64_t from = fresh ? 0 : first + 1; /* the steps this run takes */
     int64_t m = 0, last = -1;
-    if (sc->every > 0)
-        for (int64_t n = (from + sc->every - 1) / sc->every * sc->every; n <= sc->steps;
-             n += sc->every) {
+    if (every > 0)
+        for (int64_t n = (from + every - 1) / every * every; n <= total; n += every) {
             if (steps)
                 steps[m] = n;
             m++;
             last = n;
         }
-    if (sc->steps >= from && last != sc->steps) {
+    if (total >= from && last != total) {
         if (steps)
-            steps[m] = sc->steps;
+            steps[m] = total;
         m++;
     }
     return m;
+}
+
+int64_t pd_frame_steps(const pd_scene *sc, int64_t first, int fresh, int64_t *steps)
+{
+    return sampled_steps(sc->every, sc->steps, first, fresh, steps);
+}
+
+int pd_series_at(const pd_scene *sc, int64_t n)
+{
+    return sc->series > 0 && (n % sc->series == 0 || n == sc->steps);
+}
+
+int64_t pd_series_steps(const pd_scene *sc, int64_t first, int fresh, int64_t *steps)
+{
+    return sc->series > 0 ? sampled_steps(sc->series, sc->steps, first, fresh, steps) : 0;
 }
 
 /* ------------------------------------------------------------ before step 1 */

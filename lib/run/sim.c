@@ -58,6 +58,23 @@ static void lost_box(pd_sim *sim)
     }
 }
 
+/* The rows of each of the scene's named sets (the time series'). */
+static pd_status set_rows(pd_sim *sim)
+{
+    const pd_sets *sets = sim->sc.sets;
+    if (sets == NULL || sets->count == 0)
+        return PD_OK;
+    if ((sim->set_rows = calloc((size_t)sets->count, sizeof *sim->set_rows)) == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the sets");
+    sim->nsets = sets->count;
+    for (int k = 0; k < sets->count; k++) {
+        pd_status s = pd_set_rows(&sets->set[k], sim->p, &sim->set_rows[k]);
+        if (s != PD_OK)
+            return s;
+    }
+    return PD_OK;
+}
+
 pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s, pd_sim **out)
 {
     if (!(s->dt > 0) || !isfinite(s->dt))
@@ -108,6 +125,11 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
         for (size_t i = 0; i < n; i++)
             sim->s0[i] = sim->s0_new[i] = DBL_MAX;
     lost_box(sim);
+    st = set_rows(sim);
+    if (st != PD_OK) {
+        pd_sim_free(sim);
+        return st;
+    }
 
     /* The step is assembled from the model's force and the declared
      * effects only. */
@@ -141,6 +163,9 @@ void pd_sim_free(pd_sim *sim)
     free(sim->s0);
     free(sim->s0_new);
     free(sim->lost);
+    for (int k = 0; k < sim->nsets; k++)
+        free(sim->set_rows[k]);
+    free(sim->set_rows);
     free(sim);
 }
 
@@ -611,20 +636,32 @@ void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
             sim->effects[k]->save(sim, sim->state[k], r);
 }
 
-double pd_sim_max_damage(const pd_sim *sim)
+pd_status pd_sim_damage_stats(const pd_sim *sim, double threshold, double *max_damage,
+                              int64_t *above)
 {
-    double dg;
-    if (pd_grid_max_damage(sim, &dg)) /* the stencil's masks, in parallel */
-        return dg;
-    double *dmg = malloc((size_t)sim->n * sizeof(double));
+    if (pd_grid_damage(sim, threshold, max_damage, above)) /* the stencil's masks */
+        return PD_OK;
+    double *dmg = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
     if (dmg == NULL)
-        return NAN;
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the damage");
     pd_damage(sim->p, sim->b, pd_sim_intact(sim), dmg);
     double m = 0;
-    for (int64_t i = 0; i < sim->n; i++)
+    int64_t count = 0;
+    for (int64_t i = 0; i < sim->n; i++) {
         m = fmax(m, dmg[i]);
+        count += dmg[i] > threshold;
+    }
     free(dmg);
-    return m;
+    *max_damage = m;
+    *above = count;
+    return PD_OK;
+}
+
+double pd_sim_max_damage(const pd_sim *sim)
+{
+    double m;
+    int64_t above;
+    return pd_sim_damage_stats(sim, 1.0, &m, &above) == PD_OK ? m : NAN;
 }
 
 pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double *const v[3],

@@ -40,6 +40,10 @@ typedef struct pd_effect {
      * restart data (pointing into the run), and back; NULL: nothing. */
     void (*save)(const pd_sim *sim, void *state, pd_restart *r);
     pd_status (*restore)(pd_sim *sim, void *state, const pd_restart *r);
+    /* Add each particle's share of the force the effect applies to hold
+     * or load it, N, to r[a][i]: the reaction of a boundary condition
+     * (pd_sim_series_row sums it over each set); NULL: none. */
+    void (*reaction)(const pd_sim *sim, void *state, double *const r[3]);
 } pd_effect;
 
 /* Where pd_effect.constrain is called: in pd_sim_setup before the first
@@ -135,6 +139,10 @@ struct pd_sim {
     double proj_x[3];   /* centre, m                                     */
     double proj_v[3];   /* velocity, m/s                                 */
     double proj_f[3];   /* force on it at the last force evaluation, N   */
+    double ind_f[3];    /* the force on the indenter at the last force
+                           evaluation, N (the body's push back)          */
+    int nsets;          /* the scene's named sets (sc.sets), and the     */
+    int64_t **set_rows; /* rows of each, for the time series             */
 };
 
 

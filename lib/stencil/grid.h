@@ -32,10 +32,11 @@ int pd_grid_tiles(const pd_grid *g);
  * m (lib/effects/contact.c searches only particles that moved enough to close
  * it). */
 double pd_grid_gap(const pd_grid *g);
-/* The largest damage of a particle (seed 000 eq. 10), counted on the
- * stencil's masks in parallel: 1 when *max_damage is set, 0 when the grid
- * cannot tell (none, or its masks lag behind the half bonds). */
-int pd_grid_max_damage(const pd_sim *sim, double *max_damage);
+/* The largest damage of a particle (seed 000 eq. 10) and the number of
+ * particles damaged above `threshold`, counted on the stencil's masks in
+ * parallel: 1 when they are set, 0 when the grid cannot tell (none, or its
+ * masks lag behind the half bonds). */
+int pd_grid_damage(const pd_sim *sim, double threshold, double *max_damage, int64_t *above);
 int pd_grid_contact(const pd_grid *g);
 int pd_grid_pair(const pd_grid *g, int64_t i, int64_t j);
 /* LPS on the stencil (lib/models/lps.c without ellipsoids, particles in lattice

@@ -74,16 +74,32 @@ static void pair_energy(const pd_sim *sim, double *e, const int contact)
     }
 }
 
-int pd_grid_max_damage(const pd_sim *sim, double *max_damage)
+int pd_grid_damage(const pd_sim *sim, double threshold, double *max_damage, int64_t *above)
 {
     const pd_grid *G = sim->grid;
     if (G == NULL || G->epoch != sim->half.epoch)
         return 0;
     const int64_t n = G->n;
     const int W = G->words;
+    const double *V = sim->p->volume;
+    for (int64_t i = 1; i < n; i++) /* pd_damage's figures need equal volumes */
+        if (V[i] != V[0])
+            return 0;
+    const int64_t *off = sim->b->offset;
+    int64_t longest = 0;
+    for (int64_t i = 0; i < n; i++)
+        longest = off[i + 1] - off[i] > longest ? off[i + 1] - off[i] : longest;
     int32_t *kept = calloc((size_t)(n > 0 ? n : 1), sizeof(int32_t));
-    if (kept == NULL)
+    double *sum = malloc((size_t)(longest + 1) * sizeof(double));
+    if (kept == NULL || sum == NULL) {
+        free(kept);
+        free(sum);
         return 0;
+    }
+    /* the volume of m bonds summed one by one, as pd_damage sums them */
+    sum[0] = 0;
+    for (int64_t m = 1; m <= longest; m++)
+        sum[m] = sum[m - 1] + V[0];
     /* the intact bonds of each particle, both ends of each (even blocks,
      * then odd ones: no two threads count into one particle) */
     for (int phase = 0; phase < 2; phase++) {
@@ -104,18 +120,21 @@ int pd_grid_max_damage(const pd_sim *sim, double *max_damage)
         }
     }
     /* equal volumes: damage = 1 - intact / family, the family counting
-     * every bond of the file (pd_damage) */
-    const int64_t *off = sim->b->offset;
+     * every bond of the file, to the bit as pd_damage */
     double dmax = 0;
-#pragma omp parallel for schedule(static) reduction(max : dmax)
+    int64_t count = 0;
+#pragma omp parallel for schedule(static) reduction(max : dmax) reduction(+ : count)
     for (int64_t g = 0; g < n; g++) {
         const int64_t i = G->perm ? G->perm[g] : g;
         const int64_t all = off[i + 1] - off[i];
-        const double d = all > 0 ? 1.0 - (double)kept[g] / (double)all : 0.0;
+        const double d = all > 0 ? 1.0 - sum[kept[g]] / sum[all] : 0.0;
         dmax = d > dmax ? d : dmax;
+        count += d > threshold;
     }
     free(kept);
+    free(sum);
     *max_damage = dmax;
+    *above = count;
     return 1;
 }
 
