@@ -105,7 +105,7 @@ with h5py.File(sys.argv[1]) as f:
     pd-run "${LPS_RUN[@]}" "${E[@]}" --steps 60 --every 30 --threads 2 -q model.h5 -o full.h5
     pd-run "${LPS_RUN[@]}" "${E[@]}" --steps 30 --every 30 --threads 1 -q model.h5 -o run.h5
     run -0 pd-run --restart run.h5 --steps 30 --threads 2 -q
-    run -0 h5_same full.h5 run.h5 'history|threads|^/restart|@steps|options'
+    run -0 h5_same full.h5 run.h5 'history|threads|^/restart|^/series|@steps|options'
     run -2 --separate-stderr pd-run --restart run.h5 --steps 30 --ellipsoid 1,0,0,1,1,0
     [[ "$stderr" =~ would\ change\ it ]]
 }

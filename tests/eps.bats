@@ -67,7 +67,7 @@ with h5py.File(sys.argv[1]) as f:
     pd-run "${EPS_RUN[@]}" --steps 60 --every 30 --threads 2 -q model.h5 -o full.h5
     pd-run "${EPS_RUN[@]}" --steps 30 --every 30 --threads 1 -q model.h5 -o run.h5
     run -0 pd-run --restart run.h5 --steps 30 --threads 2 -q
-    run -0 h5_same full.h5 run.h5 'history|threads|^/restart|@steps|options'
+    run -0 h5_same full.h5 run.h5 'history|threads|^/restart|^/series|@steps|options'
     py "
 with h5py.File(sys.argv[1]) as f:
     assert f['frames/00000060'].attrs['broken_bonds'] > 0
@@ -80,5 +80,5 @@ with h5py.File(sys.argv[1], 'r+') as f:
     for k in (0, 1):
         f['restart/%d/bond_history' % k][...] = 0" cut.h5
     run -0 pd-run --restart cut.h5 --steps 30 --threads 2 -q
-    run -1 h5_same full.h5 cut.h5 'history|threads|^/restart|@steps|options'
+    run -1 h5_same full.h5 cut.h5 'history|threads|^/restart|^/series|@steps|options'
 }

@@ -547,7 +547,7 @@ print(h.decode() if isinstance(h, bytes) else h)" r.h5
 
 @test "the model travels unchanged into the run file" {
     make_run
-    run -0 h5_same model.h5 run.h5 'history|^/frames|^/scene|^/restart'
+    run -0 h5_same model.h5 run.h5 'history|^/frames|^/scene|^/restart|^/series'
 }
 
 # ------------------------------------------------------------ physics

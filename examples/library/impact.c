@@ -68,6 +68,7 @@ int main(int argc, char **argv)
     sc->safety = 0.8;          /* dt = 0.8 x the stable step           */
     sc->steps = 200;
     sc->every = 50;
+    sc->series = 20;           /* a row of the time series every 20    */
     sc->threads = omp_get_max_threads();
     if (pd_scene_resolve(&spec, p, b, "the block") != PD_OK)
         return fail("the scene");
@@ -93,6 +94,9 @@ int main(int argc, char **argv)
                    "broken %lld\n",
                    (long long)n, pd_sim_time(sim), e.kinetic, e.projectile, pd_energy_total(&e),
                    (long long)pd_sim_broken(sim));
+        else if (s == PD_OK && pd_run_file_sample_due(f, n) && /* the series' row alone */
+                 (s = pd_sim_energy(sim, &e, NULL)) == PD_OK)
+            s = pd_run_file_sample(f, sim, &e);
     }
     if (s == PD_OK)
         s = pd_file_close(f);
