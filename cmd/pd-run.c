@@ -108,6 +108,12 @@ static void usage(FILE *out)
             "  --damping C[,SET]     viscous damping, the force density -C rho v (C in 1/s)\n"
             "                        on every particle or on those of SET; the energy it\n"
             "                        takes is booked as damped=\n"
+            "  --relax               quasi-static: each step a load step, the loads of time\n"
+            "                        n dt (--dt required), relaxed by adaptive dynamic\n"
+            "                        relaxation (with --damping C: that damping instead)\n"
+            "  --relax-tolerance F   a load step is relaxed when the residual force is F\n"
+            "                        times the load (default 1e-4)\n"
+            "  --relax-iterations N  at most N iterations per load step (default 1000000)\n"
             "  --projectile sphere,X,Y,Z,R,MASS,VX,VY,VZ[,K]\n"
             "                        rigid sphere the body pushes back: centre X,Y,Z (m)\n"
             "                        at t = 0, radius R (m), mass MASS (kg), velocity\n"
@@ -423,7 +429,8 @@ static int parse_options(int argc, char **argv, struct options *o)
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
            OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID, OPT_MATERIAL,
            OPT_INTERFACE, OPT_FIBRE, OPT_LAMBDA, OPT_TAU, OPT_YIELD, OPT_BONDLIST,
-           OPT_OVERLAP, OPT_STRICT, OPT_BALANCE, OPT_DAMPING, OPT_SERIES };
+           OPT_OVERLAP, OPT_STRICT, OPT_BALANCE, OPT_DAMPING, OPT_SERIES,
+           OPT_RELAX, OPT_RELAX_TOL, OPT_RELAX_IT };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -447,6 +454,9 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"strict", no_argument, 0, OPT_STRICT},
         {"every", required_argument, 0, OPT_EVERY},
         {"series", required_argument, 0, OPT_SERIES},
+        {"relax", no_argument, 0, OPT_RELAX},
+        {"relax-tolerance", required_argument, 0, OPT_RELAX_TOL},
+        {"relax-iterations", required_argument, 0, OPT_RELAX_IT},
         {"threads", required_argument, 0, OPT_THREADS},
         {"status", required_argument, 0, OPT_STATUS},
         {"timing", no_argument, 0, OPT_TIMING},
@@ -651,6 +661,20 @@ static int parse_options(int argc, char **argv, struct options *o)
                 return usage_error("--status must be a positive integer, not", optarg);
             o->status_every = iv;
             o->has_status = 1;
+            break;
+        case OPT_RELAX:
+            o->spec.sc.relax = 1;
+            break;
+        case OPT_RELAX_TOL:
+            if ((rc = positive("--relax-tolerance", optarg, &o->spec.sc.relax_tolerance)))
+                return rc;
+            if (o->spec.sc.relax_tolerance >= 1)
+                return usage_error("--relax-tolerance must be below 1, not", optarg);
+            break;
+        case OPT_RELAX_IT:
+            if (!pd_parse_int64(optarg, &iv) || iv < 1)
+                return usage_error("--relax-iterations must be a positive integer, not", optarg);
+            o->spec.sc.relax_iterations = iv;
             break;
         case OPT_SERIES:
             if (!pd_parse_int64(optarg, &iv) || iv < 1)
@@ -873,6 +897,7 @@ struct held {
     struct options *opts; /* its profiles */
     pd_scene_report report; /* a fresh run's scene at t = 0 */
     double t_setup;          /* its step 0 (pd_sim_setup), s */
+    int64_t iterations;      /* --relax: the iterations of its load steps */
 };
 
 static void release(struct held *h)
@@ -937,7 +962,18 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
                 pd_sim_stencil(sim), pd_sim_stencil_tiles(sim) ? " in AVX-512 tiles" : "",
                 sc->has_contact ? ", with the contact of its pairs" : "");
     log_constants(p, sc, o);
-    if (sc->damping > 0)
+    if (sc->relax)
+        fprintf(stderr,
+                PROG ": --relax: %lld load steps of %g s, each relaxed by %s (iterations of "
+                     "%.6g s, the stable step x %g) to a residual of %g times the load, in at "
+                     "most %lld iterations\n",
+                (long long)nsteps, sc->dt,
+                sc->damping > 0 ? "dynamic relaxation with the fixed --damping"
+                                : "adaptive dynamic relaxation",
+                sc->relax_dt, sc->safety, sc->relax_tolerance, (long long)sc->relax_iterations);
+    if (sc->damping > 0 && sc->relax)
+        fprintf(stderr, PROG ": --damping %g 1/s: the relaxation's damping\n", sc->damping);
+    else if (sc->damping > 0)
         fprintf(stderr, PROG ": --damping %g 1/s (-C rho v) on %s\n", sc->damping,
                 sc->damping_set[0] ? sc->damping_set : "every particle");
     for (int k = 0; k < o->nbc; k++) {
@@ -1081,9 +1117,17 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
         const int row = pd_run_file_sample_due(h->out, n);
         if (status || row || pd_frame_at(sc, n)) /* the bond pass counts the energies */
             pd_sim_energy_next(sim);
-        s = pd_sim_step(sim);
+        pd_relax_info relaxed;
+        s = sc->relax ? pd_sim_relax(sim, &relaxed) : pd_sim_step(sim);
         if (s != PD_OK)
             break;
+        h->iterations += sc->relax ? relaxed.iterations : 0;
+        if (sc->relax && status)
+            fprintf(stderr,
+                    "%s" PROG ": load step %lld: relaxed in %lld iterations, residual %.3e N "
+                    "of a load of %.3e N, kinetic energy %.3e J (its peak %.3e J)\n",
+                    tty ? "\r\033[K" : "", (long long)n, (long long)relaxed.iterations,
+                    relaxed.residual, relaxed.load, relaxed.kinetic, relaxed.kinetic_peak);
         if (lost == 0 && pd_sim_lost(sim) > 0 && !o->quiet) /* the first; then counts */
             fprintf(stderr,
                     "%s" PROG ": step %lld: %lld particles lost (farther than %g m outside the "
@@ -1168,7 +1212,13 @@ int main(int argc, char **argv)
     pd_status s = run_steps(&o, &h, first, &t_output);
     const double wall = pd_wtime() - t0 + h.t_setup;
     s = finish(&h, s);
-    if (s == PD_OK && !o.quiet)
+    if (s == PD_OK && !o.quiet && o.spec.sc.relax)
+        fprintf(stderr, PROG ": %lld load steps, %lld iterations, in %.3f s (%.3g bond "
+                             "updates/s), contact list builds %lld\n",
+                (long long)nsteps, (long long)h.iterations, wall,
+                wall > 0 ? (double)h.b->count * (double)(h.iterations + 2 * nsteps) / wall : 0.0,
+                (long long)pd_sim_contact_builds(h.sim));
+    else if (s == PD_OK && !o.quiet)
         fprintf(stderr, PROG ": %lld steps in %.3f s (%.3g bond updates/s), contact list builds %lld\n",
                 (long long)nsteps, wall,
                 wall > 0 ? (double)h.b->count * (double)nsteps / wall : 0.0,

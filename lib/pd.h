@@ -82,6 +82,10 @@ void pd_h5_debug(int on);
                                    is negligible (pd_sim_start_penalty)     */
 #define PD_BALANCE_EVERY 8      /* steps between the alarm's cheap test of
                                    the kinetic energy (pd_sim_step)         */
+#define PD_RELAX_TOLERANCE 1e-4 /* a load step of --relax is relaxed when the
+                                   residual force is below 1e-4 of the load */
+#define PD_RELAX_ITERATIONS 1000000 /* and gives up after this many
+                                   iterations                               */
 
 /* ---------------------------------------------------------------- particles */
 
@@ -437,6 +441,14 @@ typedef struct {
     double balance_limit;  /* the energy alarm's limit, a fraction of the
                               energy put in (pd_sim_check_balance; 0:
                               PD_BALANCE_LIMIT, negative: no alarm)      */
+    int relax;             /* quasi-static: each step a load step at time
+                              n dt, relaxed (pd_sim_relax; pd-run --relax) */
+    double relax_tolerance;/* its residual over the load (0: the default,
+                              PD_RELAX_TOLERANCE)                        */
+    int64_t relax_iterations; /* at most per load step (0: the default,
+                              PD_RELAX_ITERATIONS)                       */
+    double relax_dt;       /* the step of its iterations, s: safety x the
+                              stable step (pd_scene_resolve)             */
     int threads;
     double youngs_modulus; /* E, Pa (0 unless --youngs-modulus gave K)   */
     int nbc;                     /* boundary conditions (pd_bc), in order   */
@@ -676,6 +688,24 @@ char *pd_scene_text(const pd_scene *s);
 pd_status pd_sim_setup(pd_sim *sim);
 /* One velocity-Verlet step (seed 000 Algorithm 1) with the declared effects. */
 pd_status pd_sim_step(pd_sim *sim);
+
+/* What one load step of the relaxation took (pd_sim_relax). */
+typedef struct {
+    int64_t iterations; /* the iterations it took                        */
+    double residual;    /* the residual force at the end, N: the norm of
+                           the net force on the free particles          */
+    double load;        /* the norm of the load it is measured against, N */
+    double kinetic_peak;/* the largest kinetic energy of the iterations, J */
+    double kinetic;     /* the kinetic energy at the end, J              */
+} pd_relax_info;
+
+/* One load step of a quasi-static scene (sc.relax; lib/run/relax.c): the
+ * step and the time advance by one (the loads then are those of the new
+ * time), and adaptive dynamic relaxation (Kilic & Madenci 2010) iterates
+ * from rest until the residual force on the free particles falls below
+ * sc.relax_tolerance times the load.  PD_ERR_UNSTABLE when it does not
+ * within sc.relax_iterations, or the state turns non-finite. */
+pd_status pd_sim_relax(pd_sim *sim, pd_relax_info *info);
 
 /* Names of the active effects, e.g. "pmb+failure contact indenter". */
 const char *pd_sim_effects(const pd_sim *sim);

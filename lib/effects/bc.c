@@ -31,7 +31,8 @@
  * the force that, with the body's f_i, gives the prescribed acceleration:
  *   R_i = V_i (rho_i a_i - f_i),
  *   a_i = g'(t) for velocity-bc, 0 for displacement-bc (a piecewise linear
- *   g has no second derivative between its corners),
+ *   g has no second derivative between its corners), and 0 in a relaxed
+ *   state (pd-run --relax: at rest),
  * at the state of the step (after its forces).
  */
 #include <math.h>
@@ -153,6 +154,12 @@ static pd_status bc_init(pd_sim *sim, void **state, int want_prescribed)
             *o = k + 1;
         }
     }
+    /* the held components, for the relaxation (lib/run/relax.c) */
+    if (s == PD_OK && (sim->held = calloc((size_t)sim->n, 1)) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the boundary conditions");
+    for (int64_t i = 0; s == PD_OK && i < sim->n; i++)
+        for (int a = 0; a < 3; a++)
+            sim->held[i] |= (uint8_t)((owner[3 * i + a] != 0) << a);
     free(owner);
     return s;
 }
@@ -197,7 +204,7 @@ static pd_status body_force(pd_sim *sim, void *state)
         }
         work += bmid * sum * dt;
     }
-    if (!sim->setup)
+    if (!sim->setup && !sim->sc.relax) /* the relaxation books its own */
         sim->work += work;
     return PD_OK;
 }
@@ -329,8 +336,9 @@ static void held_reaction(const pd_sim *sim, void *state, double *const r[3])
     for (int k = 0; k < st->count; k++) {
         const cond *c = &st->c[k];
         const int a = c->bc->axis;
-        const double acc =
-            c->bc->kind == PD_BC_VELOCITY ? pd_profile_rate(&c->bc->profile, sim->time) : 0.0;
+        const double acc = c->bc->kind == PD_BC_VELOCITY && !sim->sc.relax
+                               ? pd_profile_rate(&c->bc->profile, sim->time)
+                               : 0.0; /* at rest when relaxed */
         for (int64_t m = 0; m < c->n; m++) {
             const int64_t i = c->rows[m];
             if (!(sim->lost && sim->lost[i]))

@@ -6,9 +6,11 @@
  * The force of step n+1 is taken at the velocities the forces see, v at
  * n+1/2 (after the first half kick and the drift).  The power it takes,
  * sum V_i C rho_i |v_i|^2, is integrated over the step by the trapezoidal
- * rule into pd_energy.damped (compute_forces), apart from the work of the
- * loads: the balance books what the damping took, and the energy put in
- * (the energy alarm's measure) is not lessened by it.
+ * rule into pd_energy.damped (pd_sim_compute_forces, lib/run/sim.c),
+ * apart from the work of the loads: the balance books what the damping
+ * took, and the energy put in (the energy alarm's measure) is not lessened
+ * by it.  With --relax, C is the relaxation's own damping instead
+ * (lib/run/relax.c).
  */
 #include <stdlib.h>
 
@@ -75,7 +77,7 @@ static pd_status damping_force(pd_sim *sim, void *state)
 
 static int damping_declared(const pd_scene *s)
 {
-    return s->damping > 0;
+    return s->damping > 0 && !s->relax; /* relaxed: the relaxation's damping */
 }
 
 const pd_effect pd_effect_damping = {

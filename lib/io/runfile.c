@@ -99,7 +99,7 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
     if (s == PD_OK)
         s = plan_frames(out, p, b, sc,
                         sc->fields | (sc->has_projectile ? PD_FRAME_PROJECTILE : 0) |
-                            (sc->damping > 0 ? PD_FRAME_DAMPING : 0),
+                            (sc->damping > 0 && !sc->relax ? PD_FRAME_DAMPING : 0),
                         first, !restart);
     if (s == PD_OK) /* the time series' rows too */
         s = pd_plan_series(out, sc, first, !restart);
@@ -111,7 +111,7 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
         s = pd_plan_restart(out, p->n, sc->has_failure, sc->has_contact, slots);
     if (s == PD_OK && sc->has_projectile)
         s = pd_plan_restart_projectile(out);
-    if (s == PD_OK && sc->damping > 0)
+    if (s == PD_OK && sc->damping > 0 && !sc->relax)
         s = pd_plan_restart_damping(out);
     const int width = pd_model_history_width(pd_model_of(sc->model));
     if (s == PD_OK && width > 0 && b->count > 0)

@@ -741,6 +741,10 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
         TRY(pd_h5_write_attr_doubles(g, "shear_modulus", &sc->shear_modulus, 1));
         TRY(pd_h5_write_attr_string(g, "influence", pd_influence_name(sc->influence)));
     }
+    if (sc->relax) { /* quasi-static: tolerance, iterations, their step */
+        const double rx[3] = {sc->relax_tolerance, (double)sc->relax_iterations, sc->relax_dt};
+        TRY(pd_h5_write_attr_doubles(g, "relax", rx, 3));
+    }
     if (sc->nellipsoids > 0) { /* UX,UY,UZ,A,B,ROLL per ellipsoid */
         double el[6 * PD_ELLIPSOID_MAX];
         for (int k = 0; k < sc->nellipsoids; k++) {

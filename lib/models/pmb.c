@@ -189,7 +189,7 @@ static void pmb_kernel(pd_sim *sim, pd_bond_mode failure)
     const pd_half_bonds *h = &sim->half;
     /* failure's bookkeeping outside the fused loop (the s0_new reset and
      * finish, the released-energy sum) goes to its own timer, taken out of
-     * the bonds' one that compute_forces charges the whole call to */
+     * the bonds' one that pd_sim_compute_forces charges the whole call to */
     double tf = pd_wtime();
     if (failure)
 #pragma omp parallel for schedule(static)

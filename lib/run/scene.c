@@ -97,6 +97,25 @@ static pd_status need_own(const pd_scene_spec *o, const pd_model *m)
     return missing ? pd_fail(PD_ERR_INVALID, "--model %s needs %s", m->name, all) : PD_OK;
 }
 
+/* A quasi-static scene (--relax): what it cannot hold. */
+static pd_status relax_check(const pd_scene_spec *o, const pd_model *m)
+{
+    if (o->sc.has_projectile)
+        return pd_fail(PD_ERR_INVALID, "--relax is quasi-static: a projectile moves by its "
+                       "inertia and has no static state (drive an --indenter instead)");
+    if (m->dissipative)
+        return pd_fail(PD_ERR_INVALID, "--relax is quasi-static: --model %s keeps a history "
+                       "that each step's time advances, which relaxation's iterations would "
+                       "advance too (relax pmb or lps)", m->name);
+    if (o->sc.damping_set[0] != '\0')
+        return pd_fail(PD_ERR_INVALID, "--relax takes --damping C, the relaxation's own "
+                       "damping of every particle, without a set");
+    if (!o->has_dt)
+        return pd_fail(PD_ERR_INVALID, "--relax needs --dt, the time of a load step: load "
+                       "step n holds the loads of time n dt");
+    return PD_OK;
+}
+
 pd_status pd_scene_check(pd_scene_spec *o)
 {
     const pd_model *m = pd_model_of(o->sc.model);
@@ -106,6 +125,8 @@ pd_status pd_scene_check(pd_scene_spec *o)
     if (s == PD_OK)
         s = need_own(o, m);
     if (s != PD_OK)
+        return s;
+    if (o->sc.relax && (s = relax_check(o, m)) != PD_OK)
         return s;
     if (o->sc.fields & ~m->fields) /* frame fields the model cannot write */
         return pd_fail(PD_ERR_INVALID, "--fields %s: --model %s does not write it",
@@ -176,7 +197,15 @@ pd_status pd_scene_resolve(pd_scene_spec *o, const pd_particles *p, const pd_bon
     sc->dt_stable = pd_stable_dt(p, b, sc);
     if (sc->has_projectile && !o->has_proj_k)
         sc->proj_k = pd_projectile_default_k(p, b, sc);
-    if (!o->has_dt) {
+    if (sc->relax) { /* dt is the load steps' time; the iterations take the stable step */
+        if (!isfinite(sc->dt_stable))
+            return pd_fail(PD_ERR_INVALID, "no bonds, so nothing to relax");
+        sc->relax_dt = sc->safety * sc->dt_stable;
+        if (!(sc->relax_tolerance > 0))
+            sc->relax_tolerance = PD_RELAX_TOLERANCE;
+        if (sc->relax_iterations <= 0)
+            sc->relax_iterations = PD_RELAX_ITERATIONS;
+    } else if (!o->has_dt) {
         if (!isfinite(sc->dt_stable))
             return pd_fail(PD_ERR_INVALID, "no bonds, so no stable time step; give --dt");
         sc->dt = sc->safety * sc->dt_stable;
@@ -434,7 +463,10 @@ char *pd_scene_text(const pd_scene *s)
         p += sprintf(p, "balance-limit off\n");
     else if (s->balance_limit != PD_BALANCE_LIMIT)
         p += sprintf(p, "balance-limit %.17g\n", s->balance_limit);
-    if (s->dt > s->dt_stable)
+    if (s->relax)
+        p += sprintf(p, "relax\nrelax-tolerance %.17g\nrelax-iterations %lld\n",
+                     s->relax_tolerance, (long long)s->relax_iterations);
+    else if (s->dt > s->dt_stable)
         p += sprintf(p, "force-dt\n");
     if (s->bond_list)
         p += sprintf(p, "bond-list\n");

@@ -9,6 +9,7 @@
  *   - the broken bonds, the particles damaged past PD_DAMAGE_THRESHOLD
  *     (pd-damage's count), the largest damage and the lost particles;
  *   - the body's momentum, sum rho_i V_i v_i;
+ *   - with --relax, what the load step's relaxation took (pd_relax_info);
  *   - per named set, its particles' mean displacement y - x (lost ones
  *     left out) and the force the boundary conditions apply to them: the
  *     effects' reaction hooks (lib/effects/bc.c), summed in row order;
@@ -28,6 +29,8 @@ static const char *const fixed[] = {
 static const char *const counts[] = {"balance",    "broken_bonds",   "damaged_particles",
                                      "max_damage", "lost_particles", "px",
                                      "py",         "pz"};
+static const char *const relax_cols[] = {"relax_iterations", "relax_residual", "relax_load",
+                                         "relax_peak_kinetic_energy"};
 static const char *const set_cols[] = {"ux", "uy", "uz", "fx", "fy", "fz"};
 static const char *const sphere_cols[] = {"x", "y", "z", "vx", "vy", "vz", "fx", "fy", "fz"};
 
@@ -49,10 +52,12 @@ int pd_series_columns(const pd_scene *sc, char (*names)[PD_SERIES_NAME])
         k = column(names, k, NULL, fixed[c]);
     if (sc->has_projectile)
         k = column(names, k, NULL, "projectile_energy");
-    if (sc->damping > 0)
+    if (sc->damping > 0 && !sc->relax)
         k = column(names, k, NULL, "damped_energy");
     for (int c = 0; c < COUNT(counts); c++)
         k = column(names, k, NULL, counts[c]);
+    for (int c = 0; sc->relax && c < COUNT(relax_cols); c++)
+        k = column(names, k, NULL, relax_cols[c]);
     for (int s = 0; sc->sets && s < sc->sets->count; s++)
         for (int c = 0; c < COUNT(set_cols); c++)
             k = column(names, k, sc->sets->set[s].name, set_cols[c]);
@@ -151,7 +156,7 @@ pd_status pd_sim_series_row(const pd_sim *sim, const pd_energy *e, double *row)
     row[k++] = e->work;
     if (sc->has_projectile)
         row[k++] = e->projectile;
-    if (sc->damping > 0)
+    if (sc->damping > 0 && !sc->relax)
         row[k++] = e->damped;
     double maxd;
     int64_t damaged;
@@ -171,6 +176,12 @@ pd_status pd_sim_series_row(const pd_sim *sim, const pd_energy *e, double *row)
     row[k++] = (double)sim->nlost;
     for (int d = 0; d < 3; d++)
         row[k++] = P[d];
+    if (sc->relax) {
+        row[k++] = (double)sim->relaxed.iterations;
+        row[k++] = sim->relaxed.residual;
+        row[k++] = sim->relaxed.load;
+        row[k++] = sim->relaxed.kinetic_peak;
+    }
     for (int set = 0; set < sim->nsets; set++, k += 6)
         set_figures(sim, set, r[0] ? r : NULL, row + k);
     for (int d = 0; d < 3; d++)

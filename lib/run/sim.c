@@ -166,13 +166,16 @@ void pd_sim_free(pd_sim *sim)
     for (int k = 0; k < sim->nsets; k++)
         free(sim->set_rows[k]);
     free(sim->set_rows);
+    free(sim->held);
+    if (sim->relax_free)
+        sim->relax_free(sim->relax);
     free(sim);
 }
 
 /* All force densities at the current positions; the power the effects put
  * in is integrated into the work, and the power --damping takes into
  * pd_energy.damped, with the trapezoidal rule over the step. */
-static pd_status compute_forces(pd_sim *sim)
+pd_status pd_sim_compute_forces(pd_sim *sim)
 {
     double before = sim->power, damp_before = sim->damp_power;
     sim->power = sim->damp_power = 0;
@@ -194,7 +197,7 @@ static pd_status compute_forces(pd_sim *sim)
         for (int64_t i = 0; i < sim->n; i++)
             if (sim->lost[i])
                 sim->f[0][i] = sim->f[1][i] = sim->f[2][i] = 0;
-    if (!sim->setup) {
+    if (!sim->setup && !sim->sc.relax) { /* the relaxation books its own */
         sim->work += 0.5 * sim->sc.dt * (before + sim->power);
         sim->damped += 0.5 * sim->sc.dt * (damp_before + sim->damp_power);
     }
@@ -213,7 +216,7 @@ static inline int outside(const pd_sim *sim, int64_t i)
 
 /* The constrain hooks of the effects at a phase of the step (nothing to
  * do, and no cost, when no effect holds prescribed motion). */
-static pd_status constrain(pd_sim *sim, int phase)
+pd_status pd_sim_constrain(pd_sim *sim, int phase)
 {
     if (!sim->constrained)
         return PD_OK;
@@ -235,9 +238,9 @@ pd_status pd_sim_setup(pd_sim *sim)
 {
     sim->setup = 1;
     sim->energy_next = 1; /* energy0, below */
-    pd_status s = constrain(sim, PD_PHASE_SETUP);
+    pd_status s = pd_sim_constrain(sim, PD_PHASE_SETUP);
     if (s == PD_OK)
-        s = compute_forces(sim);
+        s = pd_sim_compute_forces(sim);
     sim->setup = 0;
     pd_energy e;
     if (s == PD_OK && (s = pd_sim_energy(sim, &e, NULL)) == PD_OK)
@@ -300,7 +303,7 @@ pd_status pd_sim_check_balance(const pd_sim *sim, const pd_energy *e)
 {
     const double limit = sim->sc.balance_limit, drift = pd_energy_drift(sim, e);
     const int gain = drift > limit, loss = -drift > limit && !pd_model_of(sim->sc.model)->dissipative;
-    if (!(limit > 0) || !(gain || loss))
+    if (!(limit > 0) || !(gain || loss) || sim->sc.relax) /* relaxed: no dynamics */
         return PD_OK;
     return pd_fail(PD_ERR_UNSTABLE,
                    "at step %lld the energy balance %s %.3g J since step 0, %.3g times the "
@@ -485,7 +488,7 @@ pd_status pd_sim_step(pd_sim *sim)
     const int fused = !sim->constrained;
     if (!fused) {
         half_kick(sim);
-        pd_status s = constrain(sim, PD_PHASE_KICK1);
+        pd_status s = pd_sim_constrain(sim, PD_PHASE_KICK1);
         if (s != PD_OK)
             return s;
     }
@@ -500,7 +503,7 @@ pd_status pd_sim_step(pd_sim *sim)
     sim->step++;
     sim->time = (double)sim->step * dt;
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
-    pd_status s = constrain(sim, PD_PHASE_DRIFT);
+    pd_status s = pd_sim_constrain(sim, PD_PHASE_DRIFT);
     if (s == PD_OK && away) {
         double tl = pd_wtime(); /* breaking the lost particles' bonds */
         s = take_lost(sim);
@@ -508,7 +511,7 @@ pd_status pd_sim_step(pd_sim *sim)
     }
     if (s != PD_OK)
         return s;
-    s = compute_forces(sim);
+    s = pd_sim_compute_forces(sim);
     if (s != PD_OK)
         return s;
     t0 = pd_wtime();
@@ -519,7 +522,7 @@ pd_status pd_sim_step(pd_sim *sim)
     if (s != PD_OK)
         return s;
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
-    if (!bad && (s = constrain(sim, PD_PHASE_KICK2)) != PD_OK)
+    if (!bad && (s = pd_sim_constrain(sim, PD_PHASE_KICK2)) != PD_OK)
         return s;
     return bad ? not_finite(sim) : watch_balance(sim);
 }
@@ -622,7 +625,7 @@ void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
     r->power = sim->power;
     r->lost_energy = sim->lost_energy;
     r->energy0 = sim->energy0;
-    r->has_damping = sim->sc.damping > 0;
+    r->has_damping = pd_sim_damping(sim) > 0;
     r->damping[0] = sim->damped;
     r->damping[1] = sim->damp_power;
     r->lost = sim->lost;
@@ -711,5 +714,5 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
 
 double pd_sim_damping(const pd_sim *sim)
 {
-    return sim->sc.damping;
+    return sim->sc.relax ? 0.0 : sim->sc.damping; /* relaxed: the relaxation's */
 }

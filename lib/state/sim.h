@@ -143,7 +143,19 @@ struct pd_sim {
                            evaluation, N (the body's push back)          */
     int nsets;          /* the scene's named sets (sc.sets), and the     */
     int64_t **set_rows; /* rows of each, for the time series             */
+    uint8_t *held;      /* n flags, bit a: component a of the particle's
+                           motion is prescribed (lib/effects/bc.c); NULL
+                           when nothing is                               */
+    struct pd_relax *relax; /* the relaxation's work arrays (lib/run/
+                           relax.c), NULL until its first load step      */
+    void (*relax_free)(struct pd_relax *r); /* and what frees them       */
+    pd_relax_info relaxed;  /* what the last load step took              */
 };
+
+/* lib/run/sim.c, for relax.c: all force densities at the current
+ * positions, and the effects' constrain hooks at a phase. */
+pd_status pd_sim_compute_forces(pd_sim *sim);
+pd_status pd_sim_constrain(pd_sim *sim, int phase);
 
 
 #endif
