@@ -1124,10 +1124,12 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
         h->iterations += sc->relax ? relaxed.iterations : 0;
         if (sc->relax && status)
             fprintf(stderr,
-                    "%s" PROG ": load step %lld: relaxed in %lld iterations, residual %.3e N "
-                    "of a load of %.3e N, kinetic energy %.3e J (its peak %.3e J)\n",
+                    "%s" PROG ": load step %lld: relaxed in %lld iterations (%lld times "
+                    "again after bonds broke), residual %.3e N of a load of %.3e N, kinetic "
+                    "energy %.3e J (its peak %.3e J)\n",
                     tty ? "\r\033[K" : "", (long long)n, (long long)relaxed.iterations,
-                    relaxed.residual, relaxed.load, relaxed.kinetic, relaxed.kinetic_peak);
+                    (long long)relaxed.rounds, relaxed.residual, relaxed.load, relaxed.kinetic,
+                    relaxed.kinetic_peak);
         if (lost == 0 && pd_sim_lost(sim) > 0 && !o->quiet) /* the first; then counts */
             fprintf(stderr,
                     "%s" PROG ": step %lld: %lld particles lost (farther than %g m outside the "

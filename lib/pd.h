@@ -697,6 +697,7 @@ typedef struct {
     double load;        /* the norm of the load it is measured against, N */
     double kinetic_peak;/* the largest kinetic energy of the iterations, J */
     double kinetic;     /* the kinetic energy at the end, J              */
+    int64_t rounds;     /* the relaxations again after bonds broke       */
 } pd_relax_info;
 
 /* One load step of a quasi-static scene (sc.relax; lib/run/relax.c): the

@@ -21,6 +21,11 @@
  *     K_ii = -(f_i^k - f_i^{k-1}) / (rho_i h v_i^{k-1/2}),
  *     c_k  = 2 sqrt(u^T K u / u^T u),  u = y^k - x  (0 unless positive),
  * or is the C of --damping when one is given (plain dynamic relaxation).
+ * Bonds do not break while the body relaxes (its transient would break
+ * them: the held layer jumps by the load's increment at the first
+ * iteration); the breaking test is taken on the relaxed state and, while
+ * it breaks bonds, the body is relaxed again from there (each time from
+ * rest), so that a crack runs as far as the load step drives it.
  * A load step is relaxed when the residual, the norm of the net force on
  * the free particles, sqrt(sum over free components of (V_i f_i)^2), N,
  * is at most sc.relax_tolerance times the load: the norm of the loads
@@ -165,11 +170,97 @@ static void move(pd_sim *sim, struct pd_relax *R, double c, int first)
         }
 }
 
-pd_status pd_sim_relax(pd_sim *sim, pd_relax_info *info)
+/* Relax from rest under the current loads until the residual is within
+ * the tolerance; *total counts the load step's iterations. */
+static pd_status iterate(pd_sim *sim, struct pd_relax *R, pd_relax_info *info, int64_t *total)
 {
     const pd_scene *sc = &sim->sc;
     const double tol = sc->relax_tolerance;
-    if (!(sc->relax_dt > 0) || !(tol > 0))
+    for (int d = 0; d < 3; d++)
+        memset(sim->v[d], 0, (size_t)sim->n * sizeof(double));
+    double first = 0;
+    for (int64_t k = 0;; k++, ++*total) {
+        double t0 = pd_wtime();
+        reactions(sim, R->r);
+        double sum[NBUF];
+        sums(sim, R, k > 0, sum);
+        const double *F = sim->ind_f;
+        info->residual = sqrt(sum[RESIDUAL]);
+        info->load = sqrt(sum[LOAD] + F[0] * F[0] + F[1] * F[1] + F[2] * F[2]);
+        info->kinetic = sum[KINETIC];
+        info->kinetic_peak = fmax(info->kinetic_peak, sum[KINETIC]);
+        info->iterations = *total;
+        if (k == 0)
+            first = info->residual;
+        if (!isfinite(info->residual) || !isfinite(sum[KINETIC]))
+            return pd_fail(PD_ERR_UNSTABLE,
+                           "the relaxation of load step %lld is not finite at iteration %lld",
+                           (long long)sim->step, (long long)*total);
+        const double ref = info->load > 0 ? info->load : first;
+        if (info->residual <= tol * ref)
+            return PD_OK;
+        if (*total == sc->relax_iterations)
+            return pd_fail(PD_ERR_UNSTABLE,
+                           "load step %lld is not relaxed after %lld iterations: the residual "
+                           "force %.3g N is %.3g times the load %.3g N, above --relax-tolerance "
+                           "%g; give more --relax-iterations or smaller load steps",
+                           (long long)sim->step, (long long)*total, info->residual,
+                           info->residual / ref, ref, tol);
+        double c = 0;
+        if (sc->damping > 0)
+            c = sc->damping;
+        else if (k > 0 && sum[QUOTIENT] > 0 && sum[NORM] > 0)
+            c = 2.0 * sqrt(sum[QUOTIENT] / sum[NORM]);
+        move(sim, R, c, k == 0);
+        sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
+        pd_status s = pd_sim_compute_forces(sim);
+        if (s != PD_OK)
+            return s;
+    }
+}
+
+/* The load step with the bonds held elastic while the body relaxes
+ * (sim->setup: the kernels' forces without the breaking test), then the
+ * breaking test on the relaxed state and, while it breaks bonds, the
+ * relaxation again from there. */
+static pd_status load_step(pd_sim *sim, struct pd_relax *R, pd_relax_info *info, double F0[3],
+                           double c0[3])
+{
+    const pd_scene *sc = &sim->sc;
+    double t0 = pd_wtime();
+    pd_status s = pd_sim_compute_forces(sim); /* the state the step starts from */
+    if (s != PD_OK)
+        return s;
+    reactions(sim, R->r0);
+    memcpy(F0, sim->ind_f, 3 * sizeof(double));
+    indenter_centre(sim, c0);
+    for (int d = 0; d < 3; d++)
+        memcpy(R->y0[d], sim->y[d], (size_t)sim->n * sizeof(double));
+    sim->step++; /* the loads of the new time */
+    sim->time = (double)sim->step * sc->dt;
+    if ((s = pd_sim_constrain(sim, PD_PHASE_SETUP)) != PD_OK)
+        return s;
+    sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
+    if ((s = pd_sim_compute_forces(sim)) != PD_OK)
+        return s;
+    memset(info, 0, sizeof *info);
+    for (int64_t total = 0;;) {
+        if ((s = iterate(sim, R, info, &total)) != PD_OK || !sc->has_failure)
+            return s;
+        const int64_t broken = pd_sim_broken(sim);
+        sim->setup = 0;
+        s = pd_sim_compute_forces(sim);
+        sim->setup = 1;
+        if (s != PD_OK || pd_sim_broken(sim) == broken)
+            return s;
+        info->rounds++;
+    }
+}
+
+pd_status pd_sim_relax(pd_sim *sim, pd_relax_info *info)
+{
+    const pd_scene *sc = &sim->sc;
+    if (!(sc->relax_dt > 0) || !(sc->relax_tolerance > 0))
         return pd_fail(PD_ERR_INVALID, "the scene is not quasi-static (pd_scene_resolve of a "
                        "scene with relax sets its step and tolerance)");
     pd_status s = sim->relax ? PD_OK : relax_new(sim, &sim->relax);
@@ -179,65 +270,13 @@ pd_status pd_sim_relax(pd_sim *sim, pd_relax_info *info)
     struct pd_relax *R = sim->relax;
     sim->energy_next = 0; /* wanted of the end: pd_sim_energy takes its own pass */
     sim->f_zeroed = 0;
-    /* the state the step starts from: its forces again, its loads */
-    double t0 = pd_wtime();
-    if ((s = pd_sim_compute_forces(sim)) != PD_OK)
-        return s;
-    reactions(sim, R->r0);
     double F0[3], c0[3];
-    memcpy(F0, sim->ind_f, sizeof F0);
-    indenter_centre(sim, c0);
-    for (int d = 0; d < 3; d++)
-        memcpy(R->y0[d], sim->y[d], (size_t)sim->n * sizeof(double));
-    /* the loads of the new time, from rest */
-    sim->step++;
-    sim->time = (double)sim->step * sc->dt;
-    if ((s = pd_sim_constrain(sim, PD_PHASE_SETUP)) != PD_OK)
+    sim->setup = 1;
+    s = load_step(sim, R, info, F0, c0);
+    sim->setup = 0;
+    if (s != PD_OK)
         return s;
-    for (int d = 0; d < 3; d++)
-        memset(sim->v[d], 0, (size_t)sim->n * sizeof(double));
-    sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
-    if ((s = pd_sim_compute_forces(sim)) != PD_OK)
-        return s;
-    memset(info, 0, sizeof *info);
-    double first = 0;
-    for (int64_t k = 0;; k++) {
-        t0 = pd_wtime();
-        reactions(sim, R->r);
-        double sum[NBUF];
-        sums(sim, R, k > 0, sum);
-        const double *F = sim->ind_f;
-        info->residual = sqrt(sum[RESIDUAL]);
-        info->load = sqrt(sum[LOAD] + F[0] * F[0] + F[1] * F[1] + F[2] * F[2]);
-        info->kinetic = sum[KINETIC];
-        info->kinetic_peak = fmax(info->kinetic_peak, sum[KINETIC]);
-        info->iterations = k;
-        if (k == 0)
-            first = info->residual;
-        if (!isfinite(info->residual) || !isfinite(sum[KINETIC]))
-            return pd_fail(PD_ERR_UNSTABLE,
-                           "the relaxation of load step %lld is not finite at iteration %lld",
-                           (long long)sim->step, (long long)k);
-        const double ref = info->load > 0 ? info->load : first;
-        if (info->residual <= tol * ref)
-            break;
-        if (k == sc->relax_iterations)
-            return pd_fail(PD_ERR_UNSTABLE,
-                           "load step %lld is not relaxed after %lld iterations: the residual "
-                           "force %.3g N is %.3g times the load %.3g N, above --relax-tolerance "
-                           "%g; give more --relax-iterations or smaller load steps",
-                           (long long)sim->step, (long long)k, info->residual,
-                           info->residual / ref, ref, tol);
-        double c = 0;
-        if (sc->damping > 0)
-            c = sc->damping;
-        else if (k > 0 && sum[QUOTIENT] > 0 && sum[NORM] > 0)
-            c = 2.0 * sqrt(sum[QUOTIENT] / sum[NORM]);
-        move(sim, R, c, k == 0);
-        sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
-        if ((s = pd_sim_compute_forces(sim)) != PD_OK)
-            return s;
-    }
+    double t0 = pd_wtime();
     /* the loads' work over the step: R->r is that of the relaxed state */
     double c1[3], dc = 0;
     indenter_centre(sim, c1);
