@@ -168,6 +168,27 @@ assert abs(s['elastic_energy'][2] - s['external_work'][2]) < 1e-3 * s['elastic_e
 "
 }
 
+@test "relax: a bar pulled past its critical stretch breaks in a relaxed state and carries nothing" {
+    make_small
+    # s0 = 5e-4: 2 um a load step over the 15 mm between the grips
+    pd-run -q --bulk-modulus 14e9 --failure 5e-4,0 --relax --dt 1 --steps 5 \
+        --velocity-bc left,x,0 --velocity-bc right,x,2e-6 small.h5 -o r.h5
+    py "$SERIES
+s = series('r.h5')
+F, Fl, broken = s['right.fx'], s['left.fx'], s['broken_bonds']
+assert broken[1] == broken[2] == 0 and abs(F[2] - 2 * F[1]) < 1e-3 * F[2], (broken, F)
+assert all(np.diff(broken) >= 0) and broken[4] > 0, broken
+# cut through: the grips carry nothing but the tolerance's rounding
+assert abs(F[5]) < 1e-4 * F[4] and abs(Fl[5]) < 1e-4 * F[4], (F, Fl)
+assert all(abs(F[1:5] + Fl[1:5]) < 1e-3 * F[1:5]), (F, Fl)
+assert s['elastic_energy'][5] < 1e-4 * s['elastic_energy'][4]
+with h5py.File('r.h5') as f:      # a plane of particles lost half its bonds
+    d = f['frames/00000005/damage'][:]
+    x = f['particles/position'][:, 0]
+assert max(d[np.isclose(x, xp)].min() for xp in np.unique(x)) > 0.3
+"
+}
+
 @test "relax: the same bits at 1 and 2 threads, and through a restart" {
     make_small
     local opts=(-q --bulk-modulus 14e9 --failure 0.0005,0.25 "${STRETCH[@]}" --every 2)

@@ -30,8 +30,9 @@
  * the free particles, sqrt(sum over free components of (V_i f_i)^2), N,
  * is at most sc.relax_tolerance times the load: the norm of the loads
  * (the reactions of the held sets and the body forces, particle by
- * particle, and the force on the indenter), or, in a scene without any,
- * the step's residual at its first iteration.
+ * particle, and the force on the indenter), but no less than the norm of
+ * the forces K PD_PENALTY_STRAIN V_i^(2/3) of a negligible stress on every
+ * particle (a scene without loads, a bar cut through).
  *
  * The work of the loads is the trapezoid over the load steps,
  *     W += sum_i (R_i^{n-1} + R_i^n)/2 . (y_i^n - y_i^{n-1})
@@ -56,6 +57,7 @@ struct pd_relax {
     double *r[3];     /* the reactions now, N                             */
     double *fprev[3]; /* forces of the iteration before, N/m^3            */
     double *term[NBUF]; /* each particle's term of the sums               */
+    double floor;     /* the least load a residual is measured against, N */
 };
 
 static void relax_free(struct pd_relax *r)
@@ -87,6 +89,18 @@ static pd_status relax_new(const pd_sim *sim, struct pd_relax **out)
         relax_free(r);
         return pd_fail(PD_ERR_NOMEM, "out of memory for the relaxation");
     }
+    /* the floor: a stress of K PD_PENALTY_STRAIN on each particle's face,
+     * the norm of K s V_i^(2/3) (a body whose load vanished, a bar cut
+     * through, is at rest once its residual is below that) */
+    double k = sim->sc.bulk_modulus;
+    if (!(k > 0)) /* c given: c is linear in K */
+        k = sim->sc.c / pd_pmb_c_for(sim->p, 1.0, sim->b->horizon);
+    double sum = 0;
+    for (int64_t i = 0; i < sim->n; i++) {
+        const double f = k * PD_PENALTY_STRAIN * pow(sim->p->volume[i], 2.0 / 3.0);
+        sum += f * f;
+    }
+    r->floor = sqrt(sum);
     *out = r;
     return PD_OK;
 }
@@ -178,7 +192,6 @@ static pd_status iterate(pd_sim *sim, struct pd_relax *R, pd_relax_info *info, i
     const double tol = sc->relax_tolerance;
     for (int d = 0; d < 3; d++)
         memset(sim->v[d], 0, (size_t)sim->n * sizeof(double));
-    double first = 0;
     for (int64_t k = 0;; k++, ++*total) {
         double t0 = pd_wtime();
         reactions(sim, R->r);
@@ -190,13 +203,11 @@ static pd_status iterate(pd_sim *sim, struct pd_relax *R, pd_relax_info *info, i
         info->kinetic = sum[KINETIC];
         info->kinetic_peak = fmax(info->kinetic_peak, sum[KINETIC]);
         info->iterations = *total;
-        if (k == 0)
-            first = info->residual;
         if (!isfinite(info->residual) || !isfinite(sum[KINETIC]))
             return pd_fail(PD_ERR_UNSTABLE,
                            "the relaxation of load step %lld is not finite at iteration %lld",
                            (long long)sim->step, (long long)*total);
-        const double ref = info->load > 0 ? info->load : first;
+        const double ref = fmax(info->load, R->floor);
         if (info->residual <= tol * ref)
             return PD_OK;
         if (*total == sc->relax_iterations)
@@ -254,6 +265,10 @@ static pd_status load_step(pd_sim *sim, struct pd_relax *R, pd_relax_info *info,
         if (s != PD_OK || pd_sim_broken(sim) == broken)
             return s;
         info->rounds++;
+        /* the forces without the bonds just broken (the breaking pass
+         * still had them), to relax from */
+        if ((s = pd_sim_compute_forces(sim)) != PD_OK)
+            return s;
     }
 }
 
