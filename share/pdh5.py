@@ -1,4 +1,5 @@
-"""pdh5 -- read pd-h5 files' bonds from Python, in either form (pd-h5(5)).
+"""pdh5 -- read pd-h5 files' bonds from Python, in either form (pd-h5(5)),
+and a run's time series.
 
     import h5py, pdh5
     with h5py.File("model.h5", "r") as f:
@@ -12,12 +13,14 @@ site c_i = round((x_i - origin) / spacing), its family is every particle at
 a site c_i + d over the table's offsets d, sorted by row, and each bond's
 length and partial-volume factor come from the positions and radii by the
 arithmetic of pd-bonds, so the arrays equal those of `pd-bonds --csr` bit
-for bit.  Needs numpy and h5py (python3-numpy, python3-h5py).
+for bit.  series(path) gives a run's /series (pd-run --series) as a dict
+of its columns by name, the rows counted only.  Needs numpy and h5py
+(python3-numpy, python3-h5py).
 """
 
 import numpy as np
 
-__all__ = ["bonds", "bits", "form", "FormatError"]
+__all__ = ["bonds", "bits", "form", "series", "FormatError"]
 
 
 class FormatError(ValueError):
@@ -104,3 +107,14 @@ def bonds(f):
     g = f["bonds"]
     return (np.asarray(g["offset"][()], dtype=np.int64), np.asarray(g["neighbor"][()]),
             np.asarray(g["length"][()]), np.asarray(g["volume_factor"][()]))
+
+
+def series(path):
+    """The time series of the run file at path: {column name: its values}."""
+    import h5py
+    with h5py.File(path, "r") as f:
+        g = f["series"]
+        columns = g.attrs["columns"]
+        columns = (columns.decode() if isinstance(columns, bytes) else columns).split()
+        values = g["values"][: g.attrs["rows"]]
+    return {c: values[:, k] for k, c in enumerate(columns)}

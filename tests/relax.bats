@@ -15,26 +15,24 @@ setup() {
     cd "$BATS_TEST_TMPDIR"
 }
 
-# A 40 x 12 x 12 mm bar at 1 mm (6929 particles, horizon 3 spacings), the
-# three planes at each end the sets left and right.  Cached per file.
+# _build_bar DIR NAME L W: DIR/NAME.h5, an L x W x W mm bar at 1 mm
+# (horizon 3 spacings), the three planes at each end the sets left and
+# right.
 _build_bar() {
-    pd-lattice -q --spacing 0.001 --box 0,0.04,0,0.012,0,0.012 --density 2200 \
-        --set left=box,-1,0.0025,-1,1,-1,1 --set right=box,0.0375,1,-1,1,-1,1 -o "$1/bar-l.h5" &&
-        pd-bonds -q --horizon 0.0030001 "$1/bar-l.h5" -o "$1/bar.h5"
+    local dir=$1 name=$2 l=$3 w=$4
+    pd-lattice -q --spacing 0.001 --box "0,0.0$l,0,0.0$w,0,0.0$w" --density 2200 \
+        --set left=box,-1,0.0025,-1,1,-1,1 --set "right=box,0.0$((l - 3))5,1,-1,1,-1,1" \
+        -o "$dir/$name-l.h5" &&
+        pd-bonds -q --horizon 0.0030001 "$dir/$name-l.h5" -o "$dir/$name.h5"
 }
+# The 40 x 12 x 12 mm bar (6929 particles) and a small 20 x 6 x 6 mm one,
+# cached per file.
 make_bar() {
-    _pd_cached relax-bar _build_bar || return 1
+    _pd_cached relax-bar _build_bar bar 40 12 || return 1
     cp "$_PD_CACHE/bar.h5" .
 }
-
-# A small 20 x 6 x 6 mm bar, the same sets.
-_build_small() {
-    pd-lattice -q --spacing 0.001 --box 0,0.02,0,0.006,0,0.006 --density 2200 \
-        --set left=box,-1,0.0025,-1,1,-1,1 --set right=box,0.0175,1,-1,1,-1,1 -o "$1/s-l.h5" &&
-        pd-bonds -q --horizon 0.0030001 "$1/s-l.h5" -o "$1/small.h5"
-}
 make_small() {
-    _pd_cached relax-small _build_small || return 1
+    _pd_cached relax-small _build_bar small 20 06 || return 1
     cp "$_PD_CACHE/small.h5" .
 }
 
@@ -79,21 +77,12 @@ for a in (1, 2):                   # uniaxial stress: the sides are free
 print(model, "E along x", E, "relaxed", sxx / eps)
 '
 
-# SERIES: the rows of a run as a dict of columns.
-SERIES='
-def series(path):
-    with h5py.File(path) as f:
-        g = f["series"]
-        cols = g.attrs["columns"].split()
-        v = g["values"][: g.attrs["rows"]]
-    return {c: v[:, k] for k, c in enumerate(cols)}
-'
 
 @test "relax: a PMB bar stretched quasi-statically has the bond-based modulus in its interior" {
     make_bar
     pd-run -q --bulk-modulus 14e9 "${STRETCH[@]}" --steps 2 --fields stress bar.h5 -o r.h5
     py "$CHECK" pmb r.h5 14e9
-    py "$SERIES
+    py "series = pdh5.series
 s = series('r.h5')
 F, Fl = s['right.fx'], s['left.fx']
 assert list(s['step']) == [0, 1, 2] and list(s['time']) == [0.0, 1.0, 2.0]
@@ -133,7 +122,7 @@ assert ib > ia, (ia, ib)"
     pd-run "${base[@]}" small.h5 -o adaptive.h5
     pd-run "${base[@]}" --damping 1e5 small.h5 -o c1.h5
     pd-run "${base[@]}" --damping 1e6 small.h5 -o c2.h5
-    py "$SERIES
+    py "series = pdh5.series
 u = {}
 for name in ('adaptive', 'c1', 'c2'):
     with h5py.File(name + '.h5') as f:
@@ -154,7 +143,7 @@ assert it['adaptive'] < it['c2'], it     # a heavy fixed damping crawls
     # the right end pulled by a body force density b along x
     pd-run -q --bulk-modulus 14e9 --relax --dt 1 --steps 2 --velocity-bc left,x,0 \
         --body-force right,x,points:0,0,2,2e9 small.h5 -o r.h5
-    py "$SERIES
+    py "series = pdh5.series
 s = series('r.h5')
 with h5py.File('r.h5') as f:
     ids = f['sets/right'][:]
@@ -173,7 +162,7 @@ assert abs(s['elastic_energy'][2] - s['external_work'][2]) < 1e-3 * s['elastic_e
     # s0 = 5e-4: 2 um a load step over the 15 mm between the grips
     pd-run -q --bulk-modulus 14e9 --failure 5e-4,0 --relax --dt 1 --steps 5 \
         --velocity-bc left,x,0 --velocity-bc right,x,2e-6 small.h5 -o r.h5
-    py "$SERIES
+    py "series = pdh5.series
 s = series('r.h5')
 F, Fl, broken = s['right.fx'], s['left.fx'], s['broken_bonds']
 assert broken[1] == broken[2] == 0 and abs(F[2] - 2 * F[1]) < 1e-3 * F[2], (broken, F)

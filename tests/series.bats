@@ -16,15 +16,6 @@ setup() {
     cd "$BATS_TEST_TMPDIR"
 }
 
-# series FILE: the series of FILE as a dict of columns (numpy arrays).
-SERIES='
-def series(path):
-    with h5py.File(path) as f:
-        g = f["series"]
-        cols = g.attrs["columns"].split()
-        v = g["values"][: g.attrs["rows"]]
-    return {c: v[:, k] for k, c in enumerate(cols)}
-'
 
 # A chain of 11 particles along y at 1 mm (horizon 1.6 mm: each bonded to
 # its neighbours only), its end particles the sets bottom and top.
@@ -47,7 +38,7 @@ make_bar() {
     # bottom held, top pulled 10 um in 0.2 ms and held; damped to rest
     pd-run -q --c 1e20 --steps 4000 --series 400 --damping 3e4 --velocity-bc bottom,y,0 \
         --displacement-bc top,y,points:0,0,2e-4,1e-5 chain.h5 -o r.h5
-    py "$SERIES
+    py "series = pdh5.series
 s = series('r.h5')
 c, V, dx, u = 1e20, 1e-9, 1e-3, 1e-5
 F = c * (u / (10 * dx)) * V * V      # every bond stretched u / L; 0.1 N
@@ -69,7 +60,7 @@ assert list(s['step']) == list(range(0, 4001, 400)), s['step']
     make_bar
     pd-run -q --bulk-modulus 14e9 --steps 3000 --series 300 --damping 2e5 \
         --velocity-bc left,x,0 --displacement-bc right,x,points:0,0,5e-5,1e-5 bar.h5 -o r.h5
-    py "$SERIES
+    py "series = pdh5.series
 s = series('r.h5')
 F, Fl, u = s['right.fx'][-1], s['left.fx'][-1], s['right.ux'][-1]
 assert abs(u - 1e-5) < 1e-9 * u and s['left.ux'][-1] == 0
@@ -91,7 +82,7 @@ for a in 'yz':
     make_bar
     pd-run -q --c 1e21 --steps 20 --series 5 --body-force right,x,points:0,0,1e-5,1e9 \
         bar.h5 -o r.h5
-    py "$SERIES
+    py "series = pdh5.series
 s = series('r.h5')
 with h5py.File('bar.h5') as f:
     n = len(f['sets/right'])
@@ -110,7 +101,7 @@ assert np.allclose(s['px'], imp, rtol=1e-9, atol=1e-12 * abs(imp).max()), (s['px
     make_block
     pd-run -q --bulk-modulus "$BULK" --allow-overlap --steps 60 --series 1 \
         --indenter sphere,0.005,0.005,0.0125,0.003,1e17,0,0,-100 model.h5 -o r.h5
-    py "$SERIES
+    py "series = pdh5.series
 s = series('r.h5')
 dt = s['time'][1]
 # the indenter moves as given
@@ -132,7 +123,7 @@ for a in 'xyz':
     make_block
     pd-run -q --bulk-modulus "$BULK" --steps 120 --series 1 \
         --projectile sphere,0.005,0.005,0.0131,0.003,0.002,0,0,-50 model.h5 -o r.h5
-    py "$SERIES
+    py "series = pdh5.series
 s = series('r.h5')
 m, dt = 0.002, s['time'][1]
 assert s['projectile.fz'].max() > 0, 'no contact'
@@ -152,7 +143,7 @@ assert s['projectile_energy'][0] == 0.5 * m * 50 ** 2
 @test "series: at a frame its row holds the frame's energies, broken bonds and damage" {
     make_block
     pd-run -q "${RUN_OPTS[@]}" --steps 120 --every 20 --series 10 model.h5 -o r.h5
-    py "$SERIES
+    py "series = pdh5.series
 s = series('r.h5')
 assert list(s['step']) == list(range(0, 121, 10))
 with h5py.File('r.h5') as f:
@@ -178,7 +169,7 @@ with h5py.File('r.h5') as f:
     pd-run -q --c 1e21 --steps 100 model.h5 -o a.h5
     pd-run -q --c 1e21 --steps 100 --status 25 model.h5 -o b.h5
     pd-run -q --c 1e21 --steps 100 --series 7 model.h5 -o c.h5
-    py "$SERIES
+    py "series = pdh5.series
 assert list(series('a.h5')['step']) == list(range(0, 101, 10))
 assert list(series('b.h5')['step']) == [0, 25, 50, 75, 100]
 assert list(series('c.h5')['step']) == list(range(0, 99, 7)) + [100]
