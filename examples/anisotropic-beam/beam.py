@@ -3,6 +3,7 @@
 
 Usage: /usr/bin/python3 beam.py stress RUN.h5 > stress.dat
        /usr/bin/python3 beam.py slice RUN.h5 > slice.dat
+       /usr/bin/python3 beam.py compare CASE... > static.txt
 
 stress  'time_ms sigma_xx_MPa' per complete frame: the mean axial
         peridynamic stress (the frames' 'stress', pd-run --fields stress)
@@ -10,8 +11,15 @@ stress  'time_ms sigma_xx_MPa' per complete frame: the mean axial
         is compression;
 slice   'x_mm y_mm damage' at the last frame, of the lattice plane of
         reference z nearest the beam's mid-height, at the deformed x and
-        y, sorted by damage (the most damaged drawn last).
+        y, sorted by damage (the most damaged drawn last);
+compare per CASE, from stress-dynamic-CASE.dat, stress-static-CASE.dat and
+        the logs dynamic-CASE.log, static-CASE.log (make static): the peak
+        compression of the dynamic and of the quasi-static run and when,
+        their largest difference at the quasi-static run's times (up to
+        its peak), and the wall time of each (the relaxation's iterations
+        too).
 """
+import re
 import sys
 
 import h5py
@@ -23,7 +31,35 @@ def frames(h):
                   key=lambda g: g.attrs["step"])
 
 
+def wall(log):
+    """The wall time of a pd-run log, s, and its iterations (0: dynamic)."""
+    text = open(log).read()
+    m = re.search(r"load steps, (\d+) iterations, in ([0-9.]+) s", text)
+    if m:
+        return float(m.group(2)), int(m.group(1))
+    return float(re.search(r"steps in ([0-9.]+) s", text).group(1)), 0
+
+
+def compare(cases):
+    print("# case  dynamic: peak -sigma_xx MPa, at ms, wall s   "
+          "static: peak MPa, at ms, wall s, iterations   "
+          "largest |dynamic - static| up to the static peak, MPa")
+    for c in cases:
+        d = np.loadtxt("stress-dynamic-%s.dat" % c, ndmin=2)
+        q = np.loadtxt("stress-static-%s.dat" % c, ndmin=2)
+        kd, kq = np.argmin(d[:, 1]), np.argmin(q[:, 1])
+        common = [(t, s) for t, s in q[: kq + 1] if np.isclose(d[:, 0], t, rtol=1e-6).any()]
+        diff = max(abs(s - d[np.isclose(d[:, 0], t, rtol=1e-6), 1][0]) for t, s in common)
+        wd, _ = wall("dynamic-%s.log" % c)
+        wq, it = wall("static-%s.log" % c)
+        print("%-8s %6.1f %6.3f %7.1f   %6.1f %6.3f %7.1f %7d   %6.1f" %
+              (c, -d[kd, 1], d[kd, 0], wd, -q[kq, 1], q[kq, 0], wq, it, diff))
+
+
 def main():
+    if len(sys.argv) > 2 and sys.argv[1] == "compare":
+        compare(sys.argv[2:])
+        return
     if len(sys.argv) != 3 or sys.argv[1] not in ("stress", "slice"):
         raise SystemExit(__doc__.split("\n\n")[1])
     with h5py.File(sys.argv[2], "r") as h:
