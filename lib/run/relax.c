@@ -105,31 +105,10 @@ static pd_status relax_new(const pd_sim *sim, struct pd_relax **out)
     return PD_OK;
 }
 
-/* The force each particle's boundary conditions apply to it, N, into r. */
-static void reactions(const pd_sim *sim, double *const r[3])
-{
-    for (int d = 0; d < 3; d++)
-        memset(r[d], 0, (size_t)sim->n * sizeof(double));
-    for (int k = 0; k < sim->neffects; k++)
-        if (sim->effects[k]->reaction)
-            sim->effects[k]->reaction(sim, sim->state[k], r);
-}
-
 /* Does the relaxation move component a of particle i? */
 static inline int moves(const pd_sim *sim, int64_t i, int a)
 {
     return !(sim->held && (sim->held[i] >> a & 1)) && !(sim->lost && sim->lost[i]);
-}
-
-/* The indenter's centre at the current time, m (as lib/effects/indenter.c
- * places it). */
-static void indenter_centre(const pd_sim *sim, double c[3])
-{
-    const pd_scene *sc = &sim->sc;
-    for (int d = 0; d < 3; d++)
-        c[d] = sc->has_indenter
-                   ? sc->ind_center[d] + ((double)sim->step * sc->dt) * sc->ind_velocity[d]
-                   : 0.0;
 }
 
 /* The sums of one iteration, each over the particles in fixed chunks:
@@ -194,7 +173,7 @@ static pd_status iterate(pd_sim *sim, struct pd_relax *R, pd_relax_info *info, i
         memset(sim->v[d], 0, (size_t)sim->n * sizeof(double));
     for (int64_t k = 0;; k++, ++*total) {
         double t0 = pd_wtime();
-        reactions(sim, R->r);
+        pd_sim_reactions(sim, R->r);
         double sum[NBUF];
         sums(sim, R, k > 0, sum);
         const double *F = sim->ind_f;
@@ -242,9 +221,9 @@ static pd_status load_step(pd_sim *sim, struct pd_relax *R, pd_relax_info *info,
     pd_status s = pd_sim_compute_forces(sim); /* the state the step starts from */
     if (s != PD_OK)
         return s;
-    reactions(sim, R->r0);
+    pd_sim_reactions(sim, R->r0);
     memcpy(F0, sim->ind_f, 3 * sizeof(double));
-    indenter_centre(sim, c0);
+    pd_sim_indenter_centre(sim, c0);
     for (int d = 0; d < 3; d++)
         memcpy(R->y0[d], sim->y[d], (size_t)sim->n * sizeof(double));
     sim->step++; /* the loads of the new time */
@@ -294,7 +273,7 @@ pd_status pd_sim_relax(pd_sim *sim, pd_relax_info *info)
     double t0 = pd_wtime();
     /* the loads' work over the step: R->r is that of the relaxed state */
     double c1[3], dc = 0;
-    indenter_centre(sim, c1);
+    pd_sim_indenter_centre(sim, c1);
     for (int d = 0; d < 3; d++)
         dc -= 0.5 * (F0[d] + sim->ind_f[d]) * (c1[d] - c0[d]);
     double *w = R->term[0];

@@ -120,16 +120,32 @@ static pd_status reactions(const pd_sim *sim, double *r[3])
     if (!any)
         return PD_OK;
     for (int d = 0; d < 3; d++)
-        if ((r[d] = calloc((size_t)(sim->n > 0 ? sim->n : 1), sizeof(double))) == NULL) {
+        if ((r[d] = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double))) == NULL) {
             for (int e = 0; e < d; e++)
                 free(r[e]);
             r[0] = NULL;
             return pd_fail(PD_ERR_NOMEM, "out of memory for the reaction forces");
         }
+    pd_sim_reactions(sim, r);
+    return PD_OK;
+}
+
+void pd_sim_reactions(const pd_sim *sim, double *const r[3])
+{
+    for (int d = 0; d < 3; d++)
+        memset(r[d], 0, (size_t)sim->n * sizeof(double));
     for (int k = 0; k < sim->neffects; k++)
         if (sim->effects[k]->reaction)
             sim->effects[k]->reaction(sim, sim->state[k], r);
-    return PD_OK;
+}
+
+void pd_sim_indenter_centre(const pd_sim *sim, double c[3])
+{
+    const pd_scene *sc = &sim->sc;
+    for (int d = 0; d < 3; d++) /* as the indenter's own centre */
+        c[d] = sc->has_indenter
+                   ? sc->ind_center[d] + ((double)sim->step * sc->dt) * sc->ind_velocity[d]
+                   : 0.0;
 }
 
 static int sphere(double *row, int k, const double x[3], const double v[3], const double f[3])
@@ -190,8 +206,7 @@ pd_status pd_sim_series_row(const pd_sim *sim, const pd_energy *e, double *row)
         k = sphere(row, k, sim->proj_x, sim->proj_v, sim->proj_f);
     if (sc->has_indenter) {
         double c[3];
-        for (int d = 0; d < 3; d++) /* as the indenter's own centre */
-            c[d] = sc->ind_center[d] + ((double)sim->step * sc->dt) * sc->ind_velocity[d];
+        pd_sim_indenter_centre(sim, c);
         k = sphere(row, k, c, sc->ind_velocity, sim->ind_f);
     }
     return PD_OK;

@@ -156,6 +156,12 @@ struct pd_sim {
  * positions, and the effects' constrain hooks at a phase. */
 pd_status pd_sim_compute_forces(pd_sim *sim);
 pd_status pd_sim_constrain(pd_sim *sim, int phase);
+/* lib/run/series.c, for relax.c too: the force each particle's boundary
+ * conditions apply to it, N, into r (zeroed first); the indenter's centre
+ * at the current time, m (as lib/effects/indenter.c places it; 0 without
+ * one). */
+void pd_sim_reactions(const pd_sim *sim, double *const r[3]);
+void pd_sim_indenter_centre(const pd_sim *sim, double c[3]);
 
 
 #endif
