@@ -20,8 +20,8 @@ SHAREDIR   = $(PREFIX)/share/pd
 CC        ?= cc
 CFLAGS    ?= -O3 -g
 PD_CFLAGS  = -std=c11 -D_POSIX_C_SOURCE=200809L -Wall -Wextra -fopenmp -fno-math-errno -Ilib \
-             $(shell pkg-config --cflags hdf5 gsl 2>/dev/null)
-PD_LIBS    = $(shell pkg-config --libs hdf5 gsl 2>/dev/null) -fopenmp -lm
+             $(shell pkg-config --cflags hdf5 gsl zlib 2>/dev/null)
+PD_LIBS    = $(shell pkg-config --libs hdf5 gsl zlib 2>/dev/null) -fopenmp -lm
 
 ifeq ($(SANITIZE),1)
 PD_CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer

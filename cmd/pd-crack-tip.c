@@ -405,7 +405,7 @@ static pd_status write_path(const struct options *o, const pd_particles *p, doub
     snprintf(*file, len, "%s", slash ? path + (slash - o->path) + 1 : path);
     pd_vtk_frame fr = {.n = p->n, .position = pos, .displacement = disp, .damage = damage,
                        .material = p->material, .id = p->id, .select = rows, .nselect = m,
-                       .front = front};
+                       .front = front, .zlib_level = PD_VTK_ZLIB_LEVEL};
     pd_status s = pd_vtk_write(path, &fr);
     free(path);
     return s;
@@ -568,7 +568,7 @@ int main(int argc, char **argv)
             st = pd_fail(PD_ERR_NOMEM, "out of memory");
         else {
             snprintf(pvd, len, "%s.pvd", o.path);
-            st = pd_pvd_write(pvd, nframes, files, s.time);
+            st = pd_pvd_write(pvd, nframes, files, s.time, NULL, NULL);
         }
         free(pvd);
     }

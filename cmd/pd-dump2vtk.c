@@ -13,6 +13,11 @@
  * `damage_run` field), which shows only what broke during the run.
  * Every optional field a frame holds (pd-run --fields) goes along:
  * strain_energy_density, stress (a 9-component tensor) and von_mises.
+ * The arrays are compressed by zlib (--compress LEVEL, 0 for raw).  A run
+ * with an indenter or a projectile also gets DIR/NAME_indenter_STEP.vtu and
+ * DIR/NAME_projectile_STEP.vtu, the sphere's surface at that frame, listed
+ * in the .pvd at the frame's time as parts 1 and on (the particles are
+ * part 0), each named.
  */
 #include <getopt.h>
 #include <stdio.h>
@@ -28,6 +33,7 @@ struct options {
     const char *input;
     const char *dir;   /* -o DIR                                       */
     const char *name;  /* --name; NULL: from the input's file name      */
+    int level;         /* --compress: zlib level, 0 raw                 */
     int quiet, debug;
 };
 
@@ -41,11 +47,15 @@ static void usage(FILE *out)
             "file name of RUN.h5 without '.h5' ('run' when RUN.h5 is '-', stdin).  A run\n"
             "with a pre-crack (pd-bonds --crack) also gets damage_run, the damage without\n"
             "the pre-crack.  The optional fields of pd-run --fields go along when the frames\n"
-            "have them: strain_energy_density, stress (a tensor) and von_mises.\n"
+            "have them: strain_energy_density, stress (a tensor) and von_mises.  A run with\n"
+            "an indenter or a projectile also gets its sphere at every frame,\n"
+            "DIR/NAME_indenter_STEP.vtu and DIR/NAME_projectile_STEP.vtu, in the .pvd.\n"
             "\n"
             "Options:\n"
             "  -o, --output DIR    directory of the output, created when missing (required)\n"
             "      --name NAME     base name of the output files\n"
+            "      --compress LEVEL  zlib level of the arrays, 1 (fast, the default) to 9\n"
+            "                      (small); 0 writes them raw\n"
             "  -q, --quiet         no summary on stderr\n"
             "      --debug         print HDF5's own error stack\n"
             "  -h, --help          show this help\n"
@@ -54,15 +64,18 @@ static void usage(FILE *out)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_NAME = 256 };
+    enum { OPT_NAME = 256, OPT_COMPRESS };
     static const struct option longopts[] = {
         {"output", required_argument, 0, 'o'},
         {"name", required_argument, 0, OPT_NAME},
+        {"compress", required_argument, 0, OPT_COMPRESS},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
+    o->level = PD_VTK_ZLIB_LEVEL;
     int c, status = 0;
+    int64_t level;
     while ((c = next_option(argc, argv, "o:qhV", longopts, usage, &o->debug, &status)) != -1) {
         switch (c) {
         case 'o':
@@ -70,6 +83,11 @@ static int parse_options(int argc, char **argv, struct options *o)
             break;
         case OPT_NAME:
             o->name = optarg;
+            break;
+        case OPT_COMPRESS:
+            if (!pd_parse_int64(optarg, &level) || level < 0 || level > 9)
+                return usage_error("--compress needs a zlib level 0 to 9, not", optarg);
+            o->level = (int)level;
             break;
         case 'q':
             o->quiet = 1;
@@ -148,10 +166,63 @@ static void frame_data_free(struct frame_data *d)
     free(d->mises);
 }
 
-/* Write frame `frame` as DIR/file; file and time are filled in. */
+/* The entries of the .pvd: a file, its time and its part. */
+struct collection {
+    int64_t n;
+    char **files;
+    double *times;
+    int *parts;
+    const char **names;
+};
+
+/* Add DIR/NAME_WHAT_STEP.vtu (WHAT "" for the particles) to c; *path
+ * gets its path (caller frees). */
+static pd_status add_entry(struct collection *c, const char *dir, const char *name,
+                           const char *what, const pd_frame_info *fi, int part, char **path)
+{
+    size_t len = strlen(dir) + strlen(name) + strlen(what) + 48;
+    char *file = malloc(len);
+    *path = malloc(len);
+    if (file == NULL || *path == NULL) {
+        free(file);
+        free(*path);
+        *path = NULL;
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    snprintf(file, len, "%s%s%s_%08lld.vtu", name, what[0] ? "_" : "", what, (long long)fi->step);
+    snprintf(*path, len, "%s/%s", dir, file);
+    c->files[c->n] = file;
+    c->times[c->n] = fi->time;
+    c->parts[c->n] = part;
+    c->names[c->n] = what[0] ? what : "particles";
+    c->n++;
+    return PD_OK;
+}
+
+/* The indenter's and the projectile's spheres at a frame, parts 1 and on. */
+static pd_status dump_spheres(const pd_file *f, const pd_frame_info *fi, const struct options *o,
+                              const char *name, struct collection *c)
+{
+    pd_frame_sphere sp[2];
+    int n;
+    pd_status s = pd_frame_spheres(f, fi, sp, &n);
+    for (int k = 0; k < n && s == PD_OK; k++) {
+        char *path;
+        if ((s = add_entry(c, o->dir, name, sp[k].name, fi, 1 + k, &path)) != PD_OK)
+            break;
+        pd_vtk_sphere v = {.radius = sp[k].radius, .zlib_level = o->level};
+        memcpy(v.centre, sp[k].centre, sizeof v.centre);
+        memcpy(v.velocity, sp[k].velocity, sizeof v.velocity);
+        s = pd_vtk_write_sphere(path, &v);
+        free(path);
+    }
+    return s;
+}
+
+/* Write frame `frame` as DIR/NAME_STEP.vtu and its spheres, listed in c. */
 static pd_status dump_frame(const pd_file *f, const pd_particles *p, const char *frame,
-                            const char *dir, const char *name, struct frame_data *d,
-                            pd_bonds **b, uint64_t **intact, char **file, double *time)
+                            const struct options *o, const char *name, struct frame_data *d,
+                            pd_bonds **b, uint64_t **intact, struct collection *c)
 {
     pd_frame_info fi;
     pd_status s;
@@ -168,16 +239,9 @@ static pd_status dump_frame(const pd_file *f, const pd_particles *p, const char 
     for (int k = 0; k < 3; k++)
         for (int64_t i = 0; i < p->n; i++)
             d->pos[k][i] = p->x[k][i] + d->disp[k][i];
-    size_t len = strlen(dir) + strlen(name) + 48;
-    char *path = malloc(len);
-    *file = malloc(len);
-    if (path == NULL || *file == NULL) {
-        free(path);
-        return pd_fail(PD_ERR_NOMEM, "out of memory");
-    }
-    snprintf(*file, len, "%s_%08lld.vtu", name, (long long)fi.step);
-    snprintf(path, len, "%s/%s", dir, *file);
-    *time = fi.time;
+    char *path;
+    if ((s = add_entry(c, o->dir, name, "", &fi, 0, &path)) != PD_OK)
+        return s;
     /* every optional field the frame has */
     pd_vtk_field extra[3];
     int nextra = 0;
@@ -187,11 +251,20 @@ static pd_status dump_frame(const pd_file *f, const pd_particles *p, const char 
         extra[nextra++] = (pd_vtk_field){"stress", 9, d->stress};
     if (has_mises)
         extra[nextra++] = (pd_vtk_field){"von_mises", 1, d->mises};
-    pd_vtk_frame fr = {p->n, d->pos, d->disp, d->vel, d->damage, p->material, p->id,
-                       has_run ? d->damage_run : NULL, NULL, 0, NULL, nextra, extra};
+    pd_vtk_frame fr = {.n = p->n,
+                       .position = d->pos,
+                       .displacement = d->disp,
+                       .velocity = d->vel,
+                       .damage = d->damage,
+                       .material = p->material,
+                       .id = p->id,
+                       .damage_run = has_run ? d->damage_run : NULL,
+                       .nextra = nextra,
+                       .extra = extra,
+                       .zlib_level = o->level};
     s = pd_vtk_write(path, &fr);
     free(path);
-    return s;
+    return s == PD_OK ? dump_spheres(f, &fi, o, name, c) : s;
 }
 
 int main(int argc, char **argv)
@@ -213,37 +286,53 @@ int main(int argc, char **argv)
     pd_bonds *b = NULL;
     uint64_t *intact = NULL;
     int64_t nframes = 0;
-    char **frames = NULL, **files = NULL;
-    double *times = NULL;
+    char **frames = NULL;
+    struct collection c = {0};
     struct frame_data d = {0};
     pd_status s = pd_file_open(o.input, &f);
     if (s == PD_OK && (s = pd_read_particles(f, &p)) == PD_OK &&
         (s = pd_list_frames(f, &nframes, &frames)) == PD_OK &&
         (s = frame_data_alloc(&d, p->n)) == PD_OK) {
-        files = calloc((size_t)(nframes ? nframes : 1), sizeof *files);
-        times = calloc((size_t)(nframes ? nframes : 1), sizeof *times);
-        if (files == NULL || times == NULL)
+        /* the particles and at most two spheres a frame */
+        size_t most = 3 * (size_t)(nframes ? nframes : 1);
+        c.files = calloc(most, sizeof *c.files);
+        c.times = calloc(most, sizeof *c.times);
+        c.parts = calloc(most, sizeof *c.parts);
+        c.names = calloc(most, sizeof *c.names);
+        if (c.files == NULL || c.times == NULL || c.parts == NULL || c.names == NULL)
             s = pd_fail(PD_ERR_NOMEM, "out of memory");
     }
     if (s == PD_OK)
         s = pd_make_dirs(o.dir);
     for (int64_t k = 0; k < nframes && s == PD_OK; k++)
-        s = dump_frame(f, p, frames[k], o.dir, name, &d, &b, &intact, &files[k], &times[k]);
+        s = dump_frame(f, p, frames[k], &o, name, &d, &b, &intact, &c);
     size_t len = strlen(o.dir) + strlen(name) + 8;
     char *pvd = malloc(len);
     if (s == PD_OK && pvd == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory");
     if (s == PD_OK) {
         snprintf(pvd, len, "%s/%s.pvd", o.dir, name);
-        s = pd_pvd_write(pvd, nframes, files, times);
+        s = pd_pvd_write(pvd, c.n, c.files, c.times, c.parts, c.names);
     }
-    if (s == PD_OK && !o.quiet)
-        fprintf(stderr, PROG ": %lld frames of %lld particles, %s\n", (long long)nframes,
-                (long long)p->n, pvd);
-    for (int64_t k = 0; files && k < nframes; k++)
-        free(files[k]);
-    free(files);
-    free(times);
+    if (s == PD_OK && !o.quiet) {
+        fprintf(stderr, PROG ": %lld frames of %lld particles, ", (long long)nframes,
+                (long long)p->n);
+        const char *kinds[2] = {"indenter", "projectile"};
+        for (int k = 0; k < 2; k++) {
+            int64_t count = 0;
+            for (int64_t e = 0; e < c.n; e++)
+                count += strcmp(c.names[e], kinds[k]) == 0;
+            if (count)
+                fprintf(stderr, "%lld %s spheres, ", (long long)count, kinds[k]);
+        }
+        fprintf(stderr, "%s\n", pvd);
+    }
+    for (int64_t k = 0; k < c.n; k++)
+        free(c.files[k]);
+    free(c.files);
+    free(c.times);
+    free(c.parts);
+    free(c.names);
     free(pvd);
     free(name);
     free(intact);

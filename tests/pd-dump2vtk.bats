@@ -1,8 +1,10 @@
 #!/usr/bin/env bats
-# pd-dump2vtk: every frame of a run as a .vtu readable by meshio, with points
-# at reference + displacement, the frame's fields, damage equal to an
-# independent recomputation from /bonds, and a .pvd listing every frame with
-# its time.
+# pd-dump2vtk: every frame of a run as a .vtu readable by meshio and by
+# tests/vtu.py (zlib-compressed unless --compress 0), with points at
+# reference + displacement, the frame's fields, damage equal to an
+# independent recomputation from /bonds, the indenter's and the projectile's
+# spheres, and a .pvd listing every frame with its time.  ParaView's own
+# reading of them is in paraview.bats.
 
 load test_helper
 
@@ -51,7 +53,7 @@ frames = f["frames"]
 assert len(frames) >= 2, "fixture should have several frames"
 tree = ET.parse(os.path.join(out, name + ".pvd"))
 assert tree.getroot().get("type") == "Collection"
-sets = tree.getroot().findall("./Collection/DataSet")
+sets = [s for s in tree.getroot().findall("./Collection/DataSet") if s.get("part") == "0"]
 assert len(sets) == len(frames), (len(sets), len(frames))
 listed = {s.get("file"): float(s.get("timestep")) for s in sets}
 broken_seen = False
@@ -108,37 +110,143 @@ EOF
     assert_output "ok 5"
 }
 
-@test "the .vtu files carry binary appended data, vertex cells, UInt64 headers" {
-    pd-dump2vtk -q "$RUN" -o out
-    run -0 "$PY" - out/run_00000100.vtu <<'EOF'
-import sys, struct
-import xml.etree.ElementTree as ET
-raw = open(sys.argv[1], "rb").read()
-# the XML before the binary block, closed, is the whole header
-root = ET.fromstring(raw[:raw.index(b"<AppendedData")].decode() + "</VTKFile>")
-assert root.get("type") == "UnstructuredGrid"
-assert root.get("header_type") == "UInt64" and root.get("byte_order") == "LittleEndian"
-app = raw.index(b"_", raw.index(b'<AppendedData encoding="raw">')) + 1
-piece = root.find("./UnstructuredGrid/Piece")
-n = int(piece.get("NumberOfPoints"))
-assert int(piece.get("NumberOfCells")) == n
-sizes = {"Float64": 8, "Int64": 8, "Int32": 4, "UInt8": 1}
-for a in root.iter("DataArray"):
-    assert a.get("format") == "appended"
-    at = app + int(a.get("offset"))
-    nbytes = struct.unpack("<Q", raw[at:at + 8])[0]
-    comp = int(a.get("NumberOfComponents", "1"))
-    assert nbytes == n * comp * sizes[a.get("type")], a.get("Name")
-    body = raw[at + 8:at + 8 + nbytes]
-    if a.get("Name") == "types":
-        assert set(body) == {1}
-    if a.get("Name") == "connectivity":
-        assert list(struct.unpack("<%dq" % n, body)) == list(range(n))
-    if a.get("Name") == "offsets":
-        assert list(struct.unpack("<%dq" % n, body)) == list(range(1, n + 1))
+@test "the .vtu files carry zlib-compressed appended data, vertex cells, UInt64 headers" {
+    # 32 x 16 x 16 = 8192 particles: Points fill three 64 KiB blocks
+    # exactly, damage one; material and types end in a partial block
+    pd-lattice -q --spacing 0.001 --box 0,0.0315,0,0.0155,0,0.0155 --density 2200 -o big.h5
+    pd-bonds -q --horizon "$HORIZON" big.h5 -o bigm.h5
+    pd-run -q "${RUN_OPTS[@]}" --steps 20 --every 20 bigm.h5 -o big.h5
+    pd-dump2vtk -q big.h5 -o out
+    pd-dump2vtk -q --compress 0 big.h5 -o raw
+    pd-dump2vtk -q --compress 9 big.h5 -o best
+    run -0 "$PY" - out/big_00000020.vtu raw/big_00000020.vtu best/big_00000020.vtu <<'EOF'
+import sys, numpy as np, vtu
+z, r, b = (vtu.read(p) for p in sys.argv[1:4])
+assert z.compressed and b.compressed and not r.compressed
+n = len(r.points)
+assert n == 8192, n
+# the arrays in 64 KiB blocks, each compressed alone
+for name, blocks in (("Points", 3), ("damage", 1), ("material", 1), ("types", 1)):
+    assert z.blocks[name] == blocks, (name, z.blocks[name])
+assert r.point_data["damage"].max() > 0
+conn, off, types = z.cells
+assert np.array_equal(conn, np.arange(n)) and np.array_equal(off, np.arange(1, n + 1))
+assert np.all(types == 1)
+# compressed at any level, every array is the raw one, bit for bit
+for g in (z, b):
+    assert np.array_equal(g.points, r.points)
+    assert list(g.point_data) == list(r.point_data)
+    for k in r.point_data:
+        assert np.array_equal(g.point_data[k], r.point_data[k]), k
+    for c, d in zip(g.cells, r.cells):
+        assert np.array_equal(c, d)
 print("ok")
 EOF
     assert_output "ok"
+    # smaller files; a higher level, no larger ones
+    z=$(stat -c %s out/big_00000020.vtu) r=$(stat -c %s raw/big_00000020.vtu)
+    b=$(stat -c %s best/big_00000020.vtu)
+    (( z < r * 3 / 4 && b <= z )) || fail "sizes: level 1 $z, raw $r, level 9 $b"
+}
+
+@test "--compress takes a zlib level 0 to 9; anything else is a usage error" {
+    for bad in -1 10 1.5 x ""; do
+        expect_usage_error "--compress needs a zlib level 0 to 9" pd-dump2vtk --compress "$bad" "$RUN" -o out
+    done
+    [ ! -e out ]
+}
+
+@test "the compressed files do not depend on the thread count" {
+    OMP_NUM_THREADS=1 pd-dump2vtk -q "$RUN" -o one
+    OMP_NUM_THREADS=2 pd-dump2vtk -q "$RUN" -o two
+    for f in one/*; do
+        cmp "$f" "two/${f#one/}"
+    done
+    [ "$(ls one | wc -l)" -eq 11 ]
+}
+
+# check_spheres RUN DIR NAME KIND...: the .pvd lists, at every frame's time,
+# the particles as part 0 and then one sphere a KIND (indenter, projectile)
+# as parts 1, 2, named; each sphere's .vtu is a closed surface of triangles
+# with outward normals around the centre the run puts it at (the indenter
+# at its /scene centre + step dt v, the projectile at the frame's
+# projectile_position), its radius, and its velocity as point data.
+check_spheres() {
+    "$PY" - "$@" <<'EOF'
+import os, sys
+import xml.etree.ElementTree as ET
+import h5py, numpy as np, vtu
+run, out, name, kinds = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
+f = h5py.File(run, "r")
+sc = f["scene"].attrs
+entries = ET.parse(os.path.join(out, name + ".pvd")).getroot().findall("./Collection/DataSet")
+assert len(entries) == len(f["frames"]) * (1 + len(kinds)), len(entries)
+for g in f["frames"].values():
+    step, t = int(g.attrs["step"]), float(g.attrs["time"])
+    mine = [e for e in entries if float(e.get("timestep")) == t]
+    assert [int(e.get("part")) for e in mine] == list(range(1 + len(kinds))), mine
+    assert [e.get("name") for e in mine] == ["particles"] + kinds
+    assert mine[0].get("file") == "%s_%08d.vtu" % (name, step)
+    for e, kind in zip(mine[1:], kinds):
+        assert e.get("file") == "%s_%s_%08d.vtu" % (name, kind, step), e.get("file")
+        s = vtu.read(os.path.join(out, e.get("file")))
+        assert s.compressed
+        if kind == "indenter":
+            row = sc["indenter"]
+            c = row[:3] + (step * sc["dt"]) * row[5:8]
+            R, v = row[3], row[5:8]
+        else:
+            c, R = g.attrs["projectile_position"], sc["projectile"][3]
+            v = g.attrs["projectile_velocity"]
+        conn, off, types = s.cells
+        assert np.all(types == 5) and np.array_equal(off, 3 * np.arange(1, len(types) + 1))
+        tri = s.points[conn.reshape(-1, 3)]
+        r = np.linalg.norm(s.points - c, axis=1)
+        assert np.allclose(r, R, rtol=1e-12), (r.min(), r.max(), R)
+        # closed: every edge in exactly two triangles, once each way
+        t3 = conn.reshape(-1, 3)
+        edges = np.concatenate([t3[:, [0, 1]], t3[:, [1, 2]], t3[:, [2, 0]]])
+        fwd = {tuple(x) for x in edges}
+        assert len(fwd) == len(edges) and all((b, a) in fwd for a, b in fwd)
+        # outward: the enclosed volume (divergence theorem) is positive and
+        # near 4/3 pi R^3 (a polyhedron inscribed in the sphere)
+        vol = np.einsum("ij,ij->i", tri[:, 0] - c, np.cross(tri[:, 1] - c, tri[:, 2] - c)).sum() / 6
+        assert 0.97 < vol / (4 / 3 * np.pi * R**3) < 1.0, vol / (4 / 3 * np.pi * R**3)
+        assert np.array_equal(s.point_data["velocity"], np.tile(v, (len(s.points), 1)))
+print("ok", len(f["frames"]))
+EOF
+}
+
+@test "a run with an indenter gets the indenter's sphere at every frame, part 1 of the .pvd" {
+    run -0 --separate-stderr pd-dump2vtk "$RUN" -o out
+    assert_regex "${stderr_lines[0]}" '^pd-dump2vtk: 5 frames of [0-9]+ particles, 5 indenter spheres'
+    run -0 check_spheres "$RUN" out run indenter
+    assert_output "ok 5"
+    run -0 check_vtk "$RUN" out run
+}
+
+@test "a run with a projectile gets its sphere where each frame puts it" {
+    make_block
+    pd-run -q --bulk-modulus "$BULK" --projectile sphere,0.005,0.005,0.0135,0.003,0.002,0,0,-60 \
+        --steps 200 --every 50 model.h5 -o p.h5
+    pd-dump2vtk -q p.h5 -o out
+    run -0 check_spheres p.h5 out p projectile
+    assert_output "ok 5"
+    # it moved: down, then pushed back by the body
+    run -0 py "
+z = [g.attrs['projectile_position'][2] for g in h5py.File(sys.argv[1])['frames'].values()]
+assert z[1] < z[0] and len(set(z)) == len(z), z
+print('ok')" p.h5
+}
+
+@test "a run with both gets both, indenter first" {
+    make_block
+    pd-run -q --bulk-modulus "$BULK" --projectile sphere,0.005,0.005,0.0135,0.003,0.002,0,0,-60 \
+        --indenter sphere,0.005,0.005,-0.0035,0.003,1e17,0,0,50 \
+        --steps 100 --every 50 model.h5 -o both.h5
+    pd-dump2vtk -q both.h5 -o out
+    run -0 check_spheres both.h5 out both indenter projectile
+    assert_output "ok 3"
 }
 
 @test "damage comes from the frame's damage field when pd-damage stored one" {
@@ -177,7 +285,8 @@ EOF
     run -0 check_vtk "$RUN" out run
     assert_no_temp out
     run ls -A out
-    assert_output "$(printf 'run.pvd\n'; printf 'run_%08d.vtu\n' 0 25 50 75 100)"
+    assert_output "$(printf 'run.pvd\n'; printf 'run_%08d.vtu\n' 0 25 50 75 100
+                     printf 'run_indenter_%08d.vtu\n' 0 25 50 75 100)"
 }
 
 @test "a missing input is a runtime error: exit 1, one line, no directory made" {

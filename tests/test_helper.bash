@@ -26,9 +26,11 @@ export OMP_WAIT_POLICY
 
 # Debian's python, the one with h5py and numpy; another python3 may come
 # first on PATH.  share/ comes first on its path, for pdh5 (the bonds of
-# either form of /bonds, pd-h5(5)): every $PY the suites run finds it.
+# either form of /bonds, pd-h5(5)), then tests/, for vtu (the suites' own
+# reader of .vtu files, raw or compressed): every $PY the suites run finds
+# them.
 PY=/usr/bin/python3
-PYTHONPATH="$(cd "$BATS_TEST_DIRNAME/../share" && pwd)${PYTHONPATH:+:$PYTHONPATH}"
+PYTHONPATH="$(cd "$BATS_TEST_DIRNAME/../share" && pwd):$BATS_TEST_DIRNAME${PYTHONPATH:+:$PYTHONPATH}"
 export PYTHONPATH
 
 # The small block of make_block: an 11x11x11 simple cubic lattice (1331

@@ -146,3 +146,11 @@ pd_status pd_make_dirs(const char *dir)
     free(path);
     return s;
 }
+
+void pd_indenter_centre(const double c0[3], const double v[3], int64_t step, double dt,
+                        double c[3])
+{
+    const double t = (double)step * dt;
+    for (int d = 0; d < 3; d++)
+        c[d] = c0[d] + t * v[d];
+}

@@ -17,10 +17,7 @@
 static void centre(const pd_sim *sim, double c[3])
 {
     const pd_scene *s = &sim->sc;
-    /* the same evaluation order as the LAMMPS example: y0 + (step*dt)*v */
-    const double t = (double)sim->step * s->dt;
-    for (int d = 0; d < 3; d++)
-        c[d] = s->ind_center[d] + t * s->ind_velocity[d];
+    pd_indenter_centre(s->ind_center, s->ind_velocity, sim->step, s->dt, c);
 }
 
 void pd_sphere_push(pd_sim *sim, const double c[3], double R, double K, double F[3])

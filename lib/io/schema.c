@@ -1166,6 +1166,48 @@ pd_status pd_read_frame_info(const pd_file *f, const char *name, pd_frame_info *
     return PD_OK;
 }
 
+pd_status pd_frame_spheres(const pd_file *f, const pd_frame_info *fi, pd_frame_sphere out[2],
+                           int *n)
+{
+    *n = 0;
+    if (!pd_h5_has_link(f->fid, "/scene"))
+        return PD_OK;
+    hid_t g = H5Gopen2(f->fid, "/scene", H5P_DEFAULT);
+    if (g < 0)
+        return pd_fail(PD_ERR_FORMAT, "'%s': /scene is not a group", f->name);
+    double ind[8], pr[9], dt = 0.0;
+    pd_status s = PD_OK;
+    if (pd_h5_has_attr(g, "indenter") &&
+        (s = pd_h5_read_attr_doubles(g, "indenter", ind, 8)) == PD_OK &&
+        (s = pd_h5_read_attr_double(g, "dt", &dt)) == PD_OK) {
+        pd_frame_sphere *sp = &out[(*n)++];
+        sp->name = "indenter";
+        pd_indenter_centre(ind, ind + 5, fi->step, dt, sp->centre);
+        sp->radius = ind[3];
+        memcpy(sp->velocity, ind + 5, sizeof sp->velocity);
+    }
+    /* the projectile as the frame has it (files before those attributes:
+     * none drawn) */
+    if (s == PD_OK && fi->has_projectile && pd_h5_has_attr(g, "projectile") &&
+        (s = pd_h5_read_attr_doubles(g, "projectile", pr, 9)) == PD_OK) {
+        pd_frame_sphere *sp = &out[(*n)++];
+        sp->name = "projectile";
+        memcpy(sp->centre, fi->projectile_position, sizeof sp->centre);
+        sp->radius = pr[3];
+        memcpy(sp->velocity, fi->projectile_velocity, sizeof sp->velocity);
+    }
+    H5Gclose(g);
+    for (int k = 0; k < *n && s == PD_OK; k++)
+        if (!(isfinite(out[k].radius) && out[k].radius > 0))
+            s = pd_fail(PD_ERR_FORMAT, "/scene gives the %s radius %g", out[k].name,
+                        out[k].radius);
+    if (s != PD_OK) {
+        *n = 0;
+        return pd_fail(PD_ERR_FORMAT, "'%s': %s", f->name, pd_errmsg());
+    }
+    return PD_OK;
+}
+
 pd_status pd_read_frame_vectors(const pd_file *f, const char *name, int64_t n, double *disp[3],
                                 double *vel[3])
 {

@@ -142,10 +142,10 @@ void pd_sim_reactions(const pd_sim *sim, double *const r[3])
 void pd_sim_indenter_centre(const pd_sim *sim, double c[3])
 {
     const pd_scene *sc = &sim->sc;
-    for (int d = 0; d < 3; d++) /* as the indenter's own centre */
-        c[d] = sc->has_indenter
-                   ? sc->ind_center[d] + ((double)sim->step * sc->dt) * sc->ind_velocity[d]
-                   : 0.0;
+    if (sc->has_indenter)
+        pd_indenter_centre(sc->ind_center, sc->ind_velocity, sim->step, sc->dt, c);
+    else
+        c[0] = c[1] = c[2] = 0.0;
 }
 
 static int sphere(double *row, int k, const double x[3], const double v[3], const double f[3])

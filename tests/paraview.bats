@@ -1,0 +1,56 @@
+#!/usr/bin/env bats
+# ParaView's own reading of pd-dump2vtk's files: tests/paraview/check_dump.py
+# runs under ParaView's pvbatch (Debian's paraview and python3-paraview),
+# inside xvfb-run for the rendering, and reads the compressed collection and
+# a raw one (--compress 0) through ParaView's PVD reader: the frames' times,
+# the named blocks (particles, indenter, projectile), the arrays bit for bit
+# against the run file and tests/vtu.py, each sphere's radius, centre and
+# area (ParaView's IntegrateVariables), and a picture of the last frame.
+
+load test_helper
+
+setup() {
+    command -v pvbatch >/dev/null && command -v xvfb-run >/dev/null ||
+        skip "pvbatch (paraview, python3-paraview) or xvfb-run (xvfb) is not installed"
+    cd "$BATS_TEST_TMPDIR"
+}
+
+# pv_check RUN.h5 KIND...: dump RUN.h5 compressed and raw, and check both in
+# pvbatch; prints check_dump.py's "ok NFRAMES".
+pv_check() {
+    local run=$1 name
+    shift
+    name=$(basename "$run" .h5)
+    pd-dump2vtk -q "$run" -o zlib && pd-dump2vtk -q --compress 0 "$run" -o raw || return 1
+    grep -q 'compressor="vtkZLibDataCompressor"' "zlib/${name}_00000000.vtu" || return 1
+    ! grep -q 'compressor=' "raw/${name}_00000000.vtu" || return 1
+    # pvbatch's messages (its MPI start, Mesa) are not ours: keep its last line
+    xvfb-run -a pvbatch "$BATS_TEST_DIRNAME/paraview/check_dump.py" "$run" \
+        "zlib/$name.pvd" "raw/$name.pvd" last.png "$@" 2>&1 | tail -n 1
+}
+
+@test "ParaView reads the compressed frames and the indenter's sphere of a run" {
+    make_run "$BATS_TEST_TMPDIR" --steps 100 --every 25
+    run -0 pv_check run.h5 indenter
+    assert_output "ok 5"
+    [ -s last.png ]
+}
+
+@test "ParaView reads a run with a projectile and an indenter: both spheres, in order" {
+    make_block
+    pd-run -q --bulk-modulus "$BULK" --projectile sphere,0.005,0.005,0.0135,0.003,0.002,0,0,-60 \
+        --indenter sphere,0.005,0.005,-0.0035,0.003,1e17,0,0,50 \
+        --steps 100 --every 50 model.h5 -o both.h5
+    run -0 pv_check both.h5 indenter projectile
+    assert_output "ok 3"
+}
+
+@test "ParaView reads a run without spheres: the particles alone" {
+    # the make_block lattice with its top layer a set, pulled up at 1 m/s
+    pd-lattice -q --spacing "$SPACING" --box -0.0005,0.0105,-0.0005,0.0105,-0.0005,0.0105 \
+        --density "$DENSITY" --set top=box,-1,1,-1,1,0.0095,1 -o lattice.h5
+    pd-bonds -q --horizon "$HORIZON" lattice.h5 -o model.h5
+    pd-run -q --bulk-modulus "$BULK" --velocity-bc top,z,1 --steps 20 --every 10 model.h5 -o bare.h5
+    run -0 pv_check bare.h5
+    assert_output "ok 3"
+}
