@@ -55,11 +55,13 @@ static char *join(int ncols, const char (*names)[PD_SERIES_NAME])
     size_t len = 1;
     for (int k = 0; k < ncols; k++)
         len += strlen(names[k]) + 1;
-    char *text = malloc(len), *p = text;
-    for (int k = 0; text && k < ncols; k++)
+    char *text = malloc(len);
+    if (text == NULL)
+        return NULL;
+    char *p = text;
+    *p = '\0';
+    for (int k = 0; k < ncols; k++)
         p += sprintf(p, "%s%s", k ? " " : "", names[k]);
-    if (text && ncols == 0)
-        *text = '\0';
     return text;
 }
 
