@@ -116,6 +116,7 @@ static pd_status check_header(pd_file *f)
         return pd_fail(PD_ERR_FORMAT,
                        "'%s': pd-h5 format version %lld, this pd reads versions 1 to %d",
                        f->name, (long long)version, PD_FORMAT_VERSION);
+    f->version = (int)version;
     return PD_OK;
 }
 
@@ -125,6 +126,7 @@ static pd_file *file_new(const char *path)
     if (f == NULL)
         return NULL;
     f->fid = H5I_INVALID_HID;
+    f->version = PD_FORMAT_VERSION; /* an opened file's is read by check_header */
     f->name = strdup(strcmp(path, "-") == 0 ? "<stdin>" : path);
     return f;
 }

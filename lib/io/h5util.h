@@ -18,6 +18,8 @@ struct pd_file {
     int to_stdout;
     int readonly;
     int published;        /* renamed to `path` while still open    */
+    int version;          /* pd_format_version: the file's, or this
+                             pd's for a file it makes             */
     struct pd_series_plan *series; /* the rows of /series still to
                                       write (series_io.c), or NULL     */
 };

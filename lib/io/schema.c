@@ -592,6 +592,9 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
                     form);
     pd_bonds *b = NULL;
     const int stencil = form && strcmp(form, "stencil") == 0;
+    if (s == PD_OK && stencil && f->version < 2)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds as a stencil needs pd-h5 format version 2, "
+                    "the file says %d", fn, f->version);
     if (s == PD_OK && stencil && pd_h5_read_attr_int(g, "count", &declared) != PD_OK)
         s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds as a stencil has no count attribute", fn);
     if (s == PD_OK)
