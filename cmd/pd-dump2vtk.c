@@ -166,7 +166,7 @@ static void frame_data_free(struct frame_data *d)
     free(d->mises);
 }
 
-/* The entries of the .pvd: a file, its time and its part. */
+/* The entries of the .pvd: a file, its time, its part and the part's name. */
 struct collection {
     int64_t n;
     char **files;
