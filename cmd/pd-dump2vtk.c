@@ -210,10 +210,7 @@ static pd_status dump_spheres(const pd_file *f, const pd_frame_info *fi, const s
         char *path;
         if ((s = add_entry(c, o->dir, name, sp[k].name, fi, 1 + k, &path)) != PD_OK)
             break;
-        pd_vtk_sphere v = {.radius = sp[k].radius, .zlib_level = o->level};
-        memcpy(v.centre, sp[k].centre, sizeof v.centre);
-        memcpy(v.velocity, sp[k].velocity, sizeof v.velocity);
-        s = pd_vtk_write_sphere(path, &v);
+        s = pd_vtk_write_sphere(path, &sp[k], o->level);
         free(path);
     }
     return s;

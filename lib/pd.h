@@ -1245,17 +1245,11 @@ typedef struct pd_vtk_field {
 
 pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr);
 
-/* A rigid sphere as a VTK UnstructuredGrid of triangles on its surface
- * (482 points on 15 circles of latitude and the poles, 960 triangles,
- * normals outward), with point data velocity, the sphere's own. */
-typedef struct {
-    double centre[3]; /* m   */
-    double radius;    /* m   */
-    double velocity[3]; /* m/s */
-    int zlib_level;   /* as pd_vtk_frame's */
-} pd_vtk_sphere;
-
-pd_status pd_vtk_write_sphere(const char *path, const pd_vtk_sphere *sphere);
+/* A rigid sphere (pd_frame_sphere) as a VTK UnstructuredGrid of triangles
+ * on its surface (482 points on 15 circles of latitude and the poles, 960
+ * triangles, normals outward), with point data velocity, the sphere's own;
+ * zlib_level as pd_vtk_frame's. */
+pd_status pd_vtk_write_sphere(const char *path, const pd_frame_sphere *sphere, int zlib_level);
 
 /* A ParaView collection listing files (relative names) with their times,
  * parts (NULL: all part 0) and names of the parts (NULL, or a NULL entry:

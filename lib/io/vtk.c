@@ -204,15 +204,19 @@ static uint64_t value_bits(const varray *a, int64_t i, int c)
     return bits;
 }
 
-/* The little-endian bytes of tuples [lo, hi) of an array at out. */
-static void put_values(const varray *a, int64_t lo, int64_t hi, unsigned char *out)
+/* The low `width` bytes of bits, little-endian, at out; returns the end. */
+static unsigned char *le_bytes(unsigned char *out, uint64_t bits, int width)
 {
-    for (int64_t i = lo; i < hi; i++)
-        for (int c = 0; c < a->ncomp; c++) {
-            uint64_t bits = value_bits(a, i, c);
-            for (int k = 0; k < a->width; k++)
-                *out++ = (unsigned char)(bits >> (8 * k));
-        }
+    for (int k = 0; k < width; k++)
+        *out++ = (unsigned char)(bits >> (8 * k));
+    return out;
+}
+
+/* The little-endian bytes of tuple i of an array at out. */
+static void put_tuple(const varray *a, int64_t i, unsigned char *out)
+{
+    for (int c = 0; c < a->ncomp; c++)
+        out = le_bytes(out, value_bits(a, i, c), a->width);
 }
 
 /* Little-endian bytes gathered in a buffer and written in large pieces. */
@@ -234,8 +238,8 @@ static void le_put(le_writer *w, uint64_t bits, int width)
 {
     if (w->len + (size_t)width > sizeof w->buf)
         le_flush(w);
-    for (int k = 0; k < width; k++)
-        w->buf[w->len++] = (unsigned char)(bits >> (8 * k));
+    le_bytes(w->buf + w->len, bits, width);
+    w->len += (size_t)width;
 }
 
 static void write_block(le_writer *w, const varray *a)
@@ -279,7 +283,7 @@ static pd_status compress_array(varray *a, int level)
     /* each tuple's bytes at its own place, then each block on its own */
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < a->count; i++)
-        put_values(a, i, i + 1, raw + (uint64_t)i * (uint64_t)tuple);
+        put_tuple(a, i, raw + (uint64_t)i * (uint64_t)tuple);
     int failed = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(| : failed)
     for (int64_t k = 0; k < nblocks; k++) {
@@ -303,11 +307,8 @@ static pd_status compress_array(varray *a, int level)
     }
     uint64_t header[3] = {(uint64_t)nblocks, ZBLOCK, nbytes % ZBLOCK};
     unsigned char *at = z;
-    for (int64_t h = 0; h < 3 + nblocks; h++) {
-        uint64_t v = h < 3 ? header[h] : zlen[h - 3];
-        for (int k = 0; k < 8; k++)
-            *at++ = (unsigned char)(v >> (8 * k));
-    }
+    for (int64_t h = 0; h < 3 + nblocks; h++)
+        at = le_bytes(at, h < 3 ? header[h] : zlen[h - 3], 8);
     for (int64_t k = 0; k < nblocks; k++) {
         memcpy(at, packed + (size_t)k * bound, zlen[k]);
         at += zlen[k];
@@ -480,7 +481,7 @@ static int64_t sphere_row(int r, int j)
     return 1 + (int64_t)(r - 1) * SPHERE_SEGMENTS + (j % SPHERE_SEGMENTS);
 }
 
-pd_status pd_vtk_write_sphere(const char *path, const pd_vtk_sphere *sp)
+pd_status pd_vtk_write_sphere(const char *path, const pd_frame_sphere *sp, int zlib_level)
 {
     if (sp == NULL || !(isfinite(sp->radius) && sp->radius > 0))
         return pd_fail(PD_ERR_INVALID, "VTK sphere of radius %g", sp ? sp->radius : NAN);
@@ -531,10 +532,8 @@ pd_status pd_vtk_write_sphere(const char *path, const pd_vtk_sphere *sp)
          .count = SPHERE_TRIANGLES},
         {"types", "UInt8", 1, 1, SRC_CONSTANT, .start = VTK_TRIANGLE, .count = SPHERE_TRIANGLES},
     };
-    grid_shape g = {SPHERE_POINTS, SPHERE_TRIANGLES, NULL, "velocity", sp->zlib_level};
-    pd_status s = t == 3 * SPHERE_TRIANGLES
-                      ? write_grid(path, a, (int)(sizeof a / sizeof a[0]), 1, &g)
-                      : pd_fail(PD_ERR_INVALID, "sphere of %lld triangles", (long long)(t / 3));
+    grid_shape g = {SPHERE_POINTS, SPHERE_TRIANGLES, NULL, "velocity", zlib_level};
+    pd_status s = write_grid(path, a, (int)(sizeof a / sizeof a[0]), 1, &g);
     free(xyz);
     free(vel);
     free(conn);
