@@ -30,7 +30,9 @@ PD_LIBS   += -fsanitize=address,undefined
 export PD_SANITIZE = 1
 endif
 
-PROGRAMS   = $(patsubst cmd/%.c,%,$(wildcard cmd/pd-*.c))
+C_PROGRAMS = $(patsubst cmd/%.c,%,$(wildcard cmd/pd-*.c))
+PY_PROGRAMS = $(patsubst cmd/%.py,%,$(wildcard cmd/pd-*.py))
+PROGRAMS   = $(C_PROGRAMS) $(PY_PROGRAMS)
 LIB_LAYERS = $(shell cat lib/LAYERS)
 LIB_SRC    = $(foreach l,$(LIB_LAYERS),$(wildcard lib/$(l)/*.c))
 LIB_HDR    = lib/pd.h $(wildcard lib/*/*.h)
@@ -63,6 +65,14 @@ lib/libpd.a: $(LIB_OBJ)
 bin/%: cmd/%.c cmd/cli.h lib/libpd.a $(LIB_HDR)
 	@mkdir -p bin
 	$(CC) $(PD_CFLAGS) $(CFLAGS) -o $@ $< lib/libpd.a $(PD_LIBS)
+
+# The Python programs (pd-mesh, on meshio) run under Debian's python3,
+# with the version of lib/pd.h.
+bin/%: cmd/%.py lib/pd.h
+	@mkdir -p bin
+	sed -e "s/@VERSION@/$$(sed -n 's/^#define PD_VERSION "\(.*\)"/\1/p' lib/pd.h)/" $< > $@.tmp
+	chmod 755 $@.tmp
+	mv $@.tmp $@
 
 bin/test-%: tests/unit/%.c tests/unit/check.h lib/libpd.a $(LIB_HDR)
 	@mkdir -p bin

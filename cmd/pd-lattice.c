@@ -13,11 +13,22 @@
  * --material-region ID=REGION paints the particles inside a region with a
  * material id (the last such region wins), for pd-run --material and
  * --interface.
+ * --inside MESH (and mesh,MESH wherever a region is named) is the inside of
+ * a closed surface mesh: read by pd-mesh --surface (meshio), unless MESH is
+ * already such a pd-h5 /surface file, and tested by libpd's exact winding
+ * number (lib/base/surface.c).
  */
+#include <errno.h>
+#include <fcntl.h>
 #include <getopt.h>
+#include <limits.h>
+#include <math.h>
+#include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "pd.h"
 
@@ -26,6 +37,9 @@
 #define MAX_REGIONS 64
 #define MAX_SETS 64
 #define MAX_PAINTS 64
+#define MAX_SURFACES 16
+
+extern char **environ;
 
 struct options {
     pd_region regions[MAX_REGIONS];
@@ -57,16 +71,20 @@ static void usage(FILE *out)
             "  --cylinder AXIS,C1,C2,R,LO,HI   axis x|y|z; C1,C2 locate the axis in the\n"
             "                                  other two dimensions (LAMMPS region cylinder)\n"
             "  --sphere X,Y,Z,R\n"
-            "  --subtract KIND,...             cut a region out; KIND is box, cylinder or\n"
-            "                                  sphere: --subtract sphere,0,0,0,1e-3\n"
+            "  --inside MESH                   the inside of a closed surface mesh (STL, OBJ,\n"
+            "                                  PLY, or the boundary of any mesh meshio reads;\n"
+            "                                  or a pd-mesh --surface file)\n"
+            "  --subtract KIND,...             cut a region out; KIND is box, cylinder,\n"
+            "                                  sphere or mesh: --subtract sphere,0,0,0,1e-3,\n"
+            "                                  --subtract mesh,hole.stl\n"
             "\n"
             "Options:\n"
             "  --spacing DX      lattice spacing, m (> 0)\n"
             "  --density RHO     mass density, kg/m^3 (> 0)\n"
             "  --material ID     material id (default 1)\n"
             "  --material-region ID=KIND,...\n"
-            "                    the particles inside a region (KIND box, cylinder or\n"
-            "                    sphere, as --subtract) get material ID; repeatable,\n"
+            "                    the particles inside a region (KIND box, cylinder,\n"
+            "                    sphere or mesh, as --subtract) get material ID; repeatable,\n"
             "                    the last region holding a particle wins:\n"
             "                    --material-region 2=box,0,1,0.5,1,0,1\n"
             "  --perturb A       move each site by uniform noise in [-A,A] per axis, m\n"
@@ -77,7 +95,7 @@ static void usage(FILE *out)
             "  --thickness H     the plate's thickness, m (> 0; volume DX^2 H)\n"
             "  --set NAME=KIND,...\n"
             "                    name the set of the particles made inside a region\n"
-            "                    (KIND box, cylinder or sphere, as --subtract), for\n"
+            "                    (KIND box, cylinder, sphere or mesh, as --subtract), for\n"
             "                    pd-run's boundary conditions; NAME of A-Z a-z 0-9 _ . -;\n"
             "                    repeatable: --set top=box,0,1,0.9,1,0,1\n"
             "  -o, --output FILE output file, '-' for stdout (default '-')\n"
@@ -87,13 +105,176 @@ static void usage(FILE *out)
             "  -V, --version     show the version\n");
 }
 
+/* The surfaces of mesh regions, read once per file. */
+static struct {
+    char *path;
+    pd_surface *surface;
+} surfaces[MAX_SURFACES];
+static int nsurfaces;
+
+static void free_surfaces(void)
+{
+    for (int k = 0; k < nsurfaces; k++) {
+        free(surfaces[k].path);
+        pd_surface_free(surfaces[k].surface);
+    }
+    nsurfaces = 0;
+}
+
+/* pd-mesh: beside this program (an installed or a built tree), else on PATH. */
+static int find_pd_mesh(char *path, size_t len)
+{
+    ssize_t n = readlink("/proc/self/exe", path, len - 1);
+    if (n > 0) {
+        path[n] = '\0';
+        char *slash = strrchr(path, '/');
+        if (slash && (size_t)(slash - path) + sizeof "/pd-mesh" <= len) {
+            strcpy(slash, "/pd-mesh");
+            if (access(path, X_OK) == 0)
+                return 1;
+        }
+    }
+    snprintf(path, len, "pd-mesh");
+    return 0;
+}
+
+/* Run `pd-mesh --surface MESH -o -` and open what it writes; its error
+ * line, if it fails, becomes this program's. */
+static pd_status surface_by_pd_mesh(const char *mesh, pd_file **out)
+{
+    char exe[PATH_MAX];
+    int beside = find_pd_mesh(exe, sizeof exe);
+    FILE *err = tmpfile();
+    int fd[2];
+    if (err == NULL || pipe(fd) != 0) {
+        if (err)
+            fclose(err);
+        return pd_fail(PD_ERR_IO, "--inside '%s': cannot run pd-mesh: %s", mesh, strerror(errno));
+    }
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_adddup2(&fa, fd[1], 1);
+    posix_spawn_file_actions_adddup2(&fa, fileno(err), 2);
+    posix_spawn_file_actions_addclose(&fa, fd[0]);
+    posix_spawn_file_actions_addclose(&fa, fd[1]);
+    char *argv[] = {"pd-mesh", "--surface", "-q", "-o", "-", "--", (char *)mesh, NULL};
+    pid_t pid;
+    fflush(NULL);
+    int e = beside ? posix_spawn(&pid, exe, &fa, NULL, argv, environ)
+                   : posix_spawnp(&pid, exe, &fa, NULL, argv, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    close(fd[1]);
+    if (e != 0) {
+        close(fd[0]);
+        fclose(err);
+        return pd_fail(PD_ERR_IO, "--inside '%s': cannot run pd-mesh: %s", mesh, strerror(e));
+    }
+    size_t cap = 1 << 16, len = 0;
+    unsigned char *buf = malloc(cap);
+    for (ssize_t got = 1; buf != NULL && got > 0;) {
+        if (len == cap) {
+            unsigned char *nb = realloc(buf, cap * 2);
+            if (nb == NULL) {
+                free(buf);
+                buf = NULL;
+                break;
+            }
+            buf = nb;
+            cap *= 2;
+        }
+        while ((got = read(fd[0], buf + len, cap - len)) < 0 && errno == EINTR)
+            ;
+        if (got > 0)
+            len += (size_t)got;
+    }
+    close(fd[0]);
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
+        ;
+    pd_status s = PD_OK;
+    if (buf == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "--inside '%s': out of memory", mesh);
+    else if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        char line[400] = "";
+        rewind(err);
+        if (fgets(line, sizeof line, err) == NULL)
+            snprintf(line, sizeof line, "pd-mesh failed");
+        line[strcspn(line, "\n")] = '\0';
+        const char *why = strstr(line, "error: ") ? strstr(line, "error: ") + 7 : line;
+        s = pd_fail(PD_ERR_IO, "--inside '%s': %s", mesh, why);
+    } else
+        s = pd_file_open_memory(buf, len, mesh, out);
+    free(buf);
+    fclose(err);
+    return s;
+}
+
+/* The surface of MESH: its /surface when it is a pd-h5 file, else read by
+ * pd-mesh. */
+static pd_status load_surface(const char *mesh, const pd_surface **out)
+{
+    for (int k = 0; k < nsurfaces; k++)
+        if (strcmp(surfaces[k].path, mesh) == 0) {
+            *out = surfaces[k].surface;
+            return PD_OK;
+        }
+    if (nsurfaces == MAX_SURFACES)
+        return pd_fail(PD_ERR_INVALID, "too many meshes (at most %d)", MAX_SURFACES);
+    static const unsigned char hdf5[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+    unsigned char head[8] = {0};
+    FILE *in = fopen(mesh, "rb");
+    if (in == NULL)
+        return pd_fail(PD_ERR_IO, "--inside: cannot open '%s': %s", mesh, strerror(errno));
+    size_t got = fread(head, 1, sizeof head, in);
+    fclose(in);
+    pd_file *f = NULL;
+    pd_status s = got == sizeof head && memcmp(head, hdf5, sizeof head) == 0
+                      ? pd_file_open(mesh, &f)
+                      : surface_by_pd_mesh(mesh, &f);
+    pd_surface *surface = NULL;
+    if (s == PD_OK)
+        s = pd_read_surface(f, &surface);
+    pd_file_abort(f);
+    if (s != PD_OK)
+        return s;
+    if ((surfaces[nsurfaces].path = strdup(mesh)) == NULL) {
+        pd_surface_free(surface);
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    surfaces[nsurfaces++].surface = surface;
+    *out = surface;
+    return PD_OK;
+}
+
+/* A region KIND,... of --subtract, --set or --material-region: the
+ * library's kinds, or mesh,FILE.  Returns 0, 2 (usage) or 1 (a mesh that
+ * cannot be read). */
+static int parse_region(const char *spec, pd_region *r)
+{
+    if (strncmp(spec, "mesh,", 5) == 0) {
+        memset(r, 0, sizeof *r);
+        r->kind = PD_REGION_SURFACE;
+        return load_surface(spec + 5, &r->surface) == PD_OK ? 0 : fail();
+    }
+    return pd_region_parse_tagged(spec, r) == PD_OK ? 0 : usage_error(pd_errmsg(), NULL);
+}
+
 static int add_region(struct options *o, pd_region_kind kind, const char *spec, int tagged)
 {
     if (o->nregions == MAX_REGIONS)
         return usage_error("too many regions", NULL);
     pd_region *r = &o->regions[o->nregions];
-    pd_status s = tagged ? pd_region_parse_tagged(spec, r) : pd_region_parse(kind, spec, r);
-    if (s != PD_OK)
+    int rc;
+    if (tagged) {
+        if ((rc = parse_region(spec, r)))
+            return rc;
+    } else if (kind == PD_REGION_SURFACE) {
+        memset(r, 0, sizeof *r);
+        r->kind = kind;
+        if (load_surface(spec, &r->surface) != PD_OK)
+            return fail();
+    } else if (pd_region_parse(kind, spec, r) != PD_OK)
         return usage_error(pd_errmsg(), NULL);
     r->subtract = tagged;
     o->nregions++;
@@ -107,7 +288,7 @@ static int add_set(struct options *o, const char *arg)
         return usage_error("too many sets", NULL);
     const char *eq = strchr(arg, '=');
     if (eq == NULL)
-        return usage_error("--set needs NAME=KIND,... (KIND box, cylinder or sphere), not", arg);
+        return usage_error("--set needs NAME=KIND,... (KIND box, cylinder, sphere or mesh), not", arg);
     char name[PD_SET_NAME_MAX];
     size_t len = (size_t)(eq - arg);
     snprintf(name, sizeof name, "%.*s", (int)len, arg);
@@ -118,8 +299,9 @@ static int add_set(struct options *o, const char *arg)
         if (strcmp(o->set_names[k], name) == 0)
             return usage_error("--set: a name given twice:", name);
     pd_region *r = &o->set_regions[o->nsets];
-    if (pd_region_parse_tagged(eq + 1, r) != PD_OK)
-        return usage_error(pd_errmsg(), NULL);
+    int rc = parse_region(eq + 1, r);
+    if (rc)
+        return rc;
     if ((o->set_names[o->nsets] = strdup(name)) == NULL)
         return usage_error("out of memory", NULL);
     o->nsets++;
@@ -135,26 +317,28 @@ static int add_paint(struct options *o, const char *arg)
     char id[32];
     int64_t iv;
     if (eq == NULL || (size_t)(eq - arg) >= sizeof id)
-        return usage_error("--material-region needs ID=KIND,... (KIND box, cylinder or "
-                           "sphere), not",
+        return usage_error("--material-region needs ID=KIND,... (KIND box, cylinder, "
+                           "sphere or mesh), not",
                            arg);
     snprintf(id, sizeof id, "%.*s", (int)(eq - arg), arg);
     if (!pd_parse_int64(id, &iv) || iv < 0 || iv > INT32_MAX)
         return usage_error("--material-region ID must be a non-negative integer, not", arg);
-    if (pd_region_parse_tagged(eq + 1, &o->paint_regions[o->npaints]) != PD_OK)
-        return usage_error(pd_errmsg(), NULL);
+    int rc = parse_region(eq + 1, &o->paint_regions[o->npaints]);
+    if (rc)
+        return rc;
     o->paint_ids[o->npaints++] = (int32_t)iv;
     return 0;
 }
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_BOX = 256, OPT_CYL, OPT_SPHERE, OPT_SUB, OPT_SPACING, OPT_DENSITY, OPT_MATERIAL,
+    enum { OPT_BOX = 256, OPT_CYL, OPT_SPHERE, OPT_INSIDE, OPT_SUB, OPT_SPACING, OPT_DENSITY, OPT_MATERIAL,
            OPT_PERTURB, OPT_SEED, OPT_DIMENSION, OPT_THICKNESS, OPT_SET, OPT_PAINT };
     static const struct option longopts[] = {
         {"box", required_argument, 0, OPT_BOX},
         {"cylinder", required_argument, 0, OPT_CYL},
         {"sphere", required_argument, 0, OPT_SPHERE},
+        {"inside", required_argument, 0, OPT_INSIDE},
         {"subtract", required_argument, 0, OPT_SUB},
         {"spacing", required_argument, 0, OPT_SPACING},
         {"density", required_argument, 0, OPT_DENSITY},
@@ -188,6 +372,10 @@ static int parse_options(int argc, char **argv, struct options *o)
             break;
         case OPT_SPHERE:
             if ((rc = add_region(o, PD_REGION_SPHERE, optarg, 0)))
+                return rc;
+            break;
+        case OPT_INSIDE:
+            if ((rc = add_region(o, PD_REGION_SURFACE, optarg, 0)))
                 return rc;
             break;
         case OPT_SUB:
@@ -262,7 +450,8 @@ static int parse_options(int argc, char **argv, struct options *o)
     for (int r = 0; r < o->nregions; r++)
         adds += !o->regions[r].subtract;
     if (adds == 0)
-        return usage_error("give at least one region (--box, --cylinder or --sphere)", NULL);
+        return usage_error("give at least one region (--box, --cylinder, --sphere or --inside)",
+                           NULL);
     return 0;
 }
 
@@ -275,7 +464,7 @@ static void free_set_names(struct options *o)
 /* One warning per region with a face on a lattice plane to rounding. */
 static void warn_rounding(const struct options *o)
 {
-    static const char *kind[] = {"--box", "--cylinder", "--sphere"};
+    static const char *kind[] = {"--box", "--cylinder", "--sphere", "--inside"};
     char what[PD_SET_NAME_MAX + 32], text[512];
     for (int k = 0; k < o->nregions; k++)
         if (pd_region_rounding(&o->regions[k], o->lp.spacing,
@@ -302,6 +491,7 @@ int main(int argc, char **argv)
     int rc = parse_options(argc, argv, &o);
     if (rc) {
         free_set_names(&o);
+        free_surfaces();
         free(cmdline);
         return rc;
     }
@@ -335,9 +525,14 @@ int main(int argc, char **argv)
     if (s != PD_OK) {
         pd_sets_free(sets);
         pd_particles_free(p);
+        free_surfaces();
         return fail();
     }
     if (!o.quiet) {
+        for (int k = 0; k < nsurfaces; k++)
+            fprintf(stderr, PROG ": mesh '%s': a closed surface of %lld triangles, volume %.10g m^3\n",
+                    surfaces[k].path, (long long)pd_surface_triangles(surfaces[k].surface),
+                    fabs(pd_surface_volume(surfaces[k].surface)));
         fprintf(stderr, PROG ": %lld particles, spacing %g m%s\n", (long long)p->n, p->spacing,
                 p->dimension == 2 ? ", a 2-D plate" : "");
         for (int k = 0; k < sets->count; k++)
@@ -346,5 +541,6 @@ int main(int argc, char **argv)
     }
     pd_sets_free(sets);
     pd_particles_free(p);
+    free_surfaces();
     return 0;
 }

@@ -110,7 +110,28 @@ void pd_particles_bounds(const pd_particles *p, double lo[3], double hi[3]);
 
 /* ---------------------------------------------------------------- regions */
 
-typedef enum { PD_REGION_BOX, PD_REGION_CYLINDER, PD_REGION_SPHERE } pd_region_kind;
+typedef enum {
+    PD_REGION_BOX,
+    PD_REGION_CYLINDER,
+    PD_REGION_SPHERE,
+    PD_REGION_SURFACE
+} pd_region_kind;
+
+/* A closed triangulated surface (surface.c; pd-lattice --inside): points
+ * (np,3) and triangles (nt,3) of point indices, copied.  Refused unless
+ * every edge is in exactly two triangles, once each way (closed, manifold,
+ * oriented alike; either way round).  Inside means a winding number about
+ * the point that is not zero, decided exactly on the points snapped to
+ * 2^-30 of the surface's extent; a point on a facet is inside. */
+typedef struct pd_surface pd_surface;
+pd_status pd_surface_new(int64_t np, const double *points, int64_t nt, const int64_t *tri,
+                         pd_surface **out);
+void pd_surface_free(pd_surface *s);
+int pd_surface_inside(const pd_surface *s, const double x[3]);
+void pd_surface_bounds(const pd_surface *s, double lo[3], double hi[3]);
+int64_t pd_surface_triangles(const pd_surface *s);
+/* The enclosed volume, m^3: positive when the triangles turn outward. */
+double pd_surface_volume(const pd_surface *s);
 
 typedef struct {
     pd_region_kind kind;
@@ -121,6 +142,7 @@ typedef struct {
                         in x,y,z order)
                         sphere: x,y,z,R                                       */
     int subtract;    /* 1: cut this region out of the union                  */
+    const pd_surface *surface; /* PD_REGION_SURFACE: the surface (not owned) */
 } pd_region;
 
 /* Parse "XLO,XHI,..." style specs.  kind_spec is e.g. "box" and spec the
@@ -906,6 +928,11 @@ pd_status pd_set_rows(const pd_set *set, const pd_particles *p, int64_t **rows);
 /* Read /sets (an empty pd_sets when the file has none), checking every set
  * against the particles p: names, type, rank, order, ids that exist. */
 pd_status pd_read_sets(const pd_file *f, const pd_particles *p, pd_sets **out);
+/* The closed surface of /surface (pd-mesh --surface), checked as
+ * pd_surface_new() checks it; pd_file_has_surface() says whether there is
+ * one. */
+int pd_file_has_surface(const pd_file *f);
+pd_status pd_read_surface(const pd_file *f, pd_surface **out);
 /* Write /sets (nothing when there is no set). */
 pd_status pd_write_sets(pd_file *f, const pd_sets *s);
 

@@ -65,7 +65,7 @@ static pd_status make(const pd_region *regions, int nregions, const pd_lattice_p
         nadd++;
     }
     if (nadd == 0)
-        return pd_fail(PD_ERR_INVALID, "no region to fill (give --box, --cylinder or --sphere)");
+        return pd_fail(PD_ERR_INVALID, "no region to fill (give --box, --cylinder, --sphere or --inside)");
 
     int64_t nlo[3], nhi[3];
     double sites = 1;

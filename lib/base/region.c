@@ -1,6 +1,6 @@
 /*
  * region.c -- geometric regions that pd-lattice fills: box, cylinder,
- * sphere.  The inside tests follow LAMMPS `region` (closed sets; the cylinder
+ * sphere, and a closed surface (surface.c).  The inside tests follow LAMMPS `region` (closed sets; the cylinder
  * and sphere compare a square root with the radius), so a lattice made here
  * holds exactly the sites LAMMPS `create_atoms` makes.
  */
@@ -41,6 +41,8 @@ pd_status pd_region_parse(pd_region_kind kind, const char *spec, pd_region *r)
         return PD_OK;
     case PD_REGION_CYLINDER:
         return parse_cylinder(spec, r);
+    case PD_REGION_SURFACE:
+        return pd_fail(PD_ERR_INVALID, "a surface region is read from its file, not parsed");
     case PD_REGION_SPHERE:
         if (!pd_parse_doubles(spec, r->p, 4))
             return pd_fail(PD_ERR_INVALID, "sphere '%s': expected X,Y,Z,R", spec);
@@ -82,6 +84,8 @@ int pd_region_inside(const pd_region *r, const double x[3])
         double dx = x[0] - r->p[0], dy = x[1] - r->p[1], dz = x[2] - r->p[2];
         return sqrt(dx * dx + dy * dy + dz * dz) <= r->p[3];
     }
+    case PD_REGION_SURFACE:
+        return pd_surface_inside(r->surface, x);
     }
     return 0;
 }
@@ -110,6 +114,9 @@ void pd_region_bounds(const pd_region *r, double lo[3], double hi[3])
             lo[d] = r->p[d] - r->p[3];
             hi[d] = r->p[d] + r->p[3];
         }
+        break;
+    case PD_REGION_SURFACE:
+        pd_surface_bounds(r->surface, lo, hi);
         break;
     }
 }
