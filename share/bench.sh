@@ -74,6 +74,13 @@
 #       is (2000 steps, a frame every 100: the disk shatters, fragments fly
 #       and the contact list is rebuilt hundreds of times) against the seed
 #       script in.impact as it is (its dump every 100 steps);
+#   (m) meshes ("mesh"): the seed disk meshed by gmsh in tetrahedra (about
+#       10^5, share/bench-disk.geo), turned into particles by pd-mesh and
+#       bonded by pd-bonds (the better of two each), and the full scene of
+#       (a) on it for BENCH_STEPS steps (the bond lists: an irregular body):
+#       ms per step and bond updates per second beside (a)'s; and the fill
+#       of the same disk's surface by pd-lattice --inside at 0.14 mm (a box
+#       of 10^7 sites) against --cylinder (the better of two each);
 # Wall time and peak RSS come from /usr/bin/time -f '%e %M' around pd-run,
 # around mpirun (wall) and around each LAMMPS rank (peak RSS, summed).
 #
@@ -82,7 +89,7 @@
 # the 1.6M disk needs about 6 GB of memory and 3 GB in BENCH_DIR, and
 # minutes to build), BENCH_SKIP (words among lammps, lps, effects,
 # roofline, scaling, threads, kernels, files, sweep, plate, frames,
-# shattered: the parts left out),
+# shattered, mesh: the parts left out),
 # BENCH_SWEEP_STEPS (100), BENCH_DIR (cache of the
 # models and the runs, default $TMPDIR/pd-bench), PD_BIN (default: bin/ of
 # this tree), LMP (lmp), MPIRUN (mpirun), CC (cc, for share/stream.c).
@@ -123,8 +130,8 @@ case $THREADS in '' | *[!0-9]*) die "BENCH_THREADS must be a positive integer, n
 [ "$THREADS" -gt 0 ] || die "BENCH_THREADS must be a positive integer"
 for w in $SKIP; do
     case $w in
-    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep | plate | frames | shattered) ;;
-    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames, shattered)" ;;
+    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep | plate | frames | shattered | mesh) ;;
+    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames, shattered, mesh)" ;;
     esac
 done
 # skip PART: is PART left out?
@@ -582,6 +589,22 @@ if ! skip shattered; then
         rm -f dump.peri
     fi
 fi
+# --- (m) meshes: the seed disk meshed, and a surface filled ----------------------
+if ! skip mesh; then
+    echo "$prog: the seed disk meshed by gmsh, pd-mesh, pd-bonds, pd-run ($STEPS steps)" >&2
+    gmsh -v 0 -3 -format msh41 -o disk.msh "$ROOT/share/bench-disk.geo" || die "gmsh failed"
+    best2 mesh-pd-mesh "$PD_BIN/pd-mesh" -q --density 2200 disk.msh -o mesh-particles.h5
+    best2 mesh-pd-bonds "$PD_BIN/pd-bonds" -q --horizon "$HORIZON" mesh-particles.h5 -o mesh-model.h5
+    pd_bench mesh mesh-model.h5 "$STEPS" --scene "$SCENE" --status "$THERMO"
+    "$PD_BIN/pd-mesh" -q --surface disk.msh -o disk-surface.h5 || die "pd-mesh --surface failed"
+    best2 fill-inside "$PD_BIN/pd-lattice" -q --spacing 0.00014 --density 2200 \
+        --inside disk-surface.h5 -o /dev/null
+    best2 fill-cylinder "$PD_BIN/pd-lattice" -q --spacing 0.00014 --density 2200 \
+        --cylinder y,0,0,0.037,-0.0025,0 -o /dev/null
+    "$PD_BIN/pd-lattice" --spacing 0.00014 --density 2200 --inside disk-surface.h5 -o /dev/null \
+        2>fill.log || die "pd-lattice --inside failed"
+    rm -f mesh-particles.h5 mesh-model.h5 disk-surface.h5
+fi
 rm -f full.h5
 
 # --- report ---------------------------------------------------------------------
@@ -821,6 +844,31 @@ if ! skip shattered; then
     skip lammps && lmp=
     versus "shattered: the whole demo, 2000 steps, the disk shattered (pd: a frame every 100 steps; LAMMPS: in.impact, its dump every 100):" shattered "$lmp" 2000
     sed -n 's/^pd-run: .*contact list builds \([0-9]*\)$/  pd-run contact list builds: \1/p' shattered.log
+fi
+if ! skip mesh; then
+    echo
+    read -r _ r3 <<EOF
+$(pd_loop full.log)
+EOF
+    read -r tm rmesh <<EOF
+$(pd_loop mesh.log)
+EOF
+    nm=$(sed -n 's/^pd-run: \([0-9]*\) particles, \([0-9]*\) bonds.*/\1 particles, \2 bonds/p' mesh.log |
+        head -n 1)
+    read -r a _ <mesh-pd-mesh.time
+    read -r b _ <mesh-pd-bonds.time
+    read -r fin _ <fill-inside.time
+    read -r fcy _ <fill-cylinder.time
+    tri=$(sed -n "s/^pd-lattice: mesh .*: a closed surface of \([0-9]*\) triangles.*/\1/p" fill.log)
+    nfill=$(sed -n 's/^pd-lattice: \([0-9]*\) particles.*/\1/p' fill.log)
+    echo "mesh: the seed disk in gmsh's tetrahedra ($nm), the full scene of (a)"
+    awk -v a="$a" -v b="$b" -v t="$tm" -v r="$rmesh" -v r3="$r3" -v n="$STEPS" 'BEGIN {
+        printf "  pd-mesh %.2f s, pd-bonds %.2f s\n", a, b
+        printf "  %.2f ms/step, %.3g bond updates/s: %.0f%% of the lattice seed'"'"'s %.3g (a)\n",
+            1000 * t / n, r, 100 * r / r3, r3 }'
+    awk -v fin="$fin" -v fcy="$fcy" -v tri="$tri" -v n="$nfill" 'BEGIN {
+        printf "  fill: pd-lattice --inside the disk'"'"'s %s triangles at 0.14 mm (%s particles, 1.0e7 sites)\n", tri, n
+        printf "        %.2f s, against %.2f s for --cylinder (the whole program, the better of two)\n", fin, fcy }'
 fi
 echo
 echo "(runs and logs in $DIR; the models are kept there for the next run)"
