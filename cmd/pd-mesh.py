@@ -377,21 +377,22 @@ def particle_blocks(mesh, thickness):
     if solids:
         if thickness is not None:
             raise DataError("--thickness is for a 2-D mesh, and this mesh has 3-D cells")
-        for k in solids:
-            if mesh.cells[k].type not in SOLIDS:
-                raise DataError(f"unsupported cell type '{mesh.cells[k].type}' "
-                                f"(pd-mesh takes {', '.join(SOLIDS)})")
-        return solids, 3
+        return supported(mesh, solids, SOLIDS, ""), 3
     planes = [k for k, c in enumerate(mesh.cells) if cell_dim(c.type) == 2 and len(c.data)]
     if thickness is None:
         raise DataError("the mesh has no 3-D cells (for a 2-D mesh give --thickness H)")
     if not planes:
         raise DataError("the mesh has no 3-D or 2-D cells")
-    for k in planes:
-        if mesh.cells[k].type not in PLANES:
-            raise DataError(f"unsupported cell type '{mesh.cells[k].type}' for a plate "
-                            f"(pd-mesh takes {', '.join(PLANES)})")
-    return planes, 2
+    return supported(mesh, planes, PLANES, " for a plate"), 2
+
+
+def supported(mesh, blocks, types, what):
+    """The blocks, when each is of one of the types pd-mesh takes."""
+    for k in blocks:
+        if mesh.cells[k].type not in types:
+            raise DataError(f"unsupported cell type '{mesh.cells[k].type}'{what} "
+                            f"(pd-mesh takes {', '.join(types)})")
+    return blocks
 
 
 def cells_of(mesh, blocks, dim):

@@ -608,6 +608,11 @@ fi
 rm -f full.h5
 
 # --- report ---------------------------------------------------------------------
+# body LOG: "N particles, B bonds" of a pd-run log
+body() {
+    sed -n 's/^pd-run: \([0-9]*\) particles, \([0-9]*\) bonds.*/\1 particles, \2 bonds/p' "$1" |
+        head -n 1
+}
 echo
 echo "pd bench: seed impact (examples/lammps-impact), $N0 particles, $B0 bonds, $STEPS steps"
 echo "machine:  ${cpu:-unknown CPU}, $ncpu CPUs (${cores:-?} cores), ${mem:-? memory}"
@@ -806,8 +811,7 @@ EOF
     read -r t2 r2 <<EOF
 $(pd_loop plate.log)
 EOF
-    n2=$(sed -n 's/^pd-run: \([0-9]*\) particles, \([0-9]*\) bonds.*/\1 particles, \2 bonds/p' plate.log |
-        head -n 1)
+    n2=$(body plate.log)
     echo "plate: a 2-D plate, 50 mm square, dx 0.16 mm, delta 3 dx, a 10 mm centre pre-crack,"
     echo "  velocity pulses on its top and bottom sets, PMB with failure ($n2)"
     awk -v r2="$r2" -v r3="$r3" -v t="$t2" -v n="$STEPS" 'BEGIN {
@@ -853,8 +857,7 @@ EOF
     read -r tm rmesh <<EOF
 $(pd_loop mesh.log)
 EOF
-    nm=$(sed -n 's/^pd-run: \([0-9]*\) particles, \([0-9]*\) bonds.*/\1 particles, \2 bonds/p' mesh.log |
-        head -n 1)
+    nm=$(body mesh.log)
     read -r a _ <mesh-pd-mesh.time
     read -r b _ <mesh-pd-bonds.time
     read -r fin _ <fill-inside.time
