@@ -138,6 +138,27 @@ assert ((r > 0.0015 * 0.95) & (r <= 0.0015)).all(), r
 "
 }
 
+@test "inside: a row that crosses 1,200 facets (more than a row's crossings are kept) fills every cube" {
+    # 600 cubes of 2 spacings, a spacing apart along x, on lattice planes
+    py "
+import meshio
+h = float(sys.argv[1])
+c = np.array([(x, y, z) for z in (0, 2) for y in (0, 2) for x in (0, 2)], float)
+quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+tri = np.array([t for a, b, q, d in quads for t in ((a, b, q), (a, q, d))])
+pts = np.concatenate([(c + [3 * k, 0, 0]) * h for k in range(600)])
+cells = np.concatenate([tri + 8 * k for k in range(600)])
+meshio.Mesh(pts, [('triangle', cells)]).write('row.stl')
+" "$H"
+    pd-lattice -q --spacing "$H" --density 1 --inside row.stl -o row.h5
+    py "
+h = float(sys.argv[1])
+x = np.round(h5py.File('row.h5')['particles/position'][:] / h).astype(int)
+want = {(3 * k + i, j, l) for k in range(600) for i in range(3) for j in range(3) for l in range(3)}
+assert {tuple(v) for v in x} == want, len(x)
+" "$H"
+}
+
 @test "inside: open, non-manifold and badly oriented surfaces are refused in one line, with no output" {
     py "$CUBE" "$L"
     local opts=(--spacing "$H" --density 1)

@@ -26,6 +26,7 @@
  * so a lattice's row of sites costs one walk.
  */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -34,6 +35,7 @@
 #define QSTEPS (1 << 30) /* snapping grid: differences below 2^31, products below 2^62 */
 
 struct pd_surface {
+    long long serial;   /* a number no other surface of the process has  */
     int64_t np, nt;
     double *x;          /* (np,3) points                                    */
     int64_t *q;         /* (np,2) snapped y, z                              */
@@ -228,9 +230,11 @@ pd_status pd_surface_new(int64_t np, const double *points, int64_t nt, const int
     for (int64_t i = 0; i < 3 * np; i++)
         if (!isfinite(points[i]))
             return pd_fail(PD_ERR_INVALID, "surface point %lld is not finite", (long long)(i / 3));
+    static atomic_llong made;
     pd_surface *s = calloc(1, sizeof *s);
     if (s == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for a surface");
+    s->serial = atomic_fetch_add(&made, 1) + 1;
     s->np = np;
     s->nt = nt;
     s->x = malloc((size_t)np * 3 * sizeof *s->x);
@@ -281,9 +285,11 @@ pd_status pd_surface_new(int64_t np, const double *points, int64_t nt, const int
 /* The crossings of the line through p (snapped y, z; shifted by
  * (sy eps, sz eps^2)) with the surface: where along x, and -1 entering
  * (a normal with negative x), +1 leaving.  Returns their number, at most
- * `cap` kept; *on is set when p lies on the line of a triangle's side. */
+ * `cap` kept; *on is set when p lies on the line of a triangle's side.
+ * With x, also the winding numbers about x of every crossing before x
+ * (*strict) and before or at x (*closed), kept or not. */
 static int crossings(const pd_surface *s, const int64_t p[2], int sy, int sz, double *at,
-                     int *sign, int cap, int *on)
+                     int *sign, int cap, int *on, const double *x, int *strict, int *closed)
 {
     int64_t b = bin_of(s, 0, p[0]) * s->g[1] + bin_of(s, 1, p[1]);
     int n = 0;
@@ -301,9 +307,14 @@ static int crossings(const pd_surface *s, const int64_t p[2], int sy, int sz, do
         const double *xa = s->x + 3 * t[0], *xb = s->x + 3 * t[1], *xc = s->x + 3 * t[2];
         double wb = (double)orient(qc, qa, p) / (double)area,
                wc = (double)orient(qa, qb, p) / (double)area;
+        const double cross = xa[0] + (wb * (xb[0] - xa[0]) + wc * (xc[0] - xa[0]));
         if (n < cap) {
-            at[n] = xa[0] + (wb * (xb[0] - xa[0]) + wc * (xc[0] - xa[0]));
+            at[n] = cross;
             sign[n] = sa;
+        }
+        if (x) {
+            *strict -= cross < *x ? sa : 0;
+            *closed -= cross <= *x ? sa : 0;
         }
         n++;
     }
@@ -314,7 +325,7 @@ static int crossings(const pd_surface *s, const int64_t p[2], int sy, int sz, do
  * along its rows, so one line serves a row of sites. */
 #define ROW_CAP 1024
 static _Thread_local struct {
-    const pd_surface *s;
+    long long serial; /* the surface's (not its address, which another may reuse) */
     int64_t p[2];
     int known; /* shifts whose crossings are kept */
     int on;
@@ -341,8 +352,8 @@ int pd_surface_inside(const pd_surface *s, const double x[3])
         if (!(x[d] >= s->lo[d] && x[d] <= s->hi[d]))
             return 0;
     const int64_t p[2] = {snap(x[1], s->lo[1], s->qscale[0]), snap(x[2], s->lo[2], s->qscale[1])};
-    if (row.s != s || row.p[0] != p[0] || row.p[1] != p[1]) {
-        row.s = s;
+    if (row.serial != s->serial || row.p[0] != p[0] || row.p[1] != p[1]) {
+        row.serial = s->serial;
         row.p[0] = p[0];
         row.p[1] = p[1];
         row.known = row.on = 0;
@@ -355,20 +366,15 @@ int pd_surface_inside(const pd_surface *s, const double x[3])
         int in;
         if (k >= row.known) {
             row.n[k] = crossings(s, p, shifts[k][0], shifts[k][1], row.at[k], row.sign[k],
-                                 ROW_CAP, &row.on);
+                                 ROW_CAP, &row.on, NULL, NULL, NULL);
             row.known = k + 1;
         }
         if (row.n[k] <= ROW_CAP)
             in = winds(row.at[k], row.sign[k], row.n[k], x[0]);
-        else { /* more than a row keeps: this site's own */
-            int n = row.n[k], on = 0;
-            double *at = malloc((size_t)n * sizeof *at);
-            int *sign = malloc((size_t)n * sizeof *sign);
-            in = at && sign &&
-                 winds(at, sign, crossings(s, p, shifts[k][0], shifts[k][1], at, sign, n, &on),
-                       x[0]);
-            free(at);
-            free(sign);
+        else { /* more than a row keeps: counted for this site alone */
+            int on = 0, strict = 0, closed = 0;
+            crossings(s, p, shifts[k][0], shifts[k][1], NULL, NULL, 0, &on, x, &strict, &closed);
+            in = strict != 0 || closed != 0;
         }
         if (in)
             return 1;
