@@ -108,6 +108,9 @@ static void usage(FILE *out)
             "  --damping C[,SET]     viscous damping, the force density -C rho v (C in 1/s)\n"
             "                        on every particle or on those of SET; the energy it\n"
             "                        takes is booked as damped=\n"
+            "  --no-failure SET      a bond with an end in SET never breaks (grips, loaded\n"
+            "                        edges: fracture starts where the physics puts it);\n"
+            "                        repeatable; needs --failure\n"
             "  --relax               quasi-static: each step a load step, the loads of time\n"
             "                        n dt (--dt required), relaxed by adaptive dynamic\n"
             "                        relaxation (with --damping C: that damping instead)\n"
@@ -429,7 +432,7 @@ static int parse_options(int argc, char **argv, struct options *o)
            OPT_TIMING, OPT_RESTART, OPT_FIELDS, OPT_LOST, OPT_G0, OPT_E, OPT_VBC, OPT_DBC,
            OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID, OPT_MATERIAL,
            OPT_INTERFACE, OPT_FIBRE, OPT_LAMBDA, OPT_TAU, OPT_YIELD, OPT_BONDLIST,
-           OPT_OVERLAP, OPT_STRICT, OPT_BALANCE, OPT_DAMPING, OPT_SERIES,
+           OPT_OVERLAP, OPT_STRICT, OPT_BALANCE, OPT_DAMPING, OPT_NO_FAILURE, OPT_SERIES,
            OPT_RELAX, OPT_RELAX_TOL, OPT_RELAX_IT };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
@@ -451,6 +454,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"allow-overlap", no_argument, 0, OPT_OVERLAP},
         {"balance-limit", required_argument, 0, OPT_BALANCE},
         {"damping", required_argument, 0, OPT_DAMPING},
+        {"no-failure", required_argument, 0, OPT_NO_FAILURE},
         {"strict", no_argument, 0, OPT_STRICT},
         {"every", required_argument, 0, OPT_EVERY},
         {"series", required_argument, 0, OPT_SERIES},
@@ -622,6 +626,20 @@ static int parse_options(int argc, char **argv, struct options *o)
         case OPT_STRICT:
             o->strict = 1;
             break;
+        case OPT_NO_FAILURE: {
+            pd_scene *sc = &o->spec.sc;
+            if (strlen(optarg) >= PD_SET_NAME_MAX || !pd_set_name_ok(optarg))
+                return usage_error("--no-failure needs a set name, not", optarg);
+            int seen = 0;
+            for (int k = 0; k < sc->nno_failure; k++)
+                seen |= strcmp(sc->no_failure[k], optarg) == 0;
+            if (seen) /* a scene file and the command line may both say it */
+                break;
+            if (sc->nno_failure == PD_NO_FAILURE_MAX)
+                return usage_error("too many --no-failure sets", NULL);
+            snprintf(sc->no_failure[sc->nno_failure++], PD_SET_NAME_MAX, "%s", optarg);
+            break;
+        }
         case OPT_DAMPING: {
             const char *comma = strchr(optarg, ',');
             char num[64];
@@ -971,6 +989,13 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
                 sc->damping > 0 ? "dynamic relaxation with the fixed --damping"
                                 : "adaptive dynamic relaxation",
                 sc->relax_dt, sc->safety, sc->relax_tolerance, (long long)sc->relax_iterations);
+    if (sc->nno_failure > 0) {
+        fprintf(stderr, PROG ": --no-failure");
+        for (int k = 0; k < sc->nno_failure; k++)
+            fprintf(stderr, " %s", sc->no_failure[k]);
+        fprintf(stderr, ": no bond of their %lld particles breaks\n",
+                (long long)pd_sim_no_failure(sim));
+    }
     if (sc->damping > 0 && sc->relax)
         fprintf(stderr, PROG ": --damping %g 1/s: the relaxation's damping\n", sc->damping);
     else if (sc->damping > 0)

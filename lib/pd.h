@@ -417,6 +417,7 @@ typedef enum {
  * influence.c): major semi-axis 1 along the preferred direction u, the
  * others a and b along v and w, rolled about u by `roll`. */
 #define PD_ELLIPSOID_MAX 8 /* --ellipsoid at most this many times         */
+#define PD_NO_FAILURE_MAX 8 /* --no-failure at most this many times      */
 typedef struct {
     double u[3];    /* preferred direction as given (nonzero, any length) */
     double a, b;    /* semi-axis ratios along v and w, in (0, 1]          */
@@ -498,6 +499,10 @@ typedef struct {
     double ves_lambda;     /* VES: the viscous fraction lambda_i, 0..1     */
     double ves_tau;        /* VES: the relaxation time tau_i, s            */
     double yield_stress;   /* EPS: the yield stress Y, Pa                  */
+    int nno_failure;       /* sets whose bonds never break (pd-run
+                              --no-failure SET): a bond with an end in one
+                              of them stays intact whatever its stretch   */
+    char no_failure[PD_NO_FAILURE_MAX][64]; /* their names (PD_SET_NAME_MAX) */
 } pd_scene;
 
 /* A line on the model and the scene's constants of it for a run's log,
@@ -1007,6 +1012,9 @@ double pd_projectile_default_k(const pd_particles *p, const pd_bonds *b, const p
 int pd_sim_projectile(const pd_sim *sim, double x[3], double v[3]);
 /* The scene's --damping C, 1/s (0: none). */
 double pd_sim_damping(const pd_sim *sim);
+/* The particles of the scene's --no-failure sets, none of whose bonds
+ * breaks (0: no such set). */
+int64_t pd_sim_no_failure(const pd_sim *sim);
 
 /* ---------------------------------------------------------------- files */
 

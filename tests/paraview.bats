@@ -24,9 +24,22 @@ pv_check() {
     pd-dump2vtk -q "$run" -o zlib && pd-dump2vtk -q --compress 0 "$run" -o raw || return 1
     grep -q 'compressor="vtkZLibDataCompressor"' "zlib/${name}_00000000.vtu" || return 1
     ! grep -q 'compressor=' "raw/${name}_00000000.vtu" || return 1
-    # pvbatch's messages (its MPI start, Mesa) are not ours: keep its last line
-    xvfb-run -a pvbatch "$BATS_TEST_DIRNAME/paraview/check_dump.py" "$run" \
-        "zlib/$name.pvd" "raw/$name.pvd" last.png "$@" 2>&1 | tail -n 1
+    # pvbatch's messages (its MPI start, Mesa) are not ours: keep its last
+    # line.  pvbatch itself now and then aborts under xvfb on a loaded
+    # machine (SIGABRT, "Aborted", before check_dump.py says anything; seen
+    # once in 3 ParaView tests x 2 CI passes, not again in 9 reruns of the
+    # same files): that crash, and only that one, gets one more try.  A
+    # check that fails exits 1 with its traceback and is not retried.
+    local try rc
+    for try in 1 2; do
+        rc=0
+        xvfb-run -a pvbatch "$BATS_TEST_DIRNAME/paraview/check_dump.py" "$run" \
+            "zlib/$name.pvd" "raw/$name.pvd" last.png "$@" >pv.out 2>&1 || rc=$?
+        [ "$rc" -eq 134 ] || [ "$(tail -n 1 pv.out)" = Aborted ] || break
+        echo "pvbatch aborted (try $try)" >&2
+    done
+    tail -n 1 pv.out
+    return "$rc"
 }
 
 @test "ParaView reads the compressed frames and the indenter's sphere of a run" {

@@ -720,6 +720,13 @@ pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
         TRY(pd_h5_write_attr_doubles(g, "s00", &sc->s00, 1));
         TRY(pd_h5_write_attr_doubles(g, "alpha", &sc->alpha, 1));
     }
+    if (sc->nno_failure > 0) { /* the sets' names, space-separated */
+        char names[PD_NO_FAILURE_MAX * PD_SET_NAME_MAX] = "";
+        for (int k = 0; k < sc->nno_failure; k++)
+            snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", k ? " " : "",
+                     sc->no_failure[k]);
+        TRY(pd_h5_write_attr_string(g, "no_failure", names));
+    }
     if (sc->has_contact)
         TRY(pd_h5_write_attr_doubles(g, "contact_skin", &sc->contact_skin, 1));
     if (sc->has_indenter) {

@@ -717,7 +717,7 @@ static double break_marked(pd_sim *sim, lps_state *st)
             continue;
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
             const int32_t j = b->neighbor[k];
-            if (j < i || !pd_bond_intact(st->kill, k))
+            if (j < i || !pd_bond_intact(st->kill, k) || !pd_sim_may_break(sim, i, j))
                 continue;
             pd_bond_break(bits, k);
             for (int64_t r = b->offset[j]; r < b->offset[j + 1]; r++)

@@ -150,7 +150,7 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
         }
         if (failure && nbreak > 0)
             for (int64_t q = 0; q < m; q++)
-                if (brk[q] > 0) {
+                if (brk[q] > 0 && pd_sim_may_break(sim, i, nb[c0 + q])) {
                     pd_bond_break(h->intact, c0 + q);
                     *released += bond_energy(sim, i, c0 + q);
                 }

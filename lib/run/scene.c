@@ -128,6 +128,9 @@ pd_status pd_scene_check(pd_scene_spec *o)
         return s;
     if (o->sc.relax && (s = relax_check(o, m)) != PD_OK)
         return s;
+    if (o->sc.nno_failure > 0 && !o->sc.has_failure)
+        return pd_fail(PD_ERR_INVALID, "--no-failure %s keeps bonds from breaking: it needs "
+                       "--failure or --failure-energy", o->sc.no_failure[0]);
     if (o->sc.fields & ~m->fields) /* frame fields the model cannot write */
         return pd_fail(PD_ERR_INVALID, "--fields %s: --model %s does not write it",
                        (o->sc.fields & ~m->fields & PD_FIELD_ENERGY) ? "energy" : "stress",
@@ -400,7 +403,7 @@ char *pd_scene_text(const pd_scene *s)
         }
         cap += strlen(prof[k]) + 2 * PD_SET_NAME_MAX;
     }
-    cap += (size_t)s->nlaws * 160 + 256;
+    cap += (size_t)s->nlaws * 160 + 256 + (size_t)s->nno_failure * (PD_SET_NAME_MAX + 16);
     char *t = malloc(cap), *p = t;
     if (t == NULL) {
         for (int k = 0; k < s->nbc; k++)
@@ -458,6 +461,8 @@ char *pd_scene_text(const pd_scene *s)
     if (s->damping > 0)
         p += sprintf(p, "damping %.17g%s%s\n", s->damping, s->damping_set[0] ? "," : "",
                      s->damping_set);
+    for (int k = 0; k < s->nno_failure; k++)
+        p += sprintf(p, "no-failure %s\n", s->no_failure[k]);
     p += sprintf(p, "lost-margin %.17g\n", s->lost_margin);
     if (s->balance_limit < 0) /* the default is not written: a rerun takes the default */
         p += sprintf(p, "balance-limit off\n");

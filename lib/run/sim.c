@@ -58,6 +58,33 @@ static void lost_box(pd_sim *sim)
     }
 }
 
+/* The --no-failure flags: 1 for each particle of the scene's no-failure
+ * sets. */
+static pd_status no_failure_rows(pd_sim *sim)
+{
+    const pd_scene *sc = &sim->sc;
+    if (sc->nno_failure == 0)
+        return PD_OK;
+    if ((sim->nofail = calloc((size_t)sim->n, 1)) == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for --no-failure");
+    for (int k = 0; k < sc->nno_failure; k++) {
+        const pd_set *set = pd_sets_find(sc->sets, sc->no_failure[k]);
+        if (set == NULL)
+            return pd_fail(PD_ERR_INVALID,
+                           "--no-failure: the model has no set '%s' (pd-lattice --set and "
+                           "pd-mesh name them)",
+                           sc->no_failure[k]);
+        int64_t *rows = NULL;
+        pd_status s = pd_set_rows(set, sim->p, &rows);
+        if (s != PD_OK)
+            return s;
+        for (int64_t m = 0; m < set->n; m++)
+            sim->nofail[rows[m]] = 1;
+        free(rows);
+    }
+    return PD_OK;
+}
+
 /* The rows of each of the scene's named sets (the time series'). */
 static pd_status set_rows(pd_sim *sim)
 {
@@ -116,6 +143,8 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
     if (st == PD_OK)
         st = pd_half_build(b, &sim->half);
     if (st == PD_OK)
+        st = no_failure_rows(sim);
+    if (st == PD_OK)
         st = pd_grid_new(sim, sim->model->stencil(s), &sim->grid);
     if (st != PD_OK) {
         pd_sim_free(sim);
@@ -162,6 +191,7 @@ void pd_sim_free(pd_sim *sim)
     pd_grid_free(sim->grid);
     free(sim->s0);
     free(sim->s0_new);
+    free(sim->nofail);
     free(sim->lost);
     for (int k = 0; k < sim->nsets; k++)
         free(sim->set_rows[k]);
@@ -710,6 +740,14 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
         if (sim->effects[k]->restore)
             s = sim->effects[k]->restore(sim, sim->state[k], r);
     return s;
+}
+
+int64_t pd_sim_no_failure(const pd_sim *sim)
+{
+    int64_t n = 0;
+    for (int64_t i = 0; sim->nofail && i < sim->n; i++)
+        n += sim->nofail[i];
+    return n;
 }
 
 double pd_sim_damping(const pd_sim *sim)

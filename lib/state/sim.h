@@ -78,6 +78,11 @@ typedef enum {
 
 /* The state of a run.  Every per-particle array has n entries in the
  * rows of p (local indices; p->id holds the global ids). */
+struct pd_sim;
+/* May the bond i-j break, or is an end of it in a --no-failure set?
+ * Asked only of a bond whose stretch breaks it. */
+static inline int pd_sim_may_break(const struct pd_sim *sim, int64_t i, int64_t j);
+
 struct pd_sim {
     const pd_particles *p;        /* the body (reference configuration), not owned */
     const pd_bonds *b;            /* its directed families, not owned           */
@@ -103,6 +108,10 @@ struct pd_sim {
                            000 eq. 9), dimensionless; NULL without
                            failure                                       */
     double *s0_new;     /* the same, being computed in this step         */
+    uint8_t *nofail;    /* n flags, 1: the particle is in a --no-failure
+                           set and no bond of it breaks; NULL: no such
+                           set (the kernels veto a break only where they
+                           apply it, the rare path)                      */
     int64_t step;       /* steps taken                                   */
     double time;        /* step * sc.dt, s                               */
     double power;       /* power put in by the effects at this step's
@@ -151,6 +160,11 @@ struct pd_sim {
     void (*relax_free)(struct pd_relax *r); /* and what frees them       */
     pd_relax_info relaxed;  /* what the last load step took              */
 };
+static inline int pd_sim_may_break(const struct pd_sim *sim, int64_t i, int64_t j)
+{
+    return sim->nofail == NULL || !(sim->nofail[i] | sim->nofail[j]);
+}
+
 
 /* lib/run/sim.c, for relax.c: all force densities at the current
  * positions, and the effects' constrain hooks at a phase. */

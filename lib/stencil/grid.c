@@ -97,6 +97,7 @@ void pd_grid_free(pd_grid *G)
         free(G->f[d]);
     }
     free(G->perm);
+    free(G->nofail);
     free(G->mask);
     free(G->cmask);
     free(G->seg);
@@ -535,6 +536,12 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
             G->theta_m = malloc((size_t)n * sizeof(double));
             G->inv_m = malloc((size_t)n * sizeof(double));
             ok = G->theta_m && G->inv_m ? ok : -1;
+        }
+        if (sim->nofail && ok > 0) { /* the --no-failure flags in grid order */
+            if ((G->nofail = malloc((size_t)n)) == NULL)
+                ok = -1;
+            for (int64_t g = 0; g < n && ok > 0; g++)
+                G->nofail[g] = sim->nofail[G->perm ? G->perm[g] : g];
         }
         if (G->perm && ok > 0) {
             for (int d = 0; d < 3; d++) {

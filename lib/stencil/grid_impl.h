@@ -90,6 +90,8 @@ struct pd_grid {
     int32_t *lc[3];      /* lattice coordinates of particle i (sim order),
                             spacings                                       */
     int64_t *perm;       /* g -> i, NULL when grid order is sim order      */
+    uint8_t *nofail;     /* grid order: 1 for a particle no bond of which
+                            breaks (pd-run --no-failure), NULL: none       */
     uint64_t *mask;      /* words per particle (grid order): bit k set
                             while the bond at offset k is intact           */
     uint64_t *cmask;     /* words per particle: bit k set for a contact
@@ -215,6 +217,13 @@ static inline __attribute__((always_inline)) double grid_pair_energy(const int c
 static inline double grid_energy_c(const pd_grid *G, int k, double V, const int contact)
 {
     return contact ? 0.25 * G->kc * V : 0.25 * G->w[k] * G->len[k] * V;
+}
+
+/* May the bond g-j (grid order) break, or is an end of it in a
+ * --no-failure set?  Asked only of a bond whose stretch breaks it. */
+static inline int grid_may_break(const pd_grid *G, int64_t g, int64_t j)
+{
+    return G->nofail == NULL || !(G->nofail[g] | G->nofail[j]);
 }
 
 /* The broken bond g-j at offset k into a block's list (PMB and LPS):

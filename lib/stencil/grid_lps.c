@@ -122,7 +122,7 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
                     seg_contact(G, sg, A, c0, n, W);                                           \
                 if (failure && nbreak > 0)                                                     \
                     for (int64_t q = 0; q < n; q++)                                            \
-                        if (brk[q] > 0) {                                                      \
+                        if (brk[q] > 0 && grid_may_break(G, c0 + q, c0 + q + shift)) {        \
                             G->mask[(c0 + q) * W + (k >> 6)] &= ~bit;                          \
                             if (record_break(&G->breaks[blk], c0 + q, k, c0 + q + shift))      \
                                 return -1;                                                     \

@@ -141,13 +141,27 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
          * over the chunk adds their forces when there are any */
         if (contact && near > 0)
             seg_contact(G, sg, A, c0, m, W);
-        if (failure && nbreak > 0)
-            for (int64_t q = 0; q < m; q++)
-                if (brk[q] > 0) {
-                    G->mask[(c0 + q) * W + word] &= ~bit;
-                    if (record_break(bl, c0 + q, k, c0 + q + shift))
+        if (failure && nbreak > 0) {
+            for (int64_t q = 0; q < m; q++) {
+                if (brk[q] == 0)
+                    continue;
+                const int64_t g = c0 + q, j = g + shift;
+                if (grid_may_break(G, g, j)) {
+                    G->mask[g * W + word] &= ~bit;
+                    if (record_break(bl, g, k, j))
                         return -1;
+                } else if (energy) {
+                    /* kept by --no-failure: intact after this pass after
+                     * all, so its energy counts as an intact bond's does */
+                    GRID_PMB_PAIR(mask[g * W], y0[g], y1[g], y2[g], y0[j], y1[j], y2[j]);
+                    (void)fs;
+                    (void)s;
+                    const double x = mu > 0 ? grid_pair_energy(0, 0, r, ce, L, iL, dc) : 0.0;
+                    eb[g] += x;
+                    eb[j] += x;
                 }
+            }
+        }
     }
     return 0;
 }
@@ -169,7 +183,7 @@ static int tile_breaks(pd_grid *G, const grid_seg *sg, const grid_arrays *A, int
                       A->y2[j]);
         (void)fs;
         const double thr = A->s0[g] < A->s0[j] ? A->s0[g] : A->s0[j];
-        if (mu > 0 && s > thr) {
+        if (mu > 0 && s > thr && grid_may_break(G, g, j)) {
             G->mask[g * W + word] &= ~bit;
             if (record_break(bl, g, k, j))
                 return -1;
