@@ -87,6 +87,10 @@ static void usage(FILE *out)
             "                    sphere or mesh, as --subtract) get material ID; repeatable,\n"
             "                    the last region holding a particle wins:\n"
             "                    --material-region 2=box,0,1,0.5,1,0,1\n"
+            "  --origin FX,FY,FZ the sites are ((i+FX) DX, (j+FY) DY, (k+FZ) DX): the lattice\n"
+            "                    shifted by fractions of the spacing in [0, 1) (default 0,0,0;\n"
+            "                    LAMMPS lattice sc DX origin FX FY FZ); 0.5,0.5,0.5 keeps\n"
+            "                    faces on multiples of DX half a spacing from every site\n"
             "  --perturb A       move each site by uniform noise in [-A,A] per axis, m\n"
             "  --seed N          seed of the perturbation (default 1)\n"
             "  --dimension D     3 (default) or 2: a plate, the square lattice of sites\n"
@@ -332,7 +336,7 @@ static int add_paint(struct options *o, const char *arg)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_BOX = 256, OPT_CYL, OPT_SPHERE, OPT_INSIDE, OPT_SUB, OPT_SPACING, OPT_DENSITY, OPT_MATERIAL,
+    enum { OPT_BOX = 256, OPT_CYL, OPT_SPHERE, OPT_INSIDE, OPT_SUB, OPT_ORIGIN, OPT_SPACING, OPT_DENSITY, OPT_MATERIAL,
            OPT_PERTURB, OPT_SEED, OPT_DIMENSION, OPT_THICKNESS, OPT_SET, OPT_PAINT };
     static const struct option longopts[] = {
         {"box", required_argument, 0, OPT_BOX},
@@ -340,6 +344,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"sphere", required_argument, 0, OPT_SPHERE},
         {"inside", required_argument, 0, OPT_INSIDE},
         {"subtract", required_argument, 0, OPT_SUB},
+        {"origin", required_argument, 0, OPT_ORIGIN},
         {"spacing", required_argument, 0, OPT_SPACING},
         {"density", required_argument, 0, OPT_DENSITY},
         {"material", required_argument, 0, OPT_MATERIAL},
@@ -381,6 +386,14 @@ static int parse_options(int argc, char **argv, struct options *o)
         case OPT_SUB:
             if ((rc = add_region(o, PD_REGION_BOX, optarg, 1)))
                 return rc;
+            break;
+        case OPT_ORIGIN:
+            if (!pd_parse_doubles(optarg, o->lp.origin, 3) || !(o->lp.origin[0] >= 0) ||
+                !(o->lp.origin[0] < 1) || !(o->lp.origin[1] >= 0) || !(o->lp.origin[1] < 1) ||
+                !(o->lp.origin[2] >= 0) || !(o->lp.origin[2] < 1))
+                return usage_error("--origin needs FX,FY,FZ, fractions of the spacing in [0, 1), "
+                                   "not",
+                                   optarg);
             break;
         case OPT_SPACING:
             if (!pd_parse_double(optarg, &o->lp.spacing) || !(o->lp.spacing > 0))
@@ -444,6 +457,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         return usage_error("--density is required", NULL);
     if (o->dimension == 2 && !o->has_thickness)
         return usage_error("--dimension 2 needs --thickness", NULL);
+    if (o->dimension == 2 && o->lp.origin[2] != 0)
+        return usage_error("a plate's sites are at z = 0: give --origin FX,FY,0", NULL);
     if (o->has_thickness && o->dimension != 2)
         return usage_error("--thickness is for a plate: give --dimension 2", NULL);
     int adds = 0;
@@ -467,18 +482,20 @@ static void warn_rounding(const struct options *o)
     static const char *kind[] = {"--box", "--cylinder", "--sphere", "--inside"};
     char what[PD_SET_NAME_MAX + 32], text[512];
     for (int k = 0; k < o->nregions; k++)
-        if (pd_region_rounding(&o->regions[k], o->lp.spacing,
+        if (pd_region_rounding(&o->regions[k], o->lp.spacing, o->lp.origin,
                                o->regions[k].subtract ? "--subtract" : kind[o->regions[k].kind],
                                text, sizeof text))
             fprintf(stderr, PROG ": warning: %s\n", text);
     for (int k = 0; k < o->nsets; k++) {
         snprintf(what, sizeof what, "--set %s", o->set_names[k]);
-        if (pd_region_rounding(&o->set_regions[k], o->lp.spacing, what, text, sizeof text))
+        if (pd_region_rounding(&o->set_regions[k], o->lp.spacing, o->lp.origin, what, text,
+                               sizeof text))
             fprintf(stderr, PROG ": warning: %s\n", text);
     }
     for (int k = 0; k < o->npaints; k++) {
         snprintf(what, sizeof what, "--material-region %d", (int)o->paint_ids[k]);
-        if (pd_region_rounding(&o->paint_regions[k], o->lp.spacing, what, text, sizeof text))
+        if (pd_region_rounding(&o->paint_regions[k], o->lp.spacing, o->lp.origin, what, text,
+                               sizeof text))
             fprintf(stderr, PROG ": warning: %s\n", text);
     }
 }

@@ -159,6 +159,9 @@ typedef struct {
     int32_t material;   /* material id                     */
     double perturb;     /* amplitude of uniform perturbation, m (0 = none) */
     unsigned long seed; /* GSL mt19937 seed                */
+    double origin[3];   /* the sites are (n + origin) spacing, per axis,
+                           origin in [0, 1) (LAMMPS lattice ... origin;
+                           0: anchored at 0); a plate's z is 0        */
 } pd_lattice_params;
 
 /* Simple cubic lattice sites n*spacing (anchored at the origin, LAMMPS
@@ -173,7 +176,8 @@ pd_status pd_lattice_make(const pd_region *regions, int nregions,
  * 0.0045000000000000005, beyond the face)?  Then 1 and one line of text
  * (`what` names the region, e.g. "--box") on the first such face. */
 #define PD_LATTICE_ROUNDING 1e-6
-int pd_region_rounding(const pd_region *r, double h, const char *what, char *text, size_t len);
+int pd_region_rounding(const pd_region *r, double h, const double origin[3], const char *what,
+                       char *text, size_t len);
 /* A 2-D plate of thickness H (m, > 0): the square lattice of sites
  * (i spacing, j spacing, 0), anchored at the origin, where the point
  * (x, y, 0) is in the body (the regions are cut at z = 0; none there is an

@@ -342,3 +342,34 @@ print(h)" b.h5
     (cd b && pd-lattice -q --spacing 0.001 --box 0,0.004,0,0.004,0,0.004 --density 1 -o l.h5)
     cmp a/l.h5 b/l.h5
 }
+
+@test "--origin shifts the sites by fractions of the spacing (LAMMPS lattice ... origin)" {
+    # a cube of 8 spacings (exact in binary): 9^3 sites on its faces at the
+    # default origin, 8^3 half a spacing in with --origin 0.5,0.5,0.5
+    local h=0.0009765625 L=0.0078125
+    pd-lattice -q --spacing $h --density 1 --box 0,$L,0,$L,0,$L -o a.h5
+    pd-lattice -q --spacing $h --density 1 --box 0,$L,0,$L,0,$L --origin 0.5,0.5,0.5 -o b.h5
+    pd-lattice -q --spacing $h --density 1 --box 0,$L,0,$L,-1,1 --origin 0.25,0.5,0 \
+        --dimension 2 --thickness 1e-3 -o p.h5
+    py "
+h = float(sys.argv[1])
+a = h5py.File('a.h5')['particles/position'][:]
+b = h5py.File('b.h5')['particles/position'][:]
+p = h5py.File('p.h5')['particles/position'][:]
+assert len(a) == 9 ** 3 and len(b) == 8 ** 3
+want = np.array([((i + .5) * h, (j + .5) * h, (k + .5) * h)
+                 for k in range(8) for j in range(8) for i in range(8)])
+assert (b == want).all()     # (n + 0.5) h, in LAMMPS create_atoms' order
+assert len(p) == 8 * 8 and (p[:, 2] == 0).all() and (p[:8, 0] == (np.arange(8) + .25) * h).all()
+" "$h"
+    # the shifted lattice is still a stencil for pd-bonds
+    run --separate-stderr pd-bonds --horizon 0.0030001 b.h5 -o bb.h5
+    [[ "$stderr" =~ stored\ as\ a\ lattice\ stencil ]]
+    expect_usage_error "--origin needs FX,FY,FZ, fractions of the spacing in \[0, 1\), not '1,0,0'" \
+        pd-lattice --spacing $h --density 1 --box 0,$L,0,$L,0,$L --origin 1,0,0
+    expect_usage_error "--origin needs FX,FY,FZ" \
+        pd-lattice --spacing $h --density 1 --box 0,$L,0,$L,0,$L --origin 0.5,0.5
+    expect_usage_error "a plate's sites are at z = 0: give --origin FX,FY,0" \
+        pd-lattice --spacing $h --density 1 --box 0,$L,0,$L,-1,1 --origin 0,0,0.5 \
+        --dimension 2 --thickness 1e-3
+}

@@ -2,7 +2,8 @@
  * lattice.c -- particles on a simple cubic lattice inside regions.
  *
  * Sites are n * spacing for integer n along each axis (LAMMPS `lattice sc`,
- * origin at 0).  A site belongs to the body when it is inside at least one
+ * origin at 0), or (n + o) * spacing with a fraction o per axis (LAMMPS
+ * `lattice sc ... origin`).  A site belongs to the body when it is inside at least one
  * added region and inside no subtracted region.  Sites are numbered z
  * outermost, then y, then x (the order of LAMMPS create_atoms), so ids match
  * a LAMMPS run of the same region.  Each particle gets volume spacing^3 and
@@ -67,11 +68,18 @@ static pd_status make(const pd_region *regions, int nregions, const pd_lattice_p
     if (nadd == 0)
         return pd_fail(PD_ERR_INVALID, "no region to fill (give --box, --cylinder, --sphere or --inside)");
 
+    const double *o = lp->origin;
+    for (int d = 0; d < 3; d++)
+        if (!(o[d] >= 0 && o[d] < 1))
+            return pd_fail(PD_ERR_INVALID, "the lattice origin is a fraction of the spacing in "
+                           "[0, 1), not %g", o[d]);
+    if (plate && o[2] != 0)
+        return pd_fail(PD_ERR_INVALID, "a plate's sites are at z = 0: its origin's z is 0");
     int64_t nlo[3], nhi[3];
     double sites = 1;
     for (int d = 0; d < 3; d++) {
-        nlo[d] = (int64_t)floor(lo[d] / h) - 1;
-        nhi[d] = (int64_t)ceil(hi[d] / h) + 1;
+        nlo[d] = (int64_t)floor(lo[d] / h - o[d]) - 1;
+        nhi[d] = (int64_t)ceil(hi[d] / h - o[d]) + 1;
         sites *= (double)(nhi[d] - nlo[d] + 1);
     }
     if (plate) { /* one layer of sites, at z = 0 */
@@ -102,7 +110,9 @@ static pd_status make(const pd_region *regions, int nregions, const pd_lattice_p
         for (int64_t iz = nlo[2]; iz <= nhi[2]; iz++)
             for (int64_t iy = nlo[1]; iy <= nhi[1]; iy++)
                 for (int64_t ix = nlo[0]; ix <= nhi[0]; ix++) {
-                    double x[3] = {(double)ix * h, (double)iy * h, (double)iz * h};
+                    /* (n + 0.0) h is n h, bit for bit: no origin, the sites of before */
+                    double x[3] = {((double)ix + o[0]) * h, ((double)iy + o[1]) * h,
+                                   ((double)iz + o[2]) * h};
                     if (!site_in_body(regions, nregions, x))
                         continue;
                     if (pass == 1) {
@@ -263,7 +273,8 @@ pd_status pd_lattice_order(const pd_particles *p, int64_t **order)
     return s;
 }
 
-int pd_region_rounding(const pd_region *r, double h, const char *what, char *text, size_t len)
+int pd_region_rounding(const pd_region *r, double h, const double origin[3], const char *what,
+                       char *text, size_t len)
 {
     double face[6];
     int axis[6], upper[6], nf = 0;
@@ -281,7 +292,8 @@ int pd_region_rounding(const pd_region *r, double h, const char *what, char *tex
         }
     int found = 0, more = 0;
     for (int k = 0; k < nf; k++) {
-        const double n = nearbyint(face[k] / h), site = n * h;
+        const double o = origin[axis[k]];
+        const double n = nearbyint(face[k] / h - o), site = (n + o) * h;
         const double off = fabs(site - face[k]) / h;
         if (site == face[k] || !(off < PD_LATTICE_ROUNDING))
             continue;
@@ -293,10 +305,10 @@ int pd_region_rounding(const pd_region *r, double h, const char *what, char *tex
         const double out = face[k] + (upper[k] ? -0.5 : 0.5) * h,
                      keep = face[k] + (upper[k] ? 0.5 : -0.5) * h;
         snprintf(text, len,
-                 "%s: its face %c = %g lies %.2g spacings from the lattice plane %c = %.0f x "
+                 "%s: its face %c = %g lies %.2g spacings from the lattice plane %c = %.15g x "
                  "%g = %.17g, whose sites rounding puts %s; to say which you mean, give the "
                  "face half a spacing away (%g keeps them, %g leaves them out)",
-                 what, 'x' + axis[k], face[k], off, 'x' + axis[k], n, h, site,
+                 what, 'x' + axis[k], face[k], off, 'x' + axis[k], n + o, h, site,
                  in ? "inside" : "outside", keep, out);
     }
     if (more) {
