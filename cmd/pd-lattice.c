@@ -174,32 +174,21 @@ static pd_status surface_by_pd_mesh(const char *mesh, pd_file **out)
         fclose(err);
         return pd_fail(PD_ERR_IO, "--inside '%s': cannot run pd-mesh: %s", mesh, strerror(e));
     }
-    size_t cap = 1 << 16, len = 0;
-    unsigned char *buf = malloc(cap);
-    for (ssize_t got = 1; buf != NULL && got > 0;) {
-        if (len == cap) {
-            unsigned char *nb = realloc(buf, cap * 2);
-            if (nb == NULL) {
-                free(buf);
-                buf = NULL;
-                break;
-            }
-            buf = nb;
-            cap *= 2;
-        }
-        while ((got = read(fd[0], buf + len, cap - len)) < 0 && errno == EINTR)
-            ;
-        if (got > 0)
-            len += (size_t)got;
-    }
-    close(fd[0]);
+    /* all it writes, then its status: a failed pd-mesh writes nothing */
+    FILE *in = fdopen(fd[0], "rb");
+    pd_file *f = NULL;
+    pd_status s = in ? pd_file_open_stream(in, mesh, &f)
+                     : pd_fail(PD_ERR_IO, "--inside '%s': %s", mesh, strerror(errno));
+    if (in)
+        fclose(in);
+    else
+        close(fd[0]);
     int status = 0;
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
         ;
-    pd_status s = PD_OK;
-    if (buf == NULL)
-        s = pd_fail(PD_ERR_NOMEM, "--inside '%s': out of memory", mesh);
-    else if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        pd_file_abort(f);
+        f = NULL;
         char line[400] = "";
         rewind(err);
         if (fgets(line, sizeof line, err) == NULL)
@@ -207,10 +196,9 @@ static pd_status surface_by_pd_mesh(const char *mesh, pd_file **out)
         line[strcspn(line, "\n")] = '\0';
         const char *why = strstr(line, "error: ") ? strstr(line, "error: ") + 7 : line;
         s = pd_fail(PD_ERR_IO, "--inside '%s': %s", mesh, why);
-    } else
-        s = pd_file_open_memory(buf, len, mesh, out);
-    free(buf);
+    }
     fclose(err);
+    *out = f;
     return s;
 }
 
@@ -225,17 +213,11 @@ static pd_status load_surface(const char *mesh, const pd_surface **out)
         }
     if (nsurfaces == MAX_SURFACES)
         return pd_fail(PD_ERR_INVALID, "too many meshes (at most %d)", MAX_SURFACES);
-    static const unsigned char hdf5[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
-    unsigned char head[8] = {0};
-    FILE *in = fopen(mesh, "rb");
-    if (in == NULL)
-        return pd_fail(PD_ERR_IO, "--inside: cannot open '%s': %s", mesh, strerror(errno));
-    size_t got = fread(head, 1, sizeof head, in);
-    fclose(in);
+    const int hdf5 = pd_file_is_hdf5(mesh);
+    if (hdf5 < 0)
+        return pd_fail(PD_ERR_IO, "--inside: %s", pd_errmsg());
     pd_file *f = NULL;
-    pd_status s = got == sizeof head && memcmp(head, hdf5, sizeof head) == 0
-                      ? pd_file_open(mesh, &f)
-                      : surface_by_pd_mesh(mesh, &f);
+    pd_status s = hdf5 ? pd_file_open(mesh, &f) : surface_by_pd_mesh(mesh, &f);
     pd_surface *surface = NULL;
     if (s == PD_OK)
         s = pd_read_surface(f, &surface);

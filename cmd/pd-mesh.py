@@ -69,7 +69,7 @@ def warn(msg):
     sys.stderr.write(f"{PROG}: warning: {msg}\n")
 
 
-def parse_number(opt, text, positive=True):
+def parse_number(opt, text):
     try:
         v = float(text)
     except ValueError:
@@ -447,7 +447,7 @@ def gmsh_tags(mesh, k):
     return tags[k]
 
 
-def sanitize(name, taken):
+def sanitize(name):
     clean = re.sub(r"[^A-Za-z0-9_.-]", "_", name)[:63]
     if clean in (".", "..") or not clean:
         clean = "set_" + clean.strip(".")
@@ -525,7 +525,7 @@ def build(mesh, o):
         sets.append((name, node_rule(np.asarray(nodes, dtype=np.int64)), "node set"))
     out, seen = [], set()
     for name, rows, kind in sets:
-        clean = sanitize(name, seen)
+        clean = sanitize(name)
         if clean in seen:
             raise DataError(f"two sets are named '{clean}'")
         seen.add(clean)

@@ -1029,6 +1029,12 @@ pd_status pd_file_open(const char *path, pd_file **out);
 /* Open an HDF5 file image held in memory (copied), e.g. for a fuzzer;
  * `name` is used in messages. */
 pd_status pd_file_open_memory(const void *buf, size_t len, const char *name, pd_file **out);
+/* Open the whole of a stream (a pipe from another program) as an HDF5
+ * image, as "-" opens stdin; `name` is used in messages. */
+pd_status pd_file_open_stream(FILE *in, const char *name, pd_file **out);
+/* Does the file at `path` begin with HDF5's signature?  1 or 0, or -1
+ * with pd_errmsg() set when it cannot be read. */
+int pd_file_is_hdf5(const char *path);
 /* Create for writing; "-" builds the file in memory and streams it to stdout
  * at close.  Otherwise the file is written under a temporary name beside
  * `path` and renamed when pd_file_close() succeeds. */

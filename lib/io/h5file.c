@@ -201,6 +201,27 @@ static pd_status open_owned_image(unsigned char *buf, size_t len, const char *na
     return PD_OK;
 }
 
+pd_status pd_file_open_stream(FILE *in, const char *name, pd_file **out)
+{
+    unsigned char *buf;
+    size_t len;
+    pd_status s = slurp(in, name, &buf, &len);
+    return s == PD_OK ? open_owned_image(buf, len, name, out) : s;
+}
+
+int pd_file_is_hdf5(const char *path)
+{
+    unsigned char head[sizeof hdf5_signature];
+    FILE *in = fopen(path, "rb");
+    if (in == NULL) {
+        pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+        return -1;
+    }
+    size_t got = fread(head, 1, sizeof head, in);
+    fclose(in);
+    return got == sizeof head && memcmp(head, hdf5_signature, sizeof head) == 0;
+}
+
 pd_status pd_file_open_memory(const void *buf, size_t len, const char *name, pd_file **out)
 {
     unsigned char *copy = malloc(len ? len : 1);
