@@ -44,7 +44,7 @@ pv_check() {
 
 @test "ParaView reads the compressed frames and the indenter's sphere of a run" {
     make_run "$BATS_TEST_TMPDIR" --steps 100 --every 25
-    run -0 pv_check run.h5 indenter
+    run -0 --separate-stderr pv_check run.h5 indenter
     assert_output "ok 5"
     [ -s last.png ]
 }
@@ -54,7 +54,7 @@ pv_check() {
     pd-run -q --bulk-modulus "$BULK" --projectile sphere,0.005,0.005,0.0135,0.003,0.002,0,0,-60 \
         --indenter sphere,0.005,0.005,-0.0035,0.003,1e17,0,0,50 \
         --steps 100 --every 50 model.h5 -o both.h5
-    run -0 pv_check both.h5 indenter projectile
+    run -0 --separate-stderr pv_check both.h5 indenter projectile
     assert_output "ok 3"
 }
 
@@ -64,6 +64,6 @@ pv_check() {
         --density "$DENSITY" --set top=box,-1,1,-1,1,0.0095,1 -o lattice.h5
     pd-bonds -q --horizon "$HORIZON" lattice.h5 -o model.h5
     pd-run -q --bulk-modulus "$BULK" --velocity-bc top,z,1 --steps 20 --every 10 model.h5 -o bare.h5
-    run -0 pv_check bare.h5
+    run -0 --separate-stderr pv_check bare.h5
     assert_output "ok 3"
 }
