@@ -1070,7 +1070,7 @@ static int start(struct options *o, struct held *h, int64_t *first)
     if (s == PD_OK)
         s = pd_read_particles(h->in, &h->p);
     if (s == PD_OK)
-        s = pd_read_bonds(h->in, h->p, &h->b);
+        s = pd_read_bonds_compact(h->in, h->p, &h->b);
     if (s == PD_OK)
         s = pd_read_sets(h->in, h->p, &h->sets);
     pd_scene *sc = &o->spec.sc;

@@ -233,7 +233,89 @@ typedef struct {
                            are, bit for bit (pd_bonds_build_lattice,
                            pd_bonds_find_stencil): files then store the
                            stencil instead of the lists                 */
+    struct pd_bond_sites *sites; /* NULL, or the stencil's site map when
+                           the families are compact: neighbor, length
+                           and vfactor NULL, each family walked off the
+                           stencil (pd_family_start; pd_read_bonds_compact) */
 } pd_bonds;
+
+/* One family walked bond by bond, in the order of the directed bonds
+ * (b->offset[i] on), on bond lists and on compact families alike:
+ *
+ *     pd_bond_iter it;
+ *     for (pd_family_start(b, p, i, &it); pd_family_next(&it);)
+ *         ... it.q, it.j, it.length, it.vfactor ...
+ *
+ * A compact family computes each bond's length and factor from the
+ * particles as pd_bonds_expand does: the same bits as the lists.
+ * pd_family_start_partners walks the partners alone (length and vfactor
+ * not set). */
+typedef struct {
+    int64_t q;      /* the directed bond                                */
+    int32_t j;      /* its partner                                      */
+    double length;  /* reference length |xi|, m                         */
+    double vfactor; /* partial-volume factor nu                         */
+    /* the walk's own */
+    const pd_bonds *b_;
+    const pd_particles *p_;
+    int64_t i_, end_, s_;
+    int k_, geometry_;
+} pd_bond_iter;
+void pd_family_start(const pd_bonds *b, const pd_particles *p, int64_t i, pd_bond_iter *it);
+void pd_family_start_partners(const pd_bonds *b, const pd_particles *p, int64_t i,
+                              pd_bond_iter *it);
+int pd_family_next_site(pd_bond_iter *it); /* pd_family_next's compact case */
+static inline int pd_family_next(pd_bond_iter *it)
+{
+    if (++it->q >= it->end_)
+        return 0;
+    const pd_bonds *b = it->b_;
+    if (b->neighbor == NULL)
+        return pd_family_next_site(it);
+    it->j = b->neighbor[it->q];
+    if (it->geometry_) {
+        it->length = b->length[it->q];
+        it->vfactor = b->vfactor[it->q];
+    }
+    return 1;
+}
+/* A family as arrays, for loops the compiler vectorizes (the same loop
+ * over the same values gives the same bits in either form): the lists'
+ * own arrays, or a compact family's partners, lengths and factors written
+ * into buf (zeroed before the first use, grown as needed, freed by
+ * pd_family_buf_free).  pd_family_get returns 0, or -1 when out of
+ * memory for buf. */
+typedef struct {
+    int64_t n;              /* bonds                              */
+    int64_t first;          /* the first's directed index          */
+    const int32_t *j;       /* n partners                          */
+    const double *length;   /* n reference lengths, m              */
+    const double *vfactor;  /* n partial-volume factors            */
+} pd_family;
+typedef struct {
+    int64_t cap;
+    int32_t *j;
+    double *length, *vfactor;
+} pd_family_buf;
+int pd_family_get(const pd_bonds *b, const pd_particles *p, int64_t i, pd_family_buf *buf,
+                  pd_family *f);
+void pd_family_buf_free(pd_family_buf *buf);
+/* The offsets of compact families, each with its first bond (the lowest
+ * row that has one): d (x, y, z, spacings), that bond's length and
+ * factor (NaN: no bond at d) and how far any bond's length at d can lie
+ * from it, m (twice each end's distance from its site, and rounding).
+ * Returns the number of offsets (b->stencil->nk), or -1 for lists. */
+int pd_family_offsets(const pd_bonds *b, const pd_particles *p, int32_t (*d)[3], double *len,
+                      double *nu, double *spread);
+/* Of compact families: the first directed bond i->j with j < i (rows
+ * ascending, then bonds) whose bit in `bits` differs from that of its
+ * mirror j->i; -1 when there is none, -2 when out of memory, -3 for lists. */
+int64_t pd_family_asymmetric(const pd_bonds *b, const uint64_t *bits);
+/* Does b hold its families as lists (1), or compact (0)? */
+static inline int pd_bonds_has_lists(const pd_bonds *b)
+{
+    return b->neighbor != NULL;
+}
 
 /* A body's families as a lattice stencil (lib/bonds/stencil.c): particle i
  * sits at the site c_i = round((x_i - origin) / spacing) (to
@@ -286,6 +368,17 @@ pd_status pd_bonds_find_stencil(const pd_particles *p, pd_bonds *b);
  * share a site, or the body is too sparse for the site map. */
 pd_status pd_bonds_expand(const pd_particles *p, const pd_stencil *st, double horizon,
                           pd_bonds **out);
+/* The families of a stencil kept compact: offsets, all intact, no
+ * pre-crack, the site map (out->sites) and a copy of st, no lists.  When
+ * the particles are not in a lattice order (the families would need a
+ * sort), the lists instead, as pd_bonds_expand.  Its errors are
+ * pd_bonds_expand's. */
+pd_status pd_bonds_compact(const pd_particles *p, const pd_stencil *st, double horizon,
+                           pd_bonds **out);
+/* A copy of b with its families as lists (b compact or not): the state
+ * and pre-crack bits b has. */
+pd_status pd_bonds_with_lists(const pd_particles *p, const pd_bonds *b, pd_bonds **out);
+void pd_bond_sites_free(struct pd_bond_sites *s);
 /* An empty stencil of nk offsets (NULL: out of memory); and its release. */
 pd_stencil *pd_stencil_alloc(int nk);
 void pd_stencil_free(pd_stencil *st);
@@ -1073,6 +1166,9 @@ int pd_file_has_bonds(const pd_file *f);
  * or not. */
 int pd_file_has_frames(const pd_file *f);
 pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out);
+/* The same, a stencil's families kept compact (pd_bonds_compact): no
+ * per-bond arrays but the bits.  A file of lists reads as lists. */
+pd_status pd_read_bonds_compact(const pd_file *f, const pd_particles *p, pd_bonds **out);
 pd_status pd_write_bonds(pd_file *f, const pd_bonds *b);
 pd_status pd_write_scene(pd_file *f, const pd_scene *s, const char *effects,
                          const char *options_text);

@@ -485,6 +485,45 @@ b['precrack'][...] = np.packbits(pre, bitorder='little')"
         pd-damage -n bad.h5
 }
 
+# same_refusal FILE: pd-damage (which reads a stencil model's bonds as
+# lists) and pd-run (which keeps them compact, walking each family off the
+# stencil) refuse FILE with the same line, and pd-run leaves no output
+same_refusal() {
+    run -1 --separate-stderr pd-damage -n "$1"
+    local line=${stderr#pd-damage: error: }
+    [ -n "$line" ] && [ "$line" != "$stderr" ]
+    run -1 --separate-stderr pd-run -q --bulk-modulus "$BULK" --steps 0 "$1" -o r.h5
+    [ "$stderr" = "pd-run: error: $line" ]
+    [ ! -e r.h5 ]
+}
+
+@test "a stencil model's bits on one side of a bond only: pd-run (compact families) refuses as pd-damage (lists) does" {
+    # the state bit of the first bond that has a mirror below it, cleared
+    # on one side; then the pre-crack bit of one side of a bond
+    precrack_edit "
+assert b.attrs['form'] == 'stencil'
+i = int(np.nonzero(np.diff(off) > 0)[0][-1])
+k = off[i]
+state[k] = 1 - state[k]
+b['state'][...] = np.packbits(state, bitorder='little')"
+    same_refusal bad.h5
+    [[ $stderr == *"is broken on one side only (state bits differ)" ]]
+    precrack_edit "
+k = int(np.nonzero(pre)[0][-1])
+pre[k] = 0
+b['precrack'][...] = np.packbits(pre, bitorder='little')"
+    same_refusal bad.h5
+    [[ $stderr == *"is pre-cracked on one side only (precrack bits differ)" ]]
+    # both at once: the first one in the rows' order is named, as the lists do
+    precrack_edit "
+k = int(np.nonzero(pre)[0][0])
+pre[k] = 0
+b['precrack'][...] = np.packbits(pre, bitorder='little')
+state[count - 1] = 1 - state[count - 1]
+b['state'][...] = np.packbits(state, bitorder='little')"
+    same_refusal bad.h5
+}
+
 @test "/bonds/precrack of the wrong size or type is refused naming the dataset" {
     precrack_edit "
 p = b['precrack'][:]

@@ -55,6 +55,7 @@ void pd_bonds_free(pd_bonds *b)
     free(b->intact);
     free(b->precrack);
     pd_stencil_free(b->stencil);
+    pd_bond_sites_free(b->sites);
     free(b);
 }
 
@@ -105,13 +106,6 @@ int64_t pd_bits_count_broken_except(const uint64_t *bits, const uint64_t *skip, 
     for (int64_t b = words * 64; b < count; b++)
         broken += !pd_bond_intact(bits, b) && !pd_bond_intact(skip, b);
     return broken;
-}
-
-double pd_partial_volume(double len, double horizon, double r)
-{
-    if (len <= horizon - r)
-        return 1.0;
-    return (horizon + r - len) / (2.0 * r);
 }
 
 /* The bits of `bits` set among [lo, hi), and with `skip` those whose bit
@@ -190,10 +184,12 @@ static void damage_over(const pd_particles *p, const pd_bonds *b, const uint64_t
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < b->n; i++) {
         double all = 0, kept = 0;
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        pd_bond_iter it;
+        for (pd_family_start_partners(b, p, i, &it); pd_family_next(&it);) {
+            const int64_t k = it.q;
             if (skip && pd_bond_intact(skip, k))
                 continue;
-            double v = p->volume[b->neighbor[k]];
+            double v = p->volume[it.j];
             all += v;
             if (pd_bond_intact(intact, k))
                 kept += v;

@@ -50,15 +50,20 @@ pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");
     h->offset[0] = 0;
     int64_t span = 1;
+    /* the families in either form (pd_family_start: lists or compact) */
+#pragma omp parallel for schedule(static) reduction(max : span)
     for (int64_t i = 0; i < n; i++) {
-        int64_t first = lower_bound(b->neighbor, b->offset[i], b->offset[i + 1], (int32_t)i + 1);
-        count += b->offset[i + 1] - first;
-        h->offset[i + 1] = count;
-        if (b->offset[i + 1] > first) {
-            int64_t d = b->neighbor[b->offset[i + 1] - 1] - i;
-            span = d > span ? d : span;
-        }
+        int64_t c = 0;
+        pd_bond_iter it;
+        for (pd_family_start_partners(b, NULL, i, &it); pd_family_next(&it);)
+            if (it.j > i) {
+                c++;
+                span = it.j - i > span ? it.j - i : span;
+            }
+        h->offset[i + 1] = c;
     }
+    for (int64_t i = 0; i < n; i++)
+        h->offset[i + 1] = count += h->offset[i + 1];
     h->count = count;
     size_t m = (size_t)(count > 0 ? count : 1);
     h->neighbor = malloc(m * sizeof(int32_t));
@@ -67,9 +72,11 @@ pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
         return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)count);
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++) {
-        int64_t k = b->offset[i + 1] - (h->offset[i + 1] - h->offset[i]);
-        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++, k++)
-            h->neighbor[q] = b->neighbor[k];
+        int64_t q = h->offset[i];
+        pd_bond_iter it;
+        for (pd_family_start_partners(b, NULL, i, &it); pd_family_next(&it);)
+            if (it.j > i)
+                h->neighbor[q++] = it.j;
     }
     pd_half_set_state(h, b, b->intact);
     h->block = span;
@@ -86,14 +93,25 @@ void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *inta
     /* a half bond i-j (j > i) takes the bit of its copy in i's family */
     for (int64_t w = 0; w < pd_bits_words(h->count); w++)
         h->intact[w] = 0;
+    /* rows in parallel: a word is or-ed in whole, atomically, as a row
+     * ends or the word does (words are shared at the rows' ends) */
+#pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < h->n; i++) {
         int64_t q = h->offset[i];
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-            if (b->neighbor[k] > i) {
-                if (pd_bond_intact(intact, k))
-                    h->intact[q >> 6] |= UINT64_C(1) << (q & 63);
-                q++;
+        uint64_t word = 0;
+        pd_bond_iter it;
+        for (pd_family_start_partners(b, NULL, i, &it); pd_family_next(&it);)
+            if (it.j > i) {
+                if (pd_bond_intact(intact, it.q))
+                    word |= UINT64_C(1) << (q & 63);
+                if ((++q & 63) == 0) {
+                    if (word)
+                        __atomic_fetch_or(&h->intact[(q - 1) >> 6], word, __ATOMIC_RELAXED);
+                    word = 0;
+                }
             }
+        if (word)
+            __atomic_fetch_or(&h->intact[(q - 1) >> 6], word, __ATOMIC_RELAXED);
     }
 }
 
@@ -106,8 +124,9 @@ int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j)
 void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i)
 {
     h->epoch++;
-    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        int32_t j = b->neighbor[k];
+    pd_bond_iter it;
+    for (pd_family_start_partners(b, NULL, i, &it); pd_family_next(&it);) {
+        const int32_t j = it.j;
         int64_t q = pd_half_find(h, j < i ? j : i, j < i ? i : j);
         if (q >= 0)
             pd_bond_break(h->intact, q);
@@ -155,7 +174,9 @@ static void expand_rows(const pd_half_bonds *h, const pd_bonds *b, int64_t i0, i
     int64_t w = w0;
     for (int64_t i = i0; i < i1; i++) {
         int64_t own = h->offset[i];
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        pd_bond_iter it;
+        for (pd_family_start_partners(b, NULL, i, &it); pd_family_next(&it);) {
+            const int64_t k = it.q;
             if ((k >> 6) != w) { /* a word done */
                 if (w == w0)
                     __atomic_fetch_or(&intact[w], word, __ATOMIC_RELAXED);
@@ -164,7 +185,7 @@ static void expand_rows(const pd_half_bonds *h, const pd_bonds *b, int64_t i0, i
                 word = 0;
                 w = k >> 6;
             }
-            const int32_t j = b->neighbor[k];
+            const int32_t j = it.j;
             const int64_t q = j > i ? own++ : j >= i0 ? h->cursor[j]++ : before[j - j0]++;
             if (pd_bond_intact(h->intact, q))
                 word |= UINT64_C(1) << (k & 63);

@@ -20,7 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pd.h"
+#include "bonds/sites.h"
 
 static pd_stencil *stencil_copy(const pd_stencil *st)
 {
@@ -35,141 +35,7 @@ static pd_stencil *stencil_copy(const pd_stencil *st)
     return c;
 }
 
-/* ------------------------------------------------------------- site map */
-
-typedef struct {
-    int32_t *c[3];   /* site of particle i along x, y, z                  */
-    int32_t lo[3];   /* the bounding box's lowest site                    */
-    int64_t dim[3];  /* its sites per axis                                */
-    int32_t *map;    /* dim[0] dim[1] dim[2]: the particle at a site, or -1 */
-    int ax[3];       /* outer, mid, inner axis of the particles' order, or
-                        ax[0] = -1: the rows follow no lattice order      */
-} site_map;
-
-typedef enum { SITES_OK, SITES_OFF, SITES_SPARSE, SITES_SHARED, SITES_NOMEM } sites_result;
-
-static void sites_free(site_map *m)
-{
-    for (int d = 0; d < 3; d++)
-        free(m->c[d]);
-    free(m->map);
-}
-
-/* Is row order the lexicographic order of the sites in (ax[0], ax[1],
- * ax[2])? */
-static int sorted_by(const site_map *m, int64_t n, const int ax[3])
-{
-    for (int64_t i = 1; i < n; i++) {
-        int a = 0;
-        while (a < 3 && m->c[ax[a]][i] == m->c[ax[a]][i - 1])
-            a++;
-        if (a == 3 || m->c[ax[a]][i] < m->c[ax[a]][i - 1])
-            return 0;
-    }
-    return 1;
-}
-
-/* The sites of p's particles on the lattice (origin, h) and their map;
- * *shared gets a particle whose site another one holds (SITES_SHARED). */
-static sites_result sites_build(const pd_particles *p, const double origin[3], double h,
-                                site_map *m, int64_t *shared)
-{
-    const int64_t n = p->n;
-    memset(m, 0, sizeof *m);
-    for (int d = 0; d < 3; d++)
-        if ((m->c[d] = malloc((size_t)(n > 0 ? n : 1) * sizeof(int32_t))) == NULL)
-            return SITES_NOMEM;
-    if (!pd_lattice_sites(p, origin, h, m->c))
-        return SITES_OFF;
-    double sites = 1;
-    for (int d = 0; d < 3; d++) {
-        int32_t lo = INT32_MAX, hi = INT32_MIN;
-        for (int64_t i = 0; i < n; i++) {
-            lo = m->c[d][i] < lo ? m->c[d][i] : lo;
-            hi = m->c[d][i] > hi ? m->c[d][i] : hi;
-        }
-        m->lo[d] = lo;
-        m->dim[d] = (int64_t)hi - lo + 1;
-        sites *= (double)m->dim[d];
-    }
-    if (sites > (double)PD_STENCIL_SPARSE * (double)n + 4096)
-        return SITES_SPARSE;
-    const int64_t ns = m->dim[0] * m->dim[1] * m->dim[2];
-    if ((m->map = malloc((size_t)ns * sizeof(int32_t))) == NULL)
-        return SITES_NOMEM;
-    memset(m->map, 0xff, (size_t)ns * sizeof(int32_t));
-    for (int64_t i = 0; i < n; i++) {
-        int64_t s = ((int64_t)(m->c[2][i] - m->lo[2]) * m->dim[1] + (m->c[1][i] - m->lo[1])) *
-                        m->dim[0] +
-                    (m->c[0][i] - m->lo[0]);
-        if (m->map[s] >= 0) {
-            *shared = i;
-            return SITES_SHARED;
-        }
-        m->map[s] = (int32_t)i;
-    }
-    static const int perms[6][3] = {{2, 1, 0}, {2, 0, 1}, {1, 2, 0},
-                                    {1, 0, 2}, {0, 2, 1}, {0, 1, 2}};
-    m->ax[0] = -1;
-    for (int q = 0; q < 6 && m->ax[0] < 0; q++)
-        if (sorted_by(m, n, perms[q]))
-            memcpy(m->ax, perms[q], sizeof m->ax);
-    return SITES_OK;
-}
-
-/* The particle at site c_i + d, or -1. */
-static inline int32_t partner(const site_map *m, int64_t i, const int32_t d[3])
-{
-    int64_t s[3];
-    for (int a = 0; a < 3; a++) {
-        s[a] = (int64_t)m->c[a][i] + d[a] - m->lo[a];
-        if (s[a] < 0 || s[a] >= m->dim[a])
-            return -1;
-    }
-    return m->map[(s[2] * m->dim[1] + s[1]) * m->dim[0] + s[0]];
-}
-
 /* ---------------------------------------------------------- the families */
-
-typedef struct {
-    int64_t key;
-    int k;
-} key_item;
-
-static int cmp_key(const void *a, const void *b)
-{
-    const key_item *x = a, *y = b;
-    return (x->key > y->key) - (x->key < y->key);
-}
-
-/* The offsets in the order that makes every family come out sorted by
- * partner when the rows are in lattice order (m->ax); the table's own
- * order otherwise.  NULL: out of memory. */
-static int32_t (*walk_order(const pd_stencil *st, const site_map *m))[3]
-{
-    int32_t(*d)[3] = malloc((size_t)(st->nk > 0 ? st->nk : 1) * sizeof *d);
-    key_item *it = malloc((size_t)(st->nk > 0 ? st->nk : 1) * sizeof *it);
-    if (d == NULL || it == NULL) {
-        free(d);
-        free(it);
-        return NULL;
-    }
-    const int64_t w = 4 * (int64_t)PD_STENCIL_REACH + 1; /* wider than any |d| */
-    for (int k = 0; k < st->nk; k++) {
-        it[k].k = k;
-        it[k].key = k;
-        if (m->ax[0] >= 0) {
-            it[k].key = 0;
-            for (int a = 0; a < 3; a++)
-                it[k].key = it[k].key * w + (st->d[k][m->ax[a]] + 2 * PD_STENCIL_REACH);
-        }
-    }
-    qsort(it, (size_t)st->nk, sizeof *it, cmp_key);
-    for (int k = 0; k < st->nk; k++)
-        memcpy(d[k], st->d[it[k].k], sizeof d[k]);
-    free(it);
-    return d;
-}
 
 static inline int within(const pd_particles *p, int64_t i, int64_t j, double cut2);
 
@@ -180,7 +46,7 @@ static int64_t family_of(const site_map *m, int32_t (*d)[3], int nk, int64_t i, 
 {
     int64_t c = 0;
     for (int k = 0; k < nk; k++) {
-        int32_t j = partner(m, i, d[k]);
+        int32_t j = pd_site_partner(m, i, d[k]);
         if (j >= 0 && (p == NULL || within(p, i, j, cut2)))
             nb[c++] = j;
     }
@@ -195,22 +61,11 @@ static int64_t family_of(const site_map *m, int32_t (*d)[3], int nk, int64_t i, 
     return c;
 }
 
-/* The length and partial-volume factor of bond i-j, as pd_bonds_build
- * computes them. */
-static inline void bond_geometry(const pd_particles *p, int64_t i, int64_t j, double horizon,
-                                 double *len, double *nu)
-{
-    double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
-           dz = p->x[2][i] - p->x[2][j];
-    *len = sqrt(dx * dx + dy * dy + dz * dz);
-    *nu = pd_partial_volume(*len, horizon, p->radius[j]);
-}
-
 static pd_status expand(const pd_particles *p, const pd_stencil *st, double horizon,
                         const site_map *m, pd_bonds **out)
 {
     const int64_t n = p->n;
-    int32_t(*d)[3] = walk_order(st, m);
+    int32_t(*d)[3] = pd_sites_walk_order(st, m);
     int64_t *count = malloc((size_t)(n + 1) * sizeof(int64_t));
     if (d == NULL || count == NULL) {
         free(d);
@@ -221,7 +76,7 @@ static pd_status expand(const pd_particles *p, const pd_stencil *st, double hori
     for (int64_t i = 0; i < n; i++) {
         int64_t c = 0;
         for (int k = 0; k < st->nk; k++)
-            c += partner(m, i, d[k]) >= 0;
+            c += pd_site_partner(m, i, d[k]) >= 0;
         count[i] = c;
     }
     int64_t total = 0;
@@ -243,7 +98,7 @@ static pd_status expand(const pd_particles *p, const pd_stencil *st, double hori
         const int64_t o = b->offset[i];
         const int64_t c = family_of(m, d, st->nk, i, b->neighbor + o, NULL, 0);
         for (int64_t q = 0; q < c; q++)
-            bond_geometry(p, i, b->neighbor[o + q], horizon, &b->length[o + q], &b->vfactor[o + q]);
+            pd_bond_geometry(p, i, b->neighbor[o + q], horizon, &b->length[o + q], &b->vfactor[o + q]);
     }
     free(d);
     memset(b->intact, 0xff, (size_t)pd_bits_words(total) * sizeof(uint64_t));
@@ -251,32 +106,166 @@ static pd_status expand(const pd_particles *p, const pd_stencil *st, double hori
     return PD_OK;
 }
 
+/* The site map of p on st's lattice, or the error that says why not (m
+ * is freed by the caller either way). */
+static pd_status stencil_sites(const pd_particles *p, const pd_stencil *st, site_map *m)
+{
+    if (p->n >= INT32_MAX) {
+        memset(m, 0, sizeof *m);
+        return pd_fail(PD_ERR_INVALID, "too many particles for one process (%lld)",
+                       (long long)p->n);
+    }
+    int64_t shared = 0;
+    sites_result r = pd_sites_build(p, st->origin, st->spacing, m, &shared);
+    if (r == SITES_NOMEM)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the lattice sites");
+    if (r == SITES_OFF)
+        return pd_fail(PD_ERR_FORMAT, "a particle is off the lattice of the bonds' stencil "
+                                      "(spacing %g m)", st->spacing);
+    if (r == SITES_SPARSE)
+        return pd_fail(PD_ERR_FORMAT, "the particles are too sparse on the stencil's lattice "
+                                      "(more than %d sites per particle)", PD_STENCIL_SPARSE);
+    if (r == SITES_SHARED)
+        return pd_fail(PD_ERR_FORMAT, "particle %lld (id %lld) shares its lattice site with "
+                                      "another", (long long)shared, (long long)p->id[shared]);
+    return PD_OK;
+}
+
 pd_status pd_bonds_expand(const pd_particles *p, const pd_stencil *st, double horizon,
                           pd_bonds **out)
 {
     *out = NULL;
-    if (p->n >= INT32_MAX)
-        return pd_fail(PD_ERR_INVALID, "too many particles for one process (%lld)",
-                       (long long)p->n);
     site_map m;
-    int64_t shared = 0;
-    sites_result r = sites_build(p, st->origin, st->spacing, &m, &shared);
-    pd_status s = PD_OK;
-    if (r == SITES_NOMEM)
-        s = pd_fail(PD_ERR_NOMEM, "out of memory for the lattice sites");
-    else if (r == SITES_OFF)
-        s = pd_fail(PD_ERR_FORMAT, "a particle is off the lattice of the bonds' stencil "
-                                   "(spacing %g m)", st->spacing);
-    else if (r == SITES_SPARSE)
-        s = pd_fail(PD_ERR_FORMAT, "the particles are too sparse on the stencil's lattice "
-                                   "(more than %d sites per particle)", PD_STENCIL_SPARSE);
-    else if (r == SITES_SHARED)
-        s = pd_fail(PD_ERR_FORMAT, "particle %lld (id %lld) shares its lattice site with another",
-                    (long long)shared, (long long)p->id[shared]);
-    else
+    pd_status s = stencil_sites(p, st, &m);
+    if (s == PD_OK)
         s = expand(p, st, horizon, &m, out);
-    sites_free(&m);
+    pd_sites_free(&m);
     return s;
+}
+
+/* ------------------------------------------------------ compact families */
+
+/* The padded map of a compact body's sites (struct pd_bond_sites), its
+ * offsets' steps in it, and each particle's distance from its site. */
+static pd_status pad_sites(const pd_particles *p, const pd_stencil *st, struct pd_bond_sites *bs)
+{
+    const site_map *m = &bs->m;
+    int64_t R[3] = {0, 0, 0}, D[3];
+    for (int k = 0; k < st->nk; k++)
+        for (int a = 0; a < 3; a++)
+            R[a] = abs(st->d[k][a]) > R[a] ? abs(st->d[k][a]) : R[a];
+    for (int a = 0; a < 3; a++)
+        D[a] = m->dim[a] + 2 * R[a];
+    const int64_t n = p->n, ns = D[0] * D[1] * D[2];
+    bs->delta = malloc((size_t)(st->nk > 0 ? st->nk : 1) * sizeof(int64_t));
+    bs->pad = malloc((size_t)ns * sizeof(int32_t));
+    bs->at = malloc((size_t)(n > 0 ? n : 1) * sizeof(int64_t));
+    if (!bs->delta || !bs->pad || !bs->at)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the lattice sites");
+    for (int k = 0; k < bs->nk; k++) {
+        const int32_t *d = bs->d[k];
+        bs->delta[k] = ((int64_t)d[2] * D[1] + d[1]) * D[0] + d[0];
+    }
+    memset(bs->pad, 0xff, (size_t)ns * sizeof(int32_t));
+    double dev = 0, xmax = 0;
+#pragma omp parallel for schedule(static) reduction(max : dev, xmax)
+    for (int64_t i = 0; i < n; i++) {
+        int64_t c[3];
+        double e2 = 0;
+        for (int a = 0; a < 3; a++) {
+            c[a] = (int64_t)m->c[a][i] - m->lo[a] + R[a];
+            const double e = p->x[a][i] - (st->origin[a] + (double)m->c[a][i] * st->spacing);
+            e2 += e * e;
+            xmax = fabs(p->x[a][i]) > xmax ? fabs(p->x[a][i]) : xmax;
+        }
+        bs->at[i] = (c[2] * D[1] + c[1]) * D[0] + c[0];
+        bs->pad[bs->at[i]] = (int32_t)i;
+        dev = sqrt(e2) > dev ? sqrt(e2) : dev;
+    }
+    bs->dev = dev;
+    bs->xmax = xmax;
+    /* the unpadded map and the sites are not needed again */
+    pd_sites_free(&bs->m);
+    memset(&bs->m, 0, sizeof bs->m);
+    return PD_OK;
+}
+
+pd_status pd_bonds_compact(const pd_particles *p, const pd_stencil *st, double horizon,
+                           pd_bonds **out)
+{
+    *out = NULL;
+    struct pd_bond_sites *bs = calloc(1, sizeof *bs);
+    if (bs == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the lattice sites");
+    pd_status s = stencil_sites(p, st, &bs->m);
+    if (s == PD_OK && bs->m.ax[0] < 0) { /* no lattice order: the lists */
+        s = expand(p, st, horizon, &bs->m, out);
+        pd_bond_sites_free(bs);
+        return s;
+    }
+    if (s == PD_OK && (bs->d = pd_sites_walk_order(st, &bs->m)) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the stencil");
+    bs->nk = st->nk;
+    if (s == PD_OK)
+        s = pad_sites(p, st, bs);
+    const int64_t n = p->n;
+    pd_bonds *b = s == PD_OK ? calloc(1, sizeof *b) : NULL;
+    if (s == PD_OK && (b == NULL || (b->offset = calloc((size_t)n + 1, sizeof(int64_t))) == NULL ||
+                       (b->stencil = stencil_copy(st)) == NULL))
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the bonds");
+    if (s != PD_OK) {
+        pd_bonds_free(b);
+        pd_bond_sites_free(bs);
+        return s;
+    }
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++) {
+        int64_t c = 0;
+        for (int k = 0; k < bs->nk; k++)
+            c += bs->pad[bs->at[i] + bs->delta[k]] >= 0;
+        b->offset[i + 1] = c;
+    }
+    for (int64_t i = 0; i < n; i++)
+        b->offset[i + 1] += b->offset[i];
+    b->n = n;
+    b->count = b->offset[n];
+    b->horizon = horizon;
+    b->sites = bs;
+    /* one word more, clear, as pd_bonds_alloc's */
+    if ((b->intact = calloc((size_t)pd_bits_words(b->count) + 1, sizeof(uint64_t))) == NULL) {
+        pd_bonds_free(b);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)b->count);
+    }
+    memset(b->intact, 0xff, (size_t)pd_bits_words(b->count) * sizeof(uint64_t));
+    *out = b;
+    return PD_OK;
+}
+
+pd_status pd_bonds_with_lists(const pd_particles *p, const pd_bonds *b, pd_bonds **out)
+{
+    *out = NULL;
+    if (b->sites == NULL || b->stencil == NULL)
+        return pd_fail(PD_ERR_INVALID, "the bonds are not compact");
+    pd_bonds *c = NULL;
+    pd_status s = pd_bonds_expand(p, b->stencil, b->horizon, &c);
+    if (s != PD_OK)
+        return s;
+    if (c->count != b->count) {
+        pd_bonds_free(c);
+        return pd_fail(PD_ERR_INVALID, "the stencil expands to %lld bonds, not %lld",
+                       (long long)c->count, (long long)b->count);
+    }
+    const size_t words = (size_t)pd_bits_words(b->count);
+    memcpy(c->intact, b->intact, words * sizeof(uint64_t));
+    if (b->precrack) {
+        if ((c->precrack = calloc(words + 1, sizeof(uint64_t))) == NULL) {
+            pd_bonds_free(c);
+            return pd_fail(PD_ERR_NOMEM, "out of memory for the pre-crack");
+        }
+        memcpy(c->precrack, b->precrack, words * sizeof(uint64_t));
+    }
+    *out = c;
+    return PD_OK;
 }
 
 /* ------------------------------------------------------------ the finding */
@@ -285,7 +274,7 @@ pd_status pd_bonds_expand(const pd_particles *p, const pd_stencil *st, double ho
 static int same_families(const pd_particles *p, const pd_bonds *b, const pd_stencil *st,
                          const site_map *m)
 {
-    int32_t(*d)[3] = walk_order(st, m);
+    int32_t(*d)[3] = pd_sites_walk_order(st, m);
     int same = d != NULL;
 #pragma omp parallel reduction(&& : same)
     {
@@ -299,7 +288,7 @@ static int same_families(const pd_particles *p, const pd_bonds *b, const pd_sten
             same = c == b->offset[i + 1] - o;
             for (int64_t q = 0; q < c && same; q++) {
                 double len, nu;
-                bond_geometry(p, i, nb[q], b->horizon, &len, &nu);
+                pd_bond_geometry(p, i, nb[q], b->horizon, &len, &nu);
                 same = nb[q] == b->neighbor[o + q] &&
                        memcmp(&len, &b->length[o + q], sizeof len) == 0 &&
                        memcmp(&nu, &b->vfactor[o + q], sizeof nu) == 0;
@@ -321,9 +310,9 @@ pd_status pd_bonds_find_stencil(const pd_particles *p, pd_bonds *b)
     pd_particles_bounds(p, origin, hi);
     site_map m;
     int64_t shared = 0;
-    sites_result r = sites_build(p, origin, p->spacing, &m, &shared);
+    sites_result r = pd_sites_build(p, origin, p->spacing, &m, &shared);
     if (r != SITES_OK) {
-        sites_free(&m);
+        pd_sites_free(&m);
         return r == SITES_NOMEM ? pd_fail(PD_ERR_NOMEM, "out of memory for the lattice sites")
                                 : PD_OK;
     }
@@ -331,7 +320,7 @@ pd_status pd_bonds_find_stencil(const pd_particles *p, pd_bonds *b)
     const int R = PD_STENCIL_REACH, w = 2 * R + 1;
     int64_t *first = malloc((size_t)w * w * w * sizeof(int64_t));
     if (first == NULL) {
-        sites_free(&m);
+        pd_sites_free(&m);
         return pd_fail(PD_ERR_NOMEM, "out of memory for the stencil");
     }
     for (int q = 0; q < w * w * w; q++)
@@ -372,7 +361,7 @@ pd_status pd_bonds_find_stencil(const pd_particles *p, pd_bonds *b)
             pd_stencil_free(st);
     }
     free(first);
-    sites_free(&m);
+    pd_sites_free(&m);
     return s;
 }
 
@@ -429,16 +418,16 @@ pd_status pd_bonds_build_lattice(const pd_particles *p, double horizon, int list
     pd_particles_bounds(p, origin, hi);
     site_map m;
     int64_t shared = 0;
-    sites_result r = sites_build(p, origin, h, &m, &shared);
+    sites_result r = pd_sites_build(p, origin, h, &m, &shared);
     if (r != SITES_OK) { /* off the lattice, sparse, two at one site: cell lists */
-        sites_free(&m);
+        pd_sites_free(&m);
         return r == SITES_NOMEM ? pd_fail(PD_ERR_NOMEM, "out of memory for the lattice sites")
                                 : PD_OK;
     }
     const int64_t n = p->n;
     const double cut2 = horizon * horizon;
     pd_stencil *cand = candidates(horizon, h);
-    int32_t(*d)[3] = cand ? walk_order(cand, &m) : NULL;
+    int32_t(*d)[3] = cand ? pd_sites_walk_order(cand, &m) : NULL;
     const int nk = cand ? cand->nk : 0;
     /* per walked offset: pairs within the horizon, pairs there at all, and
      * the first row with a bond there */
@@ -462,7 +451,7 @@ pd_status pd_bonds_build_lattice(const pd_particles *p, double horizon, int list
             for (int64_t i = 0; i < n; i++) {
                 int64_t c = 0;
                 for (int k = 0; k < nk; k++) {
-                    const int32_t j = partner(&m, i, d[k]);
+                    const int32_t j = pd_site_partner(&m, i, d[k]);
                     if (j < 0)
                         continue;
                     const int w = within(p, i, j, cut2);
@@ -519,7 +508,7 @@ pd_status pd_bonds_build_lattice(const pd_particles *p, double horizon, int list
             int32_t *nb = b->neighbor + b->offset[i];
             const int64_t c = family_of(&m, d, nk, i, nb, p, cut2);
             for (int64_t q = 0; q < c; q++)
-                bond_geometry(p, i, nb[q], horizon, &b->length[b->offset[i] + q],
+                pd_bond_geometry(p, i, nb[q], horizon, &b->length[b->offset[i] + q],
                               &b->vfactor[b->offset[i] + q]);
         }
         memset(b->intact, 0xff, (size_t)pd_bits_words(b->count) * sizeof(uint64_t));
@@ -530,8 +519,8 @@ pd_status pd_bonds_build_lattice(const pd_particles *p, double horizon, int list
                 for (int k = 0; k < nk; k++)
                     if (in[k] > 0 && memcmp(d[k], cand->d[c], sizeof d[k]) == 0) {
                         memcpy(st->d[q], d[k], sizeof d[k]);
-                        const int32_t j = partner(&m, first[k], d[k]);
-                        bond_geometry(p, first[k], j, horizon, &st->length[q], &st->vfactor[q]);
+                        const int32_t j = pd_site_partner(&m, first[k], d[k]);
+                        pd_bond_geometry(p, first[k], j, horizon, &st->length[q], &st->vfactor[q]);
                         q++;
                     }
             memcpy(st->origin, origin, sizeof origin);
@@ -545,7 +534,7 @@ pd_status pd_bonds_build_lattice(const pd_particles *p, double horizon, int list
     free(first);
     free(count);
     pd_stencil_free(cand);
-    sites_free(&m);
+    pd_sites_free(&m);
     if (s != PD_OK) {
         pd_bonds_free(b);
         return s;

@@ -290,8 +290,13 @@ static uint8_t *words_to_bytes(const uint64_t *words, int64_t count)
 
 /* Check the CSR structure; families must be sorted and symmetric with equal
  * state (and pre-crack bits) on both sides. */
-static pd_status check_bonds(const char *fn, const pd_bonds *b)
+static pd_status check_compact(const char *fn, const pd_particles *p, const pd_bonds *b);
+static int64_t row_of(const pd_bonds *b, int64_t k);
+
+static pd_status check_bonds(const char *fn, const pd_particles *p, const pd_bonds *b)
 {
+    if (!pd_bonds_has_lists(b))
+        return check_compact(fn, p, b);
     if (b->offset[0] != 0)
         return pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset must start at 0", fn);
     for (int64_t i = 0; i < b->n; i++)
@@ -365,6 +370,90 @@ static pd_status check_bonds(const char *fn, const pd_bonds *b)
     return s;
 }
 
+/* Is every bond of compact families as check_bonds wants it (length
+ * positive, finite and within the horizon, volume factor in (0, 1])?  Each
+ * offset's bonds are bound to its first one's length within its spread
+ * (pd_family_offsets): 1 when the bounds settle it for all, else 0. */
+static int compact_lengths_bound(const pd_particles *p, const pd_bonds *b)
+{
+    const int nk = b->stencil ? b->stencil->nk : 0;
+    int32_t(*d)[3] = malloc((size_t)(nk > 0 ? nk : 1) * sizeof *d);
+    double *len = malloc((size_t)(nk > 0 ? nk : 1) * sizeof(double));
+    double *nu = malloc((size_t)(nk > 0 ? nk : 1) * sizeof(double));
+    double *spread = malloc((size_t)(nk > 0 ? nk : 1) * sizeof(double));
+    int ok = d && len && nu && spread && pd_family_offsets(b, p, d, len, nu, spread) == nk;
+    double rmin = INFINITY;
+    for (int64_t i = 0; i < p->n && ok; i++)
+        rmin = fmin(rmin, p->radius[i]);
+    ok = ok && rmin > 0 && isfinite(rmin);
+    for (int k = 0; k < nk && ok; k++) /* nu in (0, 1] while len < horizon + r */
+        ok = isnan(len[k]) || (len[k] - spread[k] > 0 &&
+                               len[k] + spread[k] <= b->horizon * (1 + 1e-9) &&
+                               len[k] + spread[k] < b->horizon + 0.5 * rmin);
+    free(d);
+    free(len);
+    free(nu);
+    free(spread);
+    return ok;
+}
+
+/* The partner of directed bond k. */
+static int32_t partner_of(const pd_particles *p, const pd_bonds *b, int64_t k)
+{
+    pd_bond_iter it;
+    for (pd_family_start_partners(b, p, row_of(b, k), &it); pd_family_next(&it) && it.q < k;)
+        ;
+    return it.j;
+}
+
+/* The same checks of compact families (pd_bonds_compact): partners,
+ * order and symmetry hold by the stencil's making; each bond's length and
+ * factor, and the state (and pre-crack) bits of both sides. */
+static pd_status check_compact(const char *fn, const pd_particles *p, const pd_bonds *b)
+{
+    int64_t bad = INT64_MAX; /* the first bad bond, as check_bonds finds it */
+    if (!compact_lengths_bound(p, b)) {
+#pragma omp parallel for schedule(static) reduction(min : bad)
+        for (int64_t i = 0; i < b->n; i++) {
+            pd_bond_iter it;
+            for (pd_family_start(b, p, i, &it); pd_family_next(&it);)
+                if (!(it.length > 0) || !isfinite(it.length) ||
+                    it.length > b->horizon * (1 + 1e-9) || !(it.vfactor > 0 && it.vfactor <= 1)) {
+                    bad = it.q < bad ? it.q : bad;
+                    break;
+                }
+        }
+    }
+    if (bad < INT64_MAX) {
+        pd_bond_iter it;
+        for (pd_family_start(b, p, row_of(b, bad), &it); pd_family_next(&it) && it.q < bad;)
+            ;
+        const long long k = (long long)bad;
+        if (!(it.length > 0) || !isfinite(it.length))
+            return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has length %g", fn, k, it.length);
+        if (it.length > b->horizon * (1 + 1e-9))
+            return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld is %g m long, beyond the horizon %g m",
+                           fn, k, it.length, b->horizon);
+        return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has volume factor %g", fn, k, it.vfactor);
+    }
+    /* both sides' bits, the first difference as check_bonds meets it (the
+     * state's before the pre-crack's at one bond) */
+    const int64_t ks = pd_family_asymmetric(b, b->intact),
+                  kp = b->precrack ? pd_family_asymmetric(b, b->precrack) : -1;
+    if (ks == -2 || kp == -2)
+        return pd_fail(PD_ERR_NOMEM, "out of memory checking bonds");
+    if (ks >= 0 && (kp < 0 || ks <= kp))
+        return pd_fail(PD_ERR_FORMAT,
+                       "'%s': bond %lld-%lld is broken on one side only (state bits differ)", fn,
+                       (long long)partner_of(p, b, ks), (long long)row_of(b, ks));
+    if (kp >= 0)
+        return pd_fail(PD_ERR_FORMAT,
+                       "'%s': bond %lld-%lld is pre-cracked on one side only (precrack bits "
+                       "differ)",
+                       fn, (long long)partner_of(p, b, kp), (long long)row_of(b, kp));
+    return PD_OK;
+}
+
 /* The row whose family holds directed bond k (offsets checked). */
 static int64_t row_of(const pd_bonds *b, int64_t k)
 {
@@ -409,18 +498,21 @@ static pd_status read_precrack(const pd_file *f, pd_bonds *b)
     return PD_OK;
 }
 
-static pd_status check_precrack(const char *fn, const pd_bonds *b)
+static pd_status check_precrack(const char *fn, const pd_particles *p, const pd_bonds *b)
 {
     if (b->precrack == NULL)
         return PD_OK;
     for (int64_t w = 0; w < pd_bits_words(b->count); w++) {
         uint64_t both = b->precrack[w] & b->intact[w];
         if (both) {
-            int64_t k = w * 64 + __builtin_ctzll(both);
+            const int64_t k = w * 64 + __builtin_ctzll(both), i = row_of(b, k);
+            pd_bond_iter it;
+            for (pd_family_start_partners(b, p, i, &it); pd_family_next(&it) && it.q < k;)
+                ;
             return pd_fail(PD_ERR_FORMAT,
                            "'%s': bond %lld-%lld is pre-cracked (/bonds/precrack) but intact in "
                            "/bonds/state",
-                           fn, (long long)row_of(b, k), (long long)b->neighbor[k]);
+                           fn, (long long)i, (long long)it.j);
         }
     }
     return PD_OK;
@@ -491,7 +583,7 @@ static pd_status read_list_bonds(const pd_file *f, const pd_particles *p, pd_bon
 /* /bonds as a stencil (pd_stencil, lib/bonds/stencil.c): the table of
  * offsets and its lattice, checked, then the families it expands to. */
 static pd_status read_stencil_bonds(const pd_file *f, hid_t g, const pd_particles *p,
-                                    double horizon, pd_bonds **out)
+                                    double horizon, int lists, pd_bonds **out)
 {
     const char *fn = f->name;
     const int R = PD_STENCIL_REACH, w = 2 * R + 1;
@@ -565,13 +657,14 @@ static pd_status read_stencil_bonds(const pd_file *f, hid_t g, const pd_particle
                                        "opposite", fn, dk[0], dk[1], dk[2]);
     }
     free(seen);
-    if (s == PD_OK && (s = pd_bonds_expand(p, st, horizon, out)) != PD_OK)
+    if (s == PD_OK && (s = lists ? pd_bonds_expand(p, st, horizon, out)
+                                 : pd_bonds_compact(p, st, horizon, out)) != PD_OK)
         s = pd_fail(s, "'%s': %s", fn, pd_errmsg());
     pd_stencil_free(st);
     return s;
 }
 
-pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
+static pd_status read_bonds(const pd_file *f, const pd_particles *p, int lists, pd_bonds **out)
 {
     const char *fn = f->name;
     if (!pd_file_has_bonds(f))
@@ -598,7 +691,7 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
     if (s == PD_OK && stencil && pd_h5_read_attr_int(g, "count", &declared) != PD_OK)
         s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds as a stencil has no count attribute", fn);
     if (s == PD_OK)
-        s = stencil ? read_stencil_bonds(f, g, p, horizon, &b) : read_list_bonds(f, p, &b);
+        s = stencil ? read_stencil_bonds(f, g, p, horizon, lists, &b) : read_list_bonds(f, p, &b);
     H5Gclose(g);
     free(form);
     if (s == PD_OK && stencil && b->count != declared)
@@ -618,15 +711,25 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
         s = read_precrack(f, b);
     }
     if (s == PD_OK)
-        s = check_bonds(fn, b);
+        s = check_bonds(fn, p, b);
     if (s == PD_OK)
-        s = check_precrack(fn, b);
+        s = check_precrack(fn, p, b);
     if (s != PD_OK) {
         pd_bonds_free(b);
         return s;
     }
     *out = b;
     return PD_OK;
+}
+
+pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
+{
+    return read_bonds(f, p, 1, out);
+}
+
+pd_status pd_read_bonds_compact(const pd_file *f, const pd_particles *p, pd_bonds **out)
+{
+    return read_bonds(f, p, 0, out);
 }
 
 /* The families as lists (CSR) or, when b->stencil says they are one, as the

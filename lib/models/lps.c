@@ -141,13 +141,13 @@ void pd_lps_weighted_volume(const pd_particles *p, const pd_bonds *b, pd_influen
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < b->n; i++) {
         double sum = 0;
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            const int32_t j = b->neighbor[k];
+        pd_bond_iter it;
+        for (pd_family_start(b, p, i, &it); pd_family_next(&it);) {
+            const int32_t j = it.j;
             const double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
                          dz = p->x[2][i] - p->x[2][j];
             const double rsq = dx * dx + dy * dy + dz * dz;
-            sum += pd_lps_influence(w, b->length[k], b->horizon) * rsq * p->volume[j] *
-                   b->vfactor[k];
+            sum += pd_lps_influence(w, it.length, b->horizon) * rsq * p->volume[j] * it.vfactor;
         }
         m[i] = sum;
     }
@@ -168,28 +168,29 @@ static void bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scen
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < b->n; i++) {
         double sum = 0;
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            const int32_t j = b->neighbor[k];
+        pd_bond_iter it;
+        for (pd_family_start(b, p, i, &it); pd_family_next(&it);) {
+            const int32_t j = it.j;
             const double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
                          dz = p->x[2][i] - p->x[2][j];
             const double rsq = dx * dx + dy * dy + dz * dz, xi[3] = {-dx, -dy, -dz};
-            const double om = pd_bond_influence(s, b->length[k], b->horizon, xi);
+            const double om = pd_bond_influence(s, it.length, b->horizon, xi);
             if (omega != NULL)
-                omega[k] = om;
-            sum += om * rsq * p->volume[j] * b->vfactor[k];
+                omega[it.q] = om;
+            sum += om * rsq * p->volume[j] * it.vfactor;
         }
         m[i] = sum;
     }
 }
 
-/* omega of directed bond k of row i, as bond_weights has it. */
+/* omega of the bond of row i that `it` is at, as bond_weights has it. */
 static double bond_omega(const pd_particles *p, const pd_bonds *b, const pd_scene *s, int64_t i,
-                         int64_t k)
+                         const pd_bond_iter *it)
 {
-    const int32_t j = b->neighbor[k];
+    const int32_t j = it->j;
     const double xi[3] = {-(p->x[0][i] - p->x[0][j]), -(p->x[1][i] - p->x[1][j]),
                           -(p->x[2][i] - p->x[2][j])};
-    return pd_bond_influence(s, b->length[k], b->horizon, xi);
+    return pd_bond_influence(s, it->length, b->horizon, xi);
 }
 
 static void lps_free(void *state)
@@ -971,8 +972,9 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
     bond_weights(p, b, s, NULL, m);
     for (int64_t i = 0; i < n; i++) {
         S[i] = 0;
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-            S[i] += bond_omega(p, b, s, i, k) * b->length[k] * b->vfactor[k] * p->volume[b->neighbor[k]];
+        pd_bond_iter it;
+        for (pd_family_start(b, p, i, &it); pd_family_next(&it);)
+            S[i] += bond_omega(p, b, s, i, &it) * it.length * it.vfactor * p->volume[it.j];
     }
     /* VES (see the top): theta_i enters t_ij with 3K omega/m_i - 5G omega
      * (1/m_i + 1/m_j), theta_j with 3K omega/m_j; with m_i ~ m_j both are
@@ -985,12 +987,13 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
     double best = INFINITY;
     for (int64_t i = 0; i < n; i++) {
         double sum = 0;
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            const int32_t j = b->neighbor[k];
-            const double om = bond_omega(p, b, s, i, k);
-            const double C = om * b->vfactor[k] *
+        pd_bond_iter it;
+        for (pd_family_start(b, p, i, &it); pd_family_next(&it);) {
+            const int32_t j = it.j;
+            const double om = bond_omega(p, b, s, i, &it);
+            const double C = om * it.vfactor *
                              (PD_LPS_SHEAR_FACTOR * G * (1.0 / m[i] + 1.0 / m[j]) +
-                              3.0 * dil * b->length[k] * (S[i] / (m[i] * m[i]) + S[j] / (m[j] * m[j])));
+                              3.0 * dil * it.length * (S[i] / (m[i] * m[i]) + S[j] / (m[j] * m[j])));
             sum += p->volume[j] * C;
         }
         if (sum > 0)

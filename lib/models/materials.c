@@ -180,10 +180,11 @@ double pd_bond_stiffness_laws(const pd_particles *p, const pd_bonds *b, const pd
                               int64_t i)
 {
     double sum = 0;
-    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+    pd_bond_iter it;
+    for (pd_family_start(b, p, i, &it); pd_family_next(&it);) {
         double c, s00;
-        pd_bond_law_of(p, s, i, b->neighbor[k], &c, &s00);
-        sum += p->volume[b->neighbor[k]] * b->vfactor[k] * c / b->length[k];
+        pd_bond_law_of(p, s, i, it.j, &c, &s00);
+        sum += p->volume[it.j] * it.vfactor * c / it.length;
     }
     return sum;
 }

@@ -266,20 +266,31 @@ static void pmb_energy_uniform(const pd_sim *sim, void *state, double *e)
     const uint64_t *intact = pd_sim_intact(sim);
     const double *V = sim->p->volume, c = sim->sc.c;
     double *const *y = sim->y;
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++) {
-        double sum = 0;
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            if (!pd_bond_intact(intact, k))
+#pragma omp parallel
+    {
+        pd_family_buf fb = {0};
+        pd_family F;
+#pragma omp for schedule(static)
+        for (int64_t i = 0; i < sim->n; i++) {
+            if (pd_family_get(b, sim->p, i, &fb, &F) != 0) {
+                e[i] = NAN; /* out of memory: never a wrong number */
                 continue;
-            const int32_t j = b->neighbor[k];
-            const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i], dz = y[2][j] - y[2][i];
-            double dr = sqrt(dx * dx + dy * dy + dz * dz) - b->length[k];
-            dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-            const double s = dr / b->length[k];
-            sum += 0.25 * c * s * s * b->length[k] * b->vfactor[k] * V[j];
+            }
+            double sum = 0;
+            for (int64_t t = 0; t < F.n; t++) {
+                if (!pd_bond_intact(intact, F.first + t))
+                    continue;
+                const int32_t j = F.j[t];
+                const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i],
+                             dz = y[2][j] - y[2][i];
+                double dr = sqrt(dx * dx + dy * dy + dz * dz) - F.length[t];
+                dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+                const double s = dr / F.length[t];
+                sum += 0.25 * c * s * s * F.length[t] * F.vfactor[t] * V[j];
+            }
+            e[i] += sum * V[i];
         }
-        e[i] += sum * V[i];
+        pd_family_buf_free(&fb);
     }
 }
 
@@ -295,27 +306,36 @@ static void pmb_stress_uniform(const pd_sim *sim, void *state, double *out)
     const double *V = sim->p->volume, c = sim->sc.c;
     double *const *y = sim->y;
     double *const *x = sim->p->x;
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++) {
-        double sum[9] = {0};
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            if (!pd_bond_intact(intact, k))
-                continue;
-            const int32_t j = b->neighbor[k];
-            const double e[3] = {y[0][j] - y[0][i], y[1][j] - y[1][i], y[2][j] - y[2][i]};
-            const double r = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-            double dr = r - b->length[k];
-            dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-            if (r <= 0.0)
-                continue;
-            const double f = 0.5 * c * (dr / b->length[k]) * b->vfactor[k] * V[j] / r;
-            const double xi[3] = {x[0][j] - x[0][i], x[1][j] - x[1][i], x[2][j] - x[2][i]};
-            for (int a = 0; a < 3; a++)
-                for (int d = 0; d < 3; d++)
-                    sum[3 * a + d] += f * e[a] * xi[d];
+#pragma omp parallel
+    {
+        pd_family_buf fb = {0};
+        pd_family F;
+#pragma omp for schedule(static)
+        for (int64_t i = 0; i < sim->n; i++) {
+            double sum[9] = {0};
+            if (pd_family_get(b, sim->p, i, &fb, &F) != 0)
+                for (int m = 0; m < 9; m++) /* out of memory: never a wrong number */
+                    sum[m] = NAN;
+            for (int64_t t = 0; t < F.n; t++) {
+                if (!pd_bond_intact(intact, F.first + t))
+                    continue;
+                const int32_t j = F.j[t];
+                const double e[3] = {y[0][j] - y[0][i], y[1][j] - y[1][i], y[2][j] - y[2][i]};
+                const double r = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+                double dr = r - F.length[t];
+                dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+                if (r <= 0.0)
+                    continue;
+                const double f = 0.5 * c * (dr / F.length[t]) * F.vfactor[t] * V[j] / r;
+                const double xi[3] = {x[0][j] - x[0][i], x[1][j] - x[1][i], x[2][j] - x[2][i]};
+                for (int a = 0; a < 3; a++)
+                    for (int d = 0; d < 3; d++)
+                        sum[3 * a + d] += f * e[a] * xi[d];
+            }
+            for (int m = 0; m < 9; m++)
+                out[9 * i + m] += sum[m];
         }
-        for (int m = 0; m < 9; m++)
-            out[9 * i + m] += sum[m];
+        pd_family_buf_free(&fb);
     }
 }
 
@@ -417,11 +437,26 @@ const pd_effect pd_effect_pmb_failure = {
     .name = "pmb+failure", .timer = PD_T_BONDS, .init = pmb_init, .force = pmb_failure_force,
     .energy = pmb_energy, .kind = PD_ENERGY_ELASTIC, .stress = pmb_stress};
 
+/* pd_bond_stiffness with the caller's buffer: a compact family goes
+ * through arrays too, so that the compiler's vectorized sum (VEC_CFLAGS)
+ * is the lists' own. */
+static double stiffness(const pd_particles *p, const pd_bonds *b, double c, int64_t i,
+                        pd_family_buf *fb)
+{
+    pd_family F;
+    if (pd_family_get(b, p, i, fb, &F) != 0)
+        return NAN;
+    double sum = 0;
+    for (int64_t t = 0; t < F.n; t++)
+        sum += p->volume[F.j[t]] * F.vfactor[t] * c / F.length[t];
+    return sum;
+}
+
 double pd_bond_stiffness(const pd_particles *p, const pd_bonds *b, double c, int64_t i)
 {
-    double sum = 0;
-    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++)
-        sum += p->volume[b->neighbor[k]] * b->vfactor[k] * c / b->length[k];
+    pd_family_buf fb = {0};
+    const double sum = stiffness(p, b, c, i, &fb);
+    pd_family_buf_free(&fb);
     return sum;
 }
 
@@ -431,13 +466,21 @@ static double pmb_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_s
      * for PMB (|df/deta| of f = c s), here with the partial volume nu V_p
      * that the discrete force uses; the smallest over all particles. */
     double best = INFINITY;
-    for (int64_t i = 0; i < b->n; i++) {
-        double sum = pd_scene_has_laws(s) ? pd_bond_stiffness_laws(p, b, s, i)
-                                          : pd_bond_stiffness(p, b, s->c, i);
-        if (sum > 0)
-            best = fmin(best, sqrt(2.0 * p->density[i] / sum));
+    int bad = 0; /* a buffer out of memory: NaN, never a wrong step */
+#pragma omp parallel reduction(min : best) reduction(| : bad)
+    {
+        pd_family_buf fb = {0};
+#pragma omp for schedule(static) /* each particle's own sum; min in any order */
+        for (int64_t i = 0; i < b->n; i++) {
+            double sum = pd_scene_has_laws(s) ? pd_bond_stiffness_laws(p, b, s, i)
+                                              : stiffness(p, b, s->c, i, &fb);
+            bad |= isnan(sum);
+            if (sum > 0)
+                best = fmin(best, sqrt(2.0 * p->density[i] / sum));
+        }
+        pd_family_buf_free(&fb);
     }
-    return best;
+    return bad ? NAN : best;
 }
 
 /* One c and s00 for every bond: the lattice stencil's PMB kernels. */

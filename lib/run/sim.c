@@ -102,6 +102,15 @@ static pd_status set_rows(pd_sim *sim)
     return PD_OK;
 }
 
+/* The lists of the run's compact families, owned by the run. */
+static pd_status own_lists(pd_sim *sim)
+{
+    pd_status s = pd_bonds_with_lists(sim->p, sim->b, &sim->own);
+    if (s == PD_OK)
+        sim->b = sim->own;
+    return s;
+}
+
 pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s, pd_sim **out)
 {
     if (!(s->dt > 0) || !isfinite(s->dt))
@@ -140,12 +149,23 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
      * the model and the body allow it, else the half bonds' list */
     sim->model = pd_model_of(s->model);
     pd_status st = sim->model ? PD_OK : pd_fail(PD_ERR_INVALID, "unknown model %d", (int)s->model);
+    /* compact families (pd_read_bonds_compact) stay compact where the PMB
+     * stencil walks them; any other kernel gets their lists */
+    if (st == PD_OK && !pd_bonds_has_lists(b) && sim->model->stencil(s) != PD_STENCIL_PMB)
+        st = own_lists(sim);
     if (st == PD_OK)
-        st = pd_half_build(b, &sim->half);
+        st = pd_half_build(sim->b, &sim->half);
     if (st == PD_OK)
         st = no_failure_rows(sim);
     if (st == PD_OK)
         st = pd_grid_new(sim, sim->model->stencil(s), &sim->grid);
+    if (st == PD_OK && sim->grid == NULL && !pd_bonds_has_lists(sim->b)) {
+        pd_half_free(&sim->half); /* the bond list's, from the lists */
+        memset(&sim->half, 0, sizeof sim->half);
+        st = own_lists(sim);
+        if (st == PD_OK)
+            st = pd_half_build(sim->b, &sim->half);
+    }
     if (st != PD_OK) {
         pd_sim_free(sim);
         return st;
@@ -189,6 +209,7 @@ void pd_sim_free(pd_sim *sim)
     free(sim->intact);
     pd_half_free(&sim->half);
     pd_grid_free(sim->grid);
+    pd_bonds_free(sim->own);
     free(sim->s0);
     free(sim->s0_new);
     free(sim->nofail);

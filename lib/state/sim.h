@@ -85,7 +85,10 @@ static inline int pd_sim_may_break(const struct pd_sim *sim, int64_t i, int64_t 
 
 struct pd_sim {
     const pd_particles *p;        /* the body (reference configuration), not owned */
-    const pd_bonds *b;            /* its directed families, not owned           */
+    const pd_bonds *b;            /* its directed families: the caller's, or
+                                     `own` when the kernels need the lists of
+                                     compact families                          */
+    pd_bonds *own;                /* NULL, or those lists (owned)               */
     pd_scene sc;                  /* the resolved scene, SI units (pd.h)        */
     const struct pd_model *model; /* the scene's model (lib/models/)            */
     int64_t n;                    /* particles, = p->n                          */

@@ -151,20 +151,81 @@ static inline int64_t gidx_of(const int64_t *inv, int64_t i)
     return inv ? inv[i] : i;
 }
 
+/* Compact families' offsets in grid axes (dg, in b->stencil's count)
+ * with their first bonds' length and nu (NaN: no bond), when every bond
+ * of an offset is bound to have its first bond's nu within half of
+ * GRID_NU_TOL (pd_family_offsets' spread): the walk of build_stencil
+ * would find the same values and pass its check.  Returns the number of
+ * offsets, 0 when a bound does not settle it (then the walk decides), -1
+ * when out of memory. */
+static int table_offsets(const pd_grid *G, const pd_particles *p, const pd_bonds *b,
+                         int32_t (*dg)[3], double *len, double *nu)
+{
+    const int nk = b->stencil->nk;
+    int32_t(*d)[3] = malloc((size_t)nk * sizeof *d);
+    double *spread = malloc((size_t)nk * sizeof(double));
+    if (d == NULL || spread == NULL) {
+        free(d);
+        free(spread);
+        return -1;
+    }
+    int ok = pd_family_offsets(b, p, d, len, nu, spread) == nk;
+    const double r = p->radius[0]; /* equal radii (pd_grid_new) */
+    for (int k = 0; k < nk && ok; k++) {
+        for (int a = 0; a < 3; a++)
+            dg[k][a] = d[k][G->axis[a]];
+        if (isnan(len[k]))
+            continue;
+        const double lo = pd_partial_volume(len[k] + spread[k], b->horizon, r),
+                     hi = pd_partial_volume(len[k] - spread[k], b->horizon, r);
+        ok = fabs(lo - nu[k]) <= 0.5 * GRID_NU_TOL * nu[k] &&
+             fabs(hi - nu[k]) <= 0.5 * GRID_NU_TOL * nu[k];
+    }
+    free(d);
+    free(spread);
+    return ok ? nk : 0;
+}
+
 /* The stencil from the file's bonds: every offset a bond has, with its
- * length and nu from the first bond of it (and nu checked on all).
+ * length and nu from the first bond of it (and nu checked on all; of
+ * compact families, from their table and its bound, table_offsets).
  * Returns 0 when the bonds are not a stencil. */
 static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
 {
+    int nt = 0; /* offsets from the table, or 0: the walk */
+    int32_t(*tg)[3] = NULL;
+    double *tl = NULL, *tn = NULL;
+    if (!pd_bonds_has_lists(b) && b->stencil) {
+        const size_t nk = (size_t)b->stencil->nk;
+        tg = malloc(nk * sizeof *tg);
+        tl = malloc(nk * sizeof(double));
+        tn = malloc(nk * sizeof(double));
+        nt = tg && tl && tn ? table_offsets(G, p, b, tg, tl, tn) : -1;
+        if (nt < 0) {
+            free(tg);
+            free(tl);
+            free(tn);
+            return -1;
+        }
+    }
     int reach = 0;
-    for (int64_t i = 0; i < b->n; i++)
-        for (int64_t q = b->offset[i]; q < b->offset[i + 1]; q++)
+    for (int k = 0; k < nt; k++)
+        for (int a = 0; a < 3 && !isnan(tl[k]); a++)
+            reach = abs(tg[k][a]) > reach ? abs(tg[k][a]) : reach;
+    for (int64_t i = 0; i < b->n && nt == 0; i++) {
+        pd_bond_iter it;
+        for (pd_family_start_partners(b, p, i, &it); pd_family_next(&it);)
             for (int a = 0; a < 3; a++) {
-                int d = abs(G->lc[a][b->neighbor[q]] - G->lc[a][i]);
+                int d = abs(G->lc[a][it.j] - G->lc[a][i]);
                 reach = d > reach ? d : reach;
             }
-    if (reach > GRID_REACH_MAX)
+    }
+    if (reach > GRID_REACH_MAX) {
+        free(tg);
+        free(tl);
+        free(tn);
         return 0;
+    }
     G->reach = reach;
     const int w = 2 * reach + 1;
     G->lookup = malloc((size_t)w * w * w * sizeof(int16_t));
@@ -173,6 +234,9 @@ static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
     if (!G->lookup || !nu || !len) {
         free(nu);
         free(len);
+        free(tg);
+        free(tl);
+        free(tn);
         return -1;
     }
     for (int q = 0; q < w * w * w; q++) {
@@ -180,20 +244,32 @@ static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
         nu[q] = NAN;
     }
     int ok = 1;
-    for (int64_t i = 0; i < b->n && ok; i++)
-        for (int64_t q = b->offset[i]; q < b->offset[i + 1] && ok; q++) {
-            int32_t j = b->neighbor[q];
+    for (int k = 0; k < nt; k++)
+        if (!isnan(tl[k])) {
+            const int dk[3] = {tg[k][0], tg[k][1], tg[k][2]};
+            const int at = lookup_index(G, dk);
+            nu[at] = tn[k];
+            len[at] = tl[k];
+        }
+    free(tg);
+    free(tl);
+    free(tn);
+    for (int64_t i = 0; i < b->n && ok && nt == 0; i++) {
+        pd_bond_iter it;
+        for (pd_family_start(b, p, i, &it); ok && pd_family_next(&it);) {
+            const int32_t j = it.j;
             int d[3] = {G->lc[0][j] - G->lc[0][i], G->lc[1][j] - G->lc[1][i],
                         G->lc[2][j] - G->lc[2][i]};
             int at = lookup_index(G, d);
             if (d[0] == 0 && d[1] == 0 && d[2] == 0)
                 ok = 0;
             else if (isnan(nu[at])) {
-                nu[at] = b->vfactor[q];
-                len[at] = b->length[q];
+                nu[at] = it.vfactor;
+                len[at] = it.length;
             } else
-                ok = fabs(b->vfactor[q] - nu[at]) <= GRID_NU_TOL * nu[at];
+                ok = fabs(it.vfactor - nu[at]) <= GRID_NU_TOL * nu[at];
         }
+    }
     /* the half stencil, in lookup order (outer, mid, inner ascending) */
     int nk = 0;
     for (int q = 0; q < w * w * w && ok; q++) {
