@@ -505,14 +505,11 @@ static pd_status check_precrack(const char *fn, const pd_particles *p, const pd_
     for (int64_t w = 0; w < pd_bits_words(b->count); w++) {
         uint64_t both = b->precrack[w] & b->intact[w];
         if (both) {
-            const int64_t k = w * 64 + __builtin_ctzll(both), i = row_of(b, k);
-            pd_bond_iter it;
-            for (pd_family_start_partners(b, p, i, &it); pd_family_next(&it) && it.q < k;)
-                ;
+            const int64_t k = w * 64 + __builtin_ctzll(both);
             return pd_fail(PD_ERR_FORMAT,
                            "'%s': bond %lld-%lld is pre-cracked (/bonds/precrack) but intact in "
                            "/bonds/state",
-                           fn, (long long)i, (long long)it.j);
+                           fn, (long long)row_of(b, k), (long long)partner_of(p, b, k));
         }
     }
     return PD_OK;
