@@ -258,8 +258,10 @@ typedef struct {
     /* the walk's own */
     const pd_bonds *b_;
     const pd_particles *p_;
+    const int32_t *pad_;   /* a compact family's site map and steps */
+    const int64_t *delta_;
     int64_t i_, end_, s_;
-    int k_, geometry_;
+    int k_, nk_, geometry_;
 } pd_bond_iter;
 void pd_family_start(const pd_bonds *b, const pd_particles *p, int64_t i, pd_bond_iter *it);
 void pd_family_start_partners(const pd_bonds *b, const pd_particles *p, int64_t i,
@@ -270,8 +272,19 @@ static inline int pd_family_next(pd_bond_iter *it)
     if (++it->q >= it->end_)
         return 0;
     const pd_bonds *b = it->b_;
-    if (b->neighbor == NULL)
-        return pd_family_next_site(it);
+    if (b->neighbor == NULL) {
+        if (it->geometry_)
+            return pd_family_next_site(it);
+        while (it->k_ < it->nk_) { /* the partners alone, here inline */
+            const int32_t j = it->pad_[it->s_ + it->delta_[it->k_++]];
+            if (j >= 0) {
+                it->j = j;
+                return 1;
+            }
+        }
+        it->q = it->end_; /* cannot be: the offsets counted these bonds */
+        return 0;
+    }
     it->j = b->neighbor[it->q];
     if (it->geometry_) {
         it->length = b->length[it->q];

@@ -154,8 +154,15 @@ static void family_start(const pd_bonds *b, const pd_particles *p, int64_t i, pd
     it->end_ = b->offset[i + 1];
     it->k_ = 0;
     it->geometry_ = geometry;
-    if (!pd_bonds_has_lists(b))
+    it->pad_ = NULL;
+    it->delta_ = NULL;
+    it->nk_ = 0;
+    if (!pd_bonds_has_lists(b)) {
         it->s_ = b->sites->at[i];
+        it->pad_ = b->sites->pad;
+        it->delta_ = b->sites->delta;
+        it->nk_ = b->sites->nk;
+    }
 }
 
 void pd_family_start(const pd_bonds *b, const pd_particles *p, int64_t i, pd_bond_iter *it)
@@ -208,13 +215,19 @@ int pd_family_get(const pd_bonds *b, const pd_particles *p, int64_t i, pd_family
         }
         buf->cap = f->n;
     }
-    pd_bond_iter it;
+    /* pd_family_next's walk, without its calls */
+    const struct pd_bond_sites *bs = b->sites;
+    const int64_t s = bs->at[i];
     int64_t t = 0;
-    for (pd_family_start(b, p, i, &it); pd_family_next(&it); t++) {
-        buf->j[t] = it.j;
-        buf->length[t] = it.length;
-        buf->vfactor[t] = it.vfactor;
+    for (int k = 0; k < bs->nk && t < f->n; k++) {
+        const int32_t j = bs->pad[s + bs->delta[k]];
+        if (j < 0)
+            continue;
+        buf->j[t] = j;
+        pd_bond_geometry(p, i, j, b->horizon, &buf->length[t], &buf->vfactor[t]);
+        t++;
     }
+    f->n = t; /* = f->n: the offsets counted these bonds */
     f->j = buf->j;
     f->length = buf->length;
     f->vfactor = buf->vfactor;
@@ -243,6 +256,48 @@ int pd_family_offsets(const pd_bonds *b, const pd_particles *p, int32_t (*d)[3],
     return bs->nk;
 }
 
+/* The first directed bond of rows [i0, i1) whose bit differs from its
+ * reverse's (INT64_MAX: none), the partner's rank in its family a
+ * popcount of its offsets' mask (mask, W words a particle; neg: each
+ * offset's reverse, -1 for none). */
+static inline __attribute__((always_inline)) int64_t
+asym_rows(const pd_bonds *b, const uint64_t *bits, const uint64_t *mask, const int *neg, int W,
+          int64_t i0, int64_t i1)
+{
+    const struct pd_bond_sites *bs = b->sites;
+    const int nk = bs->nk;
+    for (int64_t i = i0; i < i1; i++) {
+        int64_t q = b->offset[i];
+        for (int k = 0; k < nk; k++) {
+            const int32_t j = bs->pad[bs->at[i] + bs->delta[k]];
+            if (j < 0)
+                continue;
+            const int64_t me = q++;
+            if (j > i || neg[k] < 0)
+                continue;
+            const int m = neg[k];
+            int64_t rank = 0;
+            for (int w = 0; w < (m >> 6); w++)
+                rank += __builtin_popcountll(mask[(int64_t)j * W + w]);
+            rank += __builtin_popcountll(mask[(int64_t)j * W + (m >> 6)] &
+                                         ((UINT64_C(1) << (m & 63)) - 1));
+            if (pd_bond_intact(bits, me) != pd_bond_intact(bits, b->offset[j] + rank))
+                return me; /* the rows' first */
+        }
+    }
+    return INT64_MAX;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+/* with the processor's popcnt instruction (the baseline's is a call) */
+__attribute__((target("popcnt"))) static int64_t
+asym_rows_popcnt(const pd_bonds *b, const uint64_t *bits, const uint64_t *mask, const int *neg,
+                 int W, int64_t i0, int64_t i1)
+{
+    return asym_rows(b, bits, mask, neg, W, i0, i1);
+}
+#endif
+
 int64_t pd_family_asymmetric(const pd_bonds *b, const uint64_t *bits)
 {
     if (pd_bonds_has_lists(b) || b->sites == NULL)
@@ -270,28 +325,24 @@ int64_t pd_family_asymmetric(const pd_bonds *b, const uint64_t *bits)
         for (int k = 0; k < nk; k++)
             if (bs->pad[bs->at[i] + bs->delta[k]] >= 0)
                 mask[i * W + (k >> 6)] |= UINT64_C(1) << (k & 63);
+    int popcnt = 0;
+#if defined(__x86_64__) && defined(__GNUC__)
+    popcnt = __builtin_cpu_supports("popcnt");
+#endif
+    /* rows in chunks: each chunk's first, the smallest of them */
+    const int64_t chunk = 4096;
     int64_t first = INT64_MAX;
 #pragma omp parallel for schedule(static) reduction(min : first)
-    for (int64_t i = 0; i < b->n; i++) {
-        int64_t q = b->offset[i];
-        for (int k = 0; k < nk; k++) {
-            const int32_t j = bs->pad[bs->at[i] + bs->delta[k]];
-            if (j < 0)
-                continue;
-            const int64_t me = q++;
-            if (j > i || neg[k] < 0)
-                continue;
-            const int m = neg[k];
-            int64_t rank = 0;
-            for (int w = 0; w < (m >> 6); w++)
-                rank += __builtin_popcountll(mask[(int64_t)j * W + w]);
-            rank += __builtin_popcountll(mask[(int64_t)j * W + (m >> 6)] &
-                                         ((UINT64_C(1) << (m & 63)) - 1));
-            if (pd_bond_intact(bits, me) != pd_bond_intact(bits, b->offset[j] + rank)) {
-                first = me < first ? me : first;
-                break; /* the row's first */
-            }
-        }
+    for (int64_t c = 0; c < (b->n + chunk - 1) / chunk; c++) {
+        const int64_t i0 = c * chunk, i1 = i0 + chunk < b->n ? i0 + chunk : b->n;
+        int64_t f;
+#if defined(__x86_64__) && defined(__GNUC__)
+        if (popcnt)
+            f = asym_rows_popcnt(b, bits, mask, neg, W, i0, i1);
+        else
+#endif
+            f = asym_rows(b, bits, mask, neg, W, i0, i1);
+        first = f < first ? f : first;
     }
     free(mask);
     free(neg);

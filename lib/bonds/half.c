@@ -40,6 +40,32 @@ void pd_half_free(pd_half_bonds *h)
     free(h->kfail);
 }
 
+/* The state bits of row i's half bonds (i-j, j > i: the bit of its copy
+ * in i's family), or-ed into h->intact a word at a time, atomically as a
+ * row ends or the word does (words are shared at the rows' ends); with
+ * `partners`, their partners into h->neighbor on the way. */
+static void row_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact, int64_t i,
+                      int partners)
+{
+    int64_t q = h->offset[i];
+    uint64_t word = 0;
+    pd_bond_iter it;
+    for (pd_family_start_partners(b, NULL, i, &it); pd_family_next(&it);)
+        if (it.j > i) {
+            if (partners)
+                h->neighbor[q] = it.j;
+            if (pd_bond_intact(intact, it.q))
+                word |= UINT64_C(1) << (q & 63);
+            if ((++q & 63) == 0) {
+                if (word)
+                    __atomic_fetch_or(&h->intact[(q - 1) >> 6], word, __ATOMIC_RELAXED);
+                word = 0;
+            }
+        }
+    if (word)
+        __atomic_fetch_or(&h->intact[(q - 1) >> 6], word, __ATOMIC_RELAXED);
+}
+
 pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
 {
     int64_t n = b->n, count = 0;
@@ -70,15 +96,11 @@ pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
     h->intact = calloc((size_t)pd_bits_words(count) + 1, sizeof(uint64_t));
     if (!h->neighbor || !h->intact)
         return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)count);
+    /* the partners and, on the same walk, their state bits */
+    h->epoch++;
 #pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < n; i++) {
-        int64_t q = h->offset[i];
-        pd_bond_iter it;
-        for (pd_family_start_partners(b, NULL, i, &it); pd_family_next(&it);)
-            if (it.j > i)
-                h->neighbor[q++] = it.j;
-    }
-    pd_half_set_state(h, b, b->intact);
+    for (int64_t i = 0; i < n; i++)
+        row_state(h, b, b->intact, i, 1);
     h->block = span;
     h->nblocks = (n + span - 1) / span;
     h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
@@ -90,29 +112,11 @@ pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
 void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact)
 {
     h->epoch++;
-    /* a half bond i-j (j > i) takes the bit of its copy in i's family */
     for (int64_t w = 0; w < pd_bits_words(h->count); w++)
         h->intact[w] = 0;
-    /* rows in parallel: a word is or-ed in whole, atomically, as a row
-     * ends or the word does (words are shared at the rows' ends) */
 #pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < h->n; i++) {
-        int64_t q = h->offset[i];
-        uint64_t word = 0;
-        pd_bond_iter it;
-        for (pd_family_start_partners(b, NULL, i, &it); pd_family_next(&it);)
-            if (it.j > i) {
-                if (pd_bond_intact(intact, it.q))
-                    word |= UINT64_C(1) << (q & 63);
-                if ((++q & 63) == 0) {
-                    if (word)
-                        __atomic_fetch_or(&h->intact[(q - 1) >> 6], word, __ATOMIC_RELAXED);
-                    word = 0;
-                }
-            }
-        if (word)
-            __atomic_fetch_or(&h->intact[(q - 1) >> 6], word, __ATOMIC_RELAXED);
-    }
+    for (int64_t i = 0; i < h->n; i++)
+        row_state(h, b, intact, i, 0);
 }
 
 int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j)

@@ -491,7 +491,27 @@ void pd_grid_sync(pd_sim *sim, pd_grid *G)
             inv[G->perm[g]] = g;
     }
     const pd_half_bonds *h = &sim->half;
-    for (int64_t i = 0; i < n; i++)
+    /* In lattice order (no perm) a half bond i-j (j > i) is at a positive
+     * offset of i and sets a bit of i's words alone: rows in parallel.  A
+     * bond at a negative offset (through a perm) sets its partner's: one
+     * by one, all over again (the same bits: or-ed in any order). */
+    int serial = G->perm != NULL, negative = 0;
+#pragma omp parallel for schedule(static) reduction(| : negative) if (!serial)
+    for (int64_t i = 0; i < n * !serial; i++)
+        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
+            if (!pd_bond_intact(h->intact, q))
+                continue;
+            const int32_t j = h->neighbor[q];
+            const int d[3] = {G->lc[0][j] - G->lc[0][i], G->lc[1][j] - G->lc[1][i],
+                              G->lc[2][j] - G->lc[2][i]};
+            const int k = offset_of(G, d);
+            if (k < 0)
+                negative = 1;
+            else
+                G->mask[i * W + (k >> 6)] |= UINT64_C(1) << (k & 63);
+        }
+    serial |= negative;
+    for (int64_t i = 0; i < n && serial; i++)
         for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
             if (!pd_bond_intact(h->intact, q))
                 continue;
