@@ -87,6 +87,20 @@ static double bond_energy(const pd_sim *sim, int64_t i, int64_t k)
     return 0.25 * s * s * h->length[k] * (h->w_ij[k] * V[i] + h->w_ji[k] * V[j]);
 }
 
+/* mu[q] = the state bit of bond c0 + q, q < m (0 or 1): a word at a time,
+ * its bits in a loop the compiler vectorizes. */
+static inline __attribute__((always_inline)) void chunk_states(const uint64_t *bits, int64_t c0,
+                                                               int64_t m, double *mu)
+{
+    for (int64_t q = 0; q < m;) {
+        const int64_t k = c0 + q, take = 64 - (k & 63) < m - q ? 64 - (k & 63) : m - q;
+        const uint64_t w = __atomic_load_n(&bits[k >> 6], __ATOMIC_RELAXED) >> (k & 63);
+        for (int64_t t = 0; t < take; t++)
+            mu[q + t] = (double)((w >> t) & 1);
+        q += take;
+    }
+}
+
 /* The forces of the half bonds of row i (and with `failure` their breaking
  * test and the new s0 of both ends; PD_BONDS_FAILURE_LAWS: each bond's threshold times
  * its kfail, lib/models/materials.c), branch-free so that the arithmetic
@@ -110,8 +124,7 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
         brk[PMB_CHUNK];
     for (int64_t c0 = h->offset[i]; c0 < h->offset[i + 1]; c0 += PMB_CHUNK) {
         const int64_t m = h->offset[i + 1] - c0 < PMB_CHUNK ? h->offset[i + 1] - c0 : PMB_CHUNK;
-        for (int64_t q = 0; q < m; q++)
-            mu[q] = (double)pd_bond_intact(h->intact, c0 + q);
+        chunk_states(h->intact, c0, m, mu);
         for (int64_t q = 0; q < m; q++) {
             const int64_t k = c0 + q;
             const int32_t j = nb[k];
