@@ -474,6 +474,31 @@ static int build_segments(pd_grid *G, const int64_t *inv)
 
 /* Rebuild the masks from the half bonds' bits (and the contact masks from
  * the pairs and the lost flags). */
+/* The mask bits of row i's intact half bonds (inv: i -> g, NULL for
+ * none).  With `own`, only those at a positive offset, in i's own words:
+ * returns 1 when it left one out. */
+static int sync_row(pd_grid *G, const pd_half_bonds *h, const int64_t *inv, int64_t i, int own)
+{
+    const int W = G->words;
+    int left = 0;
+    for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
+        if (!pd_bond_intact(h->intact, q))
+            continue;
+        const int32_t j = h->neighbor[q];
+        const int d[3] = {G->lc[0][j] - G->lc[0][i], G->lc[1][j] - G->lc[1][i],
+                          G->lc[2][j] - G->lc[2][i]};
+        int k = offset_of(G, d);
+        if (k < 0 && own) {
+            left = 1;
+            continue;
+        }
+        const int64_t owner = k >= 0 ? gidx_of(inv, i) : gidx_of(inv, j);
+        k = k >= 0 ? k : -1 - k;
+        G->mask[owner * W + (k >> 6)] |= UINT64_C(1) << (k & 63);
+    }
+    return left;
+}
+
 void pd_grid_sync(pd_sim *sim, pd_grid *G)
 {
     const int W = G->words;
@@ -493,36 +518,15 @@ void pd_grid_sync(pd_sim *sim, pd_grid *G)
     const pd_half_bonds *h = &sim->half;
     /* In lattice order (no perm) a half bond i-j (j > i) is at a positive
      * offset of i and sets a bit of i's words alone: rows in parallel.  A
-     * bond at a negative offset (through a perm) sets its partner's: one
-     * by one, all over again (the same bits: or-ed in any order). */
+     * bond at a negative offset (through a perm) sets its partner's: all
+     * rows one by one, over again (the same bits: or-ed in any order). */
     int serial = G->perm != NULL, negative = 0;
 #pragma omp parallel for schedule(static) reduction(| : negative) if (!serial)
     for (int64_t i = 0; i < n * !serial; i++)
-        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
-            if (!pd_bond_intact(h->intact, q))
-                continue;
-            const int32_t j = h->neighbor[q];
-            const int d[3] = {G->lc[0][j] - G->lc[0][i], G->lc[1][j] - G->lc[1][i],
-                              G->lc[2][j] - G->lc[2][i]};
-            const int k = offset_of(G, d);
-            if (k < 0)
-                negative = 1;
-            else
-                G->mask[i * W + (k >> 6)] |= UINT64_C(1) << (k & 63);
-        }
+        negative |= sync_row(G, h, NULL, i, 1);
     serial |= negative;
     for (int64_t i = 0; i < n && serial; i++)
-        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
-            if (!pd_bond_intact(h->intact, q))
-                continue;
-            int32_t j = h->neighbor[q];
-            int d[3] = {G->lc[0][j] - G->lc[0][i], G->lc[1][j] - G->lc[1][i],
-                        G->lc[2][j] - G->lc[2][i]};
-            int k = offset_of(G, d);
-            int64_t owner = k >= 0 ? gidx_of(inv, i) : gidx_of(inv, j);
-            k = k >= 0 ? k : -1 - k;
-            G->mask[owner * W + (k >> 6)] |= UINT64_C(1) << (k & 63);
-        }
+        sync_row(G, h, inv, i, 0);
     if (G->cmask) {
         memset(G->cmask, 0, (size_t)n * W * sizeof(uint64_t));
         const uint8_t *lost = sim->lost;
