@@ -8,6 +8,7 @@
 #define PD_CLI_H
 
 #include <getopt.h>
+#include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -116,11 +117,22 @@ static inline int common_option(int c, char **argv, const struct option *longopt
     return -1;
 }
 
+/* The thread that opens and closes the files (main's). */
+static pthread_t cli_main_thread;
+
 /* On SIGINT, SIGTERM, SIGHUP or SIGPIPE: remove the temporary output, then
  * die of the signal as before.  A signal ignored at start (nohup, a
- * background job's SIGINT) stays ignored. */
+ * background job's SIGINT) stays ignored.  The kernel may hand a signal to
+ * any thread, an OpenMP worker too: that one passes it on to the main
+ * thread and goes on, so that the main thread cannot create or reopen a
+ * temporary file after the handler removed it, in the moment before the
+ * process dies. */
 static void remove_temps_and_die(int sig)
 {
+    if (!pthread_equal(pthread_self(), cli_main_thread)) {
+        pthread_kill(cli_main_thread, sig);
+        return;
+    }
     pd_remove_temps();
     signal(sig, SIG_DFL);
     raise(sig);
@@ -128,6 +140,7 @@ static void remove_temps_and_die(int sig)
 
 static inline void remove_temps_on_signal(void)
 {
+    cli_main_thread = pthread_self();
     /* past a file-size limit (ulimit -f) a write fails with EFBIG and is
      * reported like a full disk, instead of killing the program */
     signal(SIGXFSZ, SIG_IGN);
