@@ -268,8 +268,12 @@ static void bytes_to_words(const uint8_t *bytes, int64_t count, uint64_t *words)
 {
     int64_t nb = (count + 7) / 8;
     memset(words, 0, (size_t)pd_bits_words(count) * sizeof(uint64_t));
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    memcpy(words, bytes, (size_t)nb); /* the words' own bytes, in their order */
+#else
     for (int64_t k = 0; k < nb; k++)
         words[k / 8] |= (uint64_t)bytes[k] << (8 * (k % 8));
+#endif
     /* bits past `count` stay clear */
     if (count % 64)
         words[count / 64] &= (UINT64_C(1) << (count % 64)) - 1;
@@ -281,8 +285,12 @@ static uint8_t *words_to_bytes(const uint64_t *words, int64_t count)
     uint8_t *bytes = malloc((size_t)(nb ? nb : 1));
     if (bytes == NULL)
         return NULL;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    memcpy(bytes, words, (size_t)nb);
+#else
     for (int64_t k = 0; k < nb; k++)
         bytes[k] = (uint8_t)(words[k / 8] >> (8 * (k % 8)));
+#endif
     if (count % 8)
         bytes[nb - 1] &= (uint8_t)((1u << (count % 8)) - 1);
     return bytes;
@@ -1562,6 +1570,13 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
     hid_t g = H5Gopen2(f->fid, path, H5P_DEFAULT);
     if (g < 0)
         return pd_fail(PD_ERR_IO, "'%s' has no %s", f->name, path);
+    /* the contact list's positions change only when it is built: a
+     * complete slot of the same build holds them already */
+    int64_t builds = -1;
+    const int same_list = done[k] && r->contact_position[0] &&
+                          pd_h5_has_attr(g, "contact_builds") &&
+                          pd_h5_read_attr_int(g, "contact_builds", &builds) == PD_OK &&
+                          builds == r->contact_builds && pd_h5_has_link(g, "contact_position");
     double *buf = malloc((size_t)(n > 0 ? n : 1) * 3 * sizeof(double));
     int64_t zero = 0, one = 1;
     pd_status s = buf ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory writing restart data");
@@ -1579,7 +1594,7 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
     }
     if (s == PD_OK && r->s0)
         s = pd_h5_write_into(g, "s0", H5T_NATIVE_DOUBLE, r->s0);
-    if (s == PD_OK && r->contact_position[0]) {
+    if (s == PD_OK && r->contact_position[0] && !same_list) {
         interleave(buf, r->contact_position, n);
         s = pd_h5_write_into(g, "contact_position", H5T_NATIVE_DOUBLE, buf);
     }

@@ -153,11 +153,14 @@ static void add_counted(const pd_grid *G, const double *eg, double *e)
         e[G->perm ? G->perm[g] : g] += eg[g];
 }
 
+/* In tiles the bond pass sums the energies in an order of its own, which
+ * a pass of the pairs does not follow: the energies of a step the bond
+ * pass did not count are counted as it counts them (grid_tile_energies). */
 void pd_grid_contact_energy(const pd_sim *sim, double *e)
 {
     if (sim->grid == NULL || sim->grid->cmask == NULL)
         return;
-    if (counted(sim) && sim->grid->ec)
+    if ((counted(sim) || grid_tile_energies(sim)) && sim->grid->ec)
         add_counted(sim->grid, sim->grid->ec, e);
     else
         pair_energy(sim, e, 1);
@@ -165,7 +168,7 @@ void pd_grid_contact_energy(const pd_sim *sim, double *e)
 
 void pd_grid_pmb_energy(const pd_sim *sim, double *e)
 {
-    if (counted(sim))
+    if (counted(sim) || grid_tile_energies(sim))
         add_counted(sim->grid, sim->grid->eb, e);
     else
         pair_energy(sim, e, 0);

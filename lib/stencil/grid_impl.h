@@ -190,6 +190,11 @@ static inline int grid_mine(const pd_grid *G, int64_t blk)
  * it when the half bonds' epoch has moved on. */
 void pd_grid_sync(pd_sim *sim, pd_grid *G);
 
+/* The energies of now counted into G->eb and G->ec as a bond pass in
+ * tiles counts them, to the bit (grid_pmb.c): 1, or 0 when the grid has
+ * no tiles, its masks lag behind the half bonds or memory is short. */
+int grid_tile_energies(const pd_sim *sim);
+
 /* The two helpers of the force kernels (grid_pmb.c and grid_lps.c) are
  * plain static functions, not inline ones, as they were when the kernels
  * shared one file: the compiler then keeps them out of line as before, and
@@ -254,8 +259,9 @@ static __attribute__((unused)) int record_break(grid_breaks *bl, int64_t g, int3
 
 /* The contact forces of the pairs of a segment's chunk [c0, c0 + m) that
  * are closer than d_k (seed 000 eqs. 13-15), both ends; with A->ec their
- * energy too (grid_pair_energy, in the energy pass's order). */
-static __attribute__((unused)) void seg_contact(pd_grid *G, const grid_seg *sg,
+ * energy too (grid_pair_energy, in the energy pass's order), and with no
+ * A->f0 only that. */
+static __attribute__((unused)) void seg_contact(const pd_grid *G, const grid_seg *sg,
                                                 const grid_arrays *A, int64_t c0, int64_t m,
                                                 int W)
 {
@@ -276,7 +282,7 @@ static __attribute__((unused)) void seg_contact(pd_grid *G, const grid_seg *sg,
             ec[g] += x;
             ec[j] += x;
         }
-        if (!(r > 0.0))
+        if (!(r > 0.0) || A->f0 == NULL) /* NULL: the energies alone */
             continue;
         const double fs = kc * (r - dc) / r;
         A->f0[g] += fs * dx;

@@ -192,12 +192,24 @@ static int tile_breaks(pd_grid *G, const grid_seg *sg, const grid_arrays *A, int
     return 0;
 }
 
+/* Of the lanes `gone` of a tile's half (particle g = g8 + lane, partner
+ * g + shift), whose bonds' stretch breaks them, those that do break: not
+ * kept by --no-failure. */
+static __mmask8 tile_gone(const pd_grid *G, int64_t g8, int64_t shift, __mmask8 gone)
+{
+    for (int l = 0; l < 8; l++)
+        if (((gone >> l) & 1) && !grid_may_break(G, g8 + l, g8 + l + shift))
+            gone = (__mmask8)(gone & ~(1u << l));
+    return gone;
+}
+
 /* One half (8 lanes) of a tile against one segment: GRID_PMB_PAIR in
  * AVX-512, operation for operation (no fused multiply-adds: tile_breaks
  * must find the same stretches), for the lanes of `act`; the others load
  * nothing and store nothing.  `all`: every lane is active (plain loads and
  * stores).  Returns the lanes closer than d_k (contact) and, through brk,
- * the lanes whose bond breaks. */
+ * the lanes whose bond breaks; with `energy` it adds the energies of the
+ * bonds intact after the pass to both ends; without `forces`, no force. */
 #define TILE_HALF(h, all)                                                                      \
     do {                                                                                       \
         const __mmask8 act = (__mmask8)(acts >> (8 * (h)));                                    \
@@ -225,11 +237,11 @@ static int tile_breaks(pd_grid *G, const grid_seg *sg, const grid_arrays *A, int
         ax[h] = _mm512_add_pd(ax[h], gx);                                                      \
         ay[h] = _mm512_add_pd(ay[h], gy);                                                      \
         az[h] = _mm512_add_pd(az[h], gz);                                                      \
-        if (all) {                                                                             \
+        if (forces && (all)) {                                                                 \
             _mm512_storeu_pd(F0 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F0 + 8 * (h)), gx));  \
             _mm512_storeu_pd(F1 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F1 + 8 * (h)), gy));  \
             _mm512_storeu_pd(F2 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F2 + 8 * (h)), gz));  \
-        } else {                                                                               \
+        } else if (forces) {                                                                   \
             _mm512_mask_storeu_pd(F0 + 8 * (h), act,                                           \
                                   _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F0 + 8 * (h)), gx)); \
             _mm512_mask_storeu_pd(F1 + 8 * (h), act,                                           \
@@ -239,17 +251,30 @@ static int tile_breaks(pd_grid *G, const grid_seg *sg, const grid_arrays *A, int
         }                                                                                      \
         if (contact)                                                                           \
             near |= _mm512_mask_cmp_pd_mask(act, r, vdc, _CMP_LT_OQ);                          \
+        __mmask8 hb = 0; /* the lanes whose stretch breaks them */                            \
         if (failure) {                                                                         \
             const __m512d sj = (all) ? _mm512_loadu_pd(S0 + 8 * (h))                           \
                                      : _mm512_mask_loadu_pd(si[h], act, S0 + 8 * (h));         \
             const __m512d thr = _mm512_min_pd(si[h], sj);                                      \
-            brk |= _mm512_mask_cmp_pd_mask(kmu, s, thr, _CMP_GT_OQ);                           \
+            hb = _mm512_mask_cmp_pd_mask(kmu, s, thr, _CMP_GT_OQ);                             \
+            brk |= hb;                                                                         \
             const __m512d tt =                                                                 \
                 _mm512_mask_sub_pd(ninf, kmu, vs00, _mm512_mul_pd(valpha, s));                 \
             sm[h] = _mm512_max_pd(tt, sm[h]);                                                  \
             const __m512d sn = (all) ? _mm512_loadu_pd(SN + 8 * (h))                           \
                                      : _mm512_maskz_loadu_pd(act, SN + 8 * (h));               \
             _mm512_mask_storeu_pd(SN + 8 * (h), act, _mm512_max_pd(tt, sn));                   \
+        }                                                                                      \
+        if (energy) { /* grid_pair_energy's c (s s) of a bond intact after the pass, to the \
+                         partner, then to its own end, in memory */                            \
+            const __mmask8 gone =                                                              \
+                hb && G->nofail ? tile_gone(G, g0 + 8 * (h), sg->shift, hb) : hb;              \
+            const __m512d x =                                                                  \
+                _mm512_maskz_mul_pd((__mmask8)(kmu & ~gone), vce, _mm512_mul_pd(s, s));        \
+            _mm512_mask_storeu_pd(EB + 8 * (h), act,                                           \
+                                  _mm512_add_pd(_mm512_maskz_loadu_pd(act, EB + 8 * (h)), x)); \
+            _mm512_mask_storeu_pd(OB + 8 * (h), act,                                           \
+                                  _mm512_add_pd(_mm512_maskz_loadu_pd(act, OB + 8 * (h)), x)); \
         }                                                                                      \
     } while (0)
 
@@ -258,10 +283,15 @@ static int tile_breaks(pd_grid *G, const grid_seg *sg, const grid_arrays *A, int
  * one moved back to end with the run; its lanes of the tile before are
  * left out).  A tile walks the run's segments (in tile order) with its own
  * positions, forces and new s0 in registers, so that a bond loads and
- * stores only its partner's: half the memory traffic of seg_bonds. */
+ * stores only its partner's: half the memory traffic of seg_bonds.
+ * `energy`: the energies of the bonds intact after the pass into A->eb
+ * and those of the contact pairs into A->ec, half to each end, both ends
+ * in memory (in registers they would push the tile's own out of them);
+ * without `forces` (and failure) only them, in the same order to the bit
+ * (grid_tile_energies). */
 __attribute__((target("avx512f"))) static inline __attribute__((always_inline)) int
 tile_run(pd_grid *G, const grid_run *R, const grid_arrays *A, const int failure,
-         const int contact, grid_breaks *bl)
+         const int contact, const int energy, const int forces, grid_breaks *bl)
 {
     const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
     const __m512d ninf = _mm512_set1_pd(-INFINITY), vnz = _mm512_set1_pd(PD_NEAR_ZERO);
@@ -288,12 +318,15 @@ tile_run(pd_grid *G, const grid_run *R, const grid_arrays *A, const int failure,
             const __m512i vbit = _mm512_set1_epi64((long long)(UINT64_C(1) << k));
             const __m512d vL = _mm512_set1_pd(G->len[k]), viL = _mm512_set1_pd(G->inv_len[k]);
             const __m512d vw = _mm512_set1_pd(G->w[k]), vdc = _mm512_set1_pd(G->dc[k]);
+            const __m512d vce = _mm512_set1_pd(energy ? grid_energy_c(G, k, A->V, 0) : 0.0);
             const int64_t j0 = g0 + sg->shift;
             const uint64_t *M = G->mask + g0;
             const double *Y0 = A->y0 + j0, *Y1 = A->y1 + j0, *Y2 = A->y2 + j0;
             const double *S0 = failure ? A->s0 + j0 : NULL;
-            double *F0 = A->f0 + j0, *F1 = A->f1 + j0, *F2 = A->f2 + j0;
+            double *F0 = forces ? A->f0 + j0 : NULL, *F1 = forces ? A->f1 + j0 : NULL,
+                   *F2 = forces ? A->f2 + j0 : NULL;
             double *SN = failure ? A->s0n + j0 : NULL;
+            double *EB = energy ? A->eb + j0 : NULL, *OB = energy ? A->eb + g0 : NULL;
             const uint32_t acts = (uint32_t)(((UINT64_C(1) << (hi - g0)) - 1) &
                                              ~((UINT64_C(1) << (lo - g0)) - 1));
             __mmask8 near = 0, brk = 0;
@@ -317,9 +350,11 @@ tile_run(pd_grid *G, const grid_run *R, const grid_arrays *A, const int failure,
             _mm512_storeu_pd(ts + 8 * h, sm[h]);
         }
         for (int64_t g = own; g < g0 + GRID_TILE; g++) {
-            A->f0[g] += tx[g - g0];
-            A->f1[g] += ty[g - g0];
-            A->f2[g] += tz[g - g0];
+            if (forces) {
+                A->f0[g] += tx[g - g0];
+                A->f1[g] += ty[g - g0];
+                A->f2[g] += tz[g - g0];
+            }
             if (failure)
                 A->s0n[g] = ts[g - g0] > A->s0n[g] ? ts[g - g0] : A->s0n[g];
         }
@@ -329,26 +364,73 @@ tile_run(pd_grid *G, const grid_run *R, const grid_arrays *A, const int failure,
 
 /* The AVX-512 variants: runs at least a tile long take tile_run, shorter
  * ones seg_bonds. */
-#define GRID_TILE_BLOCK(name, failure, contact)                                                \
+#define GRID_TILE_BLOCK(name, failure, contact, energy)                                        \
     __attribute__((target("avx512f"))) static int name(pd_grid *G, int64_t blk,                \
                                                        const grid_arrays *A)                   \
     {                                                                                          \
         for (int64_t r = G->block_run[blk]; r < G->block_run[blk + 1]; r++) {                  \
             const grid_run *R = &G->run[r];                                                    \
             if (R->len >= GRID_TILE) {                                                         \
-                if (tile_run(G, R, A, failure, contact, &G->breaks[blk]))                      \
+                if (tile_run(G, R, A, failure, contact, energy, 1, &G->breaks[blk]))           \
                     return -1;                                                                 \
             } else                                                                             \
                 for (int64_t s = R->seg0; s < R[1].seg0; s++)                                  \
-                    if (seg_bonds(G, &G->seg[s], A, failure, contact, 1, 0, &G->breaks[blk]))  \
+                    if (seg_bonds(G, &G->seg[s], A, failure, contact, 1, energy,               \
+                                  &G->breaks[blk]))                                            \
                         return -1;                                                             \
         }                                                                                      \
         return 0;                                                                              \
     }
-GRID_TILE_BLOCK(grid_tile_00, PD_BONDS_ELASTIC, 0)
-GRID_TILE_BLOCK(grid_tile_01, PD_BONDS_ELASTIC, 1)
-GRID_TILE_BLOCK(grid_tile_10, PD_BONDS_FAILURE, 0)
-GRID_TILE_BLOCK(grid_tile_11, PD_BONDS_FAILURE, 1)
+GRID_TILE_BLOCK(grid_tile_000, PD_BONDS_ELASTIC, 0, 0)
+GRID_TILE_BLOCK(grid_tile_010, PD_BONDS_ELASTIC, 1, 0)
+GRID_TILE_BLOCK(grid_tile_100, PD_BONDS_FAILURE, 0, 0)
+GRID_TILE_BLOCK(grid_tile_110, PD_BONDS_FAILURE, 1, 0)
+GRID_TILE_BLOCK(grid_tile_001, PD_BONDS_ELASTIC, 0, 1)
+GRID_TILE_BLOCK(grid_tile_011, PD_BONDS_ELASTIC, 1, 1)
+GRID_TILE_BLOCK(grid_tile_101, PD_BONDS_FAILURE, 0, 1)
+GRID_TILE_BLOCK(grid_tile_111, PD_BONDS_FAILURE, 1, 1)
+
+/* The energies of a short run's segment as seg_bonds counts them (one
+ * mask word per particle), bit for bit: the intact bonds', both ends bond
+ * by bond, and with `contact` the contact pairs'.  (But for a bond kept by
+ * --no-failure in the step its stretch passed s0: seg_bonds adds it after
+ * its chunk, this in its place; the sums then differ in rounding.) */
+static void seg_energies(const pd_grid *G, const grid_seg *sg, const grid_arrays *A,
+                         const int contact)
+{
+    const int k = sg->k;
+    const uint64_t bit = UINT64_C(1) << k;
+    const double L = G->len[k], iL = G->inv_len[k], w = G->w[k], dc = G->dc[k];
+    const double ce = grid_energy_c(G, k, A->V, 0);
+    for (int64_t g = sg->lo; g < sg->hi; g++) {
+        const int64_t j = g + sg->shift;
+        GRID_PMB_PAIR(G->mask[g], A->y0[g], A->y1[g], A->y2[g], A->y0[j], A->y1[j], A->y2[j]);
+        (void)fs;
+        (void)s;
+        const double x = mu > 0 ? grid_pair_energy(0, 0, r, ce, L, iL, dc) : 0.0;
+        A->eb[g] += x;
+        A->eb[j] += x;
+    }
+    if (contact)
+        seg_contact(G, sg, A, sg->lo, sg->hi - sg->lo, 1);
+}
+
+/* The energies of one block as its bond pass with energies counts them. */
+__attribute__((target("avx512f"))) static void tile_energy_block(pd_grid *G, int64_t blk,
+                                                                 const grid_arrays *A,
+                                                                 const int contact)
+{
+    for (int64_t r = G->block_run[blk]; r < G->block_run[blk + 1]; r++) {
+        const grid_run *R = &G->run[r];
+        if (R->len < GRID_TILE)
+            for (int64_t s = R->seg0; s < R[1].seg0; s++)
+                seg_energies(G, &G->seg[s], A, contact);
+        else if (contact)
+            tile_run(G, R, A, 0, 1, 1, 0, NULL);
+        else
+            tile_run(G, R, A, 0, 0, 1, 0, NULL);
+    }
+}
 #endif
 
 /* The kernel's variants: with or without failure and contact, with one
@@ -407,6 +489,39 @@ static int energy_buffers(pd_grid *G)
     return 1;
 }
 
+int grid_tile_energies(const pd_sim *sim)
+{
+#if PD_GRID_AVX512
+    pd_grid *G = sim->grid;
+    if (!G->tile || G->epoch != sim->half.epoch || !energy_buffers(G))
+        return 0;
+    grid_arrays A = {.V = sim->p->volume[0], .eb = G->eb, .ec = G->ec};
+    if (G->perm) {
+#pragma omp parallel for schedule(static)
+        for (int64_t g = 0; g < G->n; g++)
+            for (int d = 0; d < 3; d++)
+                G->y[d][g] = sim->y[d][G->perm[g]];
+        A.y0 = G->y[0], A.y1 = G->y[1], A.y2 = G->y[2];
+    } else {
+        A.y0 = sim->y[0], A.y1 = sim->y[1], A.y2 = sim->y[2];
+    }
+    const int contact = G->cmask != NULL;
+    for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel
+        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
+            if (grid_mine(G, blk))
+                tile_energy_block(G, blk, &A, contact);
+    }
+    G->energy_ok = 1;
+    G->energy_step = sim->step;
+    G->energy_epoch = sim->half.epoch;
+    return 1;
+#else
+    (void)sim;
+    return 0;
+#endif
+}
+
 pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
 {
     pd_grid *G = sim->grid;
@@ -418,10 +533,9 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
     }
     double tf = pd_wtime();
     grid_arrays A = {.s00 = sim->sc.s00, .alpha = sim->sc.alpha, .V = sim->p->volume[0]};
-    /* the energies on the way when the step's are wanted (not in tiles,
-     * whose order of sums is not grid_energy.c's) */
+    /* the energies on the way when the step's are wanted */
     G->energy_ok = 0;
-    const int energy = sim->energy_next && !G->tile && energy_buffers(G);
+    const int energy = sim->energy_next && energy_buffers(G);
     sim->energy_next = 0;
     if (energy) {
         A.eb = G->eb;
@@ -458,9 +572,11 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
     grid_block_fn fn =
         grid_blocks[8 * energy + 4 * (failure != 0) + 2 * contact + (G->words == 1)];
 #if PD_GRID_AVX512
-    static const grid_block_fn tiles[4] = {grid_tile_00, grid_tile_01, grid_tile_10, grid_tile_11};
+    static const grid_block_fn tiles[8] = {grid_tile_000, grid_tile_010, grid_tile_100,
+                                           grid_tile_110, grid_tile_001, grid_tile_011,
+                                           grid_tile_101, grid_tile_111};
     if (G->tile)
-        fn = tiles[2 * (failure != 0) + contact];
+        fn = tiles[4 * energy + 2 * (failure != 0) + contact];
 #endif
     int bad = 0;
     for (int64_t blk = 0; blk < G->nblocks; blk++)

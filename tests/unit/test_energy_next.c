@@ -11,8 +11,9 @@
  * same strain energy density, bit for bit, as one that does not, and the
  * same trajectory; that the bond pass did count them (the stencil's
  * counted energies are those of the step); and that a step not asked for
- * leaves nothing counted.  The AVX-512 tiles are left out (PD_NO_AVX512):
- * they never count.
+ * leaves nothing counted.  Both in the AVX-512 tiles, where a processor
+ * has them (the run that does not ask counts them in a pass of the tiles'
+ * order, grid_tile_energies), and in the segment walk (PD_NO_AVX512).
  */
 #include <math.h>
 #include <omp.h>
@@ -83,7 +84,7 @@ static int same(const void *a, const void *b, size_t bytes)
     return memcmp(a, b, bytes) == 0;
 }
 
-static void run_pair(int shuffled, int failure, int threads)
+static void run_pair(int tiles, int shuffled, int failure, int threads)
 {
     int f0 = failures;
     omp_set_num_threads(threads);
@@ -92,6 +93,8 @@ static void run_pair(int shuffled, int failure, int threads)
     model(shuffled, &p, &b);
     pd_sim *asked = start(p, b, failure), *plain = start(p, b, failure);
     CHECK(pd_sim_stencil(asked) > 0, "the block is walked as a stencil");
+    CHECK(pd_grid_tiles(asked->grid) == tiles && pd_grid_tiles(plain->grid) == tiles,
+          "the rows should %sbe walked in tiles", tiles ? "" : "not ");
     CHECK((asked->grid->perm != NULL) == shuffled, "grid-order copies only when shuffled");
     if (pd_sim_setup(asked) != PD_OK || pd_sim_setup(plain) != PD_OK)
         die("setup");
@@ -133,9 +136,9 @@ static void run_pair(int shuffled, int failure, int threads)
     }
     char what[200];
     snprintf(what, sizeof what,
-             "%s, %s, %d thread%s: the energies counted in the bond pass are a pass's own, bit "
-             "for bit (%lld broken bonds)",
-             shuffled ? "shuffled" : "lattice order",
+             "%s, %s, %s, %d thread%s: the energies counted in the bond pass are a pass's own, "
+             "bit for bit (%lld broken bonds)",
+             tiles ? "AVX-512 tiles" : "segments", shuffled ? "shuffled" : "lattice order",
              failure ? "failure and contact" : "elastic", threads, threads > 1 ? "s" : "",
              (long long)pd_sim_broken(asked));
     proved(f0, what);
@@ -149,10 +152,18 @@ static void run_pair(int shuffled, int failure, int threads)
 
 int main(void)
 {
-    setenv("PD_NO_AVX512", "1", 1);
-    for (int shuffled = 0; shuffled < 2; shuffled++)
-        for (int failure = 0; failure < 2; failure++)
-            for (int threads = 1; threads <= 2; threads++)
-                run_pair(shuffled, failure, threads);
+    const int avx512 = __builtin_cpu_supports("avx512f") != 0;
+    if (!avx512)
+        printf("# no AVX-512 on this processor: the segment walk only\n");
+    for (int tiles = avx512; tiles >= 0; tiles--) {
+        if (tiles)
+            unsetenv("PD_NO_AVX512");
+        else
+            setenv("PD_NO_AVX512", "1", 1);
+        for (int shuffled = 0; shuffled < 2; shuffled++)
+            for (int failure = 0; failure < 2; failure++)
+                for (int threads = 1; threads <= 2; threads++)
+                    run_pair(tiles, shuffled, failure, threads);
+    }
     return failures ? 1 : 0;
 }
