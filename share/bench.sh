@@ -70,6 +70,12 @@
 #       milliseconds and in steps of (a), the run file's size, and
 #       pd-damage on that run, in place (its frames hold their damage: the
 #       file is read, not copied) and into a new file (the better of two);
+#       the bytes a frame adds to the run file (the run file less (a)'s, per
+#       frame; the restart slots are rewritten in place, in pages the cache
+#       holds already) and what writing them costs at the rate this
+#       machine's page cache takes new pages now (dd of as many bytes as the run file into a new file,
+#       after a pause of 15 s: a virtual machine whose freed pages go back
+#       to its host takes new ones several times slower than reused ones)
 #   (l) shattered ("shattered"; minutes): the whole demo, impact.scene as it
 #       is (2000 steps, a frame every 100: the disk shatters, fragments fly
 #       and the contact list is rebuilt hundreds of times) against the seed
@@ -571,8 +577,14 @@ if ! skip frames; then
     # not copied) and into a new file
     best2 damage-in-place "$PD_BIN/pd-damage" -q frames.h5
     best2 damage-copy "$PD_BIN/pd-damage" -q frames.h5 -o frames-damage.h5
-    echo "$(size frames.h5)" >frames.sizes
+    echo "$(size frames.h5) $(size full.h5)" >frames.sizes
+    mb=$(($(size frames.h5) / 1048576 + 1))
     rm -f frames.h5 frames-damage.h5
+    sleep 15
+    "$TIME" -f '%e' -o page-cache.time dd if=/dev/zero of=page-cache.tmp bs=1M count="$mb" \
+        2>/dev/null || die "dd failed"
+    rm -f page-cache.tmp
+    echo "$mb" >page-cache.mb
 fi
 # --- (l) shattered: the whole 2000-step demo against in.impact as it is -------
 if ! skip shattered; then
@@ -829,16 +841,25 @@ EOF2
     nf=$(sed -n 's/^pd-run: .*[^0-9]\([0-9][0-9]*\) frames to write$/\1/p' frames.log | head -n 1)
     read -r di _ <damage-in-place.time
     read -r dc _ <damage-copy.time
-    read -r fs <frames.sizes
+    read -r fs f1 <frames.sizes
+    read -r pc <page-cache.time
+    read -r pcmb <page-cache.mb
     echo "frames: (a) with a frame every $FRAME_EVERY steps, ${nf:-?} frames against (a)'s one"
     awk -v t1="$t1" -v tf="$tf" -v nf="$nf" -v n="$STEPS" -v of="$(pd_row frames.log output)" \
-        -v o1="$(pd_row full.log output)" -v di="$di" -v dc="$dc" -v fs="$fs" 'BEGIN {
+        -v o1="$(pd_row full.log output)" -v di="$di" -v dc="$dc" -v fs="$fs" \
+        -v f1="$f1" -v pc="$pc" -v pcmb="$pcmb" 'BEGIN {
         step = t1 / n; f = (tf - t1) / (nf - 1); g = (of - o1) / (nf - 1)
         printf "  %-46s %8.2f ms = %.2f steps of %.2f ms\n", "a frame, by the loop times", 1000 * f,
             f / step, 1000 * step
         printf "  %-46s %8.2f ms = %.2f steps\n", "a frame, by the output rows (--timing)", 1000 * g,
             g / step
         printf "  %-46s %8.1f MB\n", "the run file", fs / 1e6
+        bf = (fs - f1) / (nf - 1); rate = pc > 0 ? pcmb * 1048576 / pc : 0
+        printf "  %-46s %8.2f MB\n", "bytes a frame adds to the run file", bf / 1e6
+        if (rate > 0)
+            printf "  %-46s %8.0f MB/s: %.2f ms a frame = %.2f steps\n",
+                "new page-cache pages (dd, after 15 s idle)", rate / 1e6, 1000 * bf / rate,
+                bf / rate / step
         printf "  %-46s %8.3f s\n", "pd-damage RUN.h5 (in place: read, not copied)", di
         printf "  %-46s %8.3f s\n", "pd-damage RUN.h5 -o OUT.h5", dc }'
 fi
