@@ -133,7 +133,8 @@ install: all
 	install -m 644 man/man1/*.1 $(DESTDIR)$(MANDIR)/man1
 	install -m 644 man/man5/*.5 $(DESTDIR)$(MANDIR)/man5
 	install -m 644 man/man7/*.7 $(DESTDIR)$(MANDIR)/man7
-	install -m 644 share/pdh5.py $(DESTDIR)$(SHAREDIR)/python
+	install -m 644 share/pdh5.py share/pdcost.py $(DESTDIR)$(SHAREDIR)/python
+	install -m 644 share/cost.gp $(DESTDIR)$(SHAREDIR)
 	sed -e 's|@PREFIX@|$(PREFIX)|' share/pd.pc.in > $(DESTDIR)$(PCDIR)/pd.pc
 
 uninstall:
@@ -141,7 +142,8 @@ uninstall:
 	rm -f $(DESTDIR)$(LIBDIR)/libpd.a $(DESTDIR)$(INCDIR)/pd.h $(DESTDIR)$(PCDIR)/pd.pc
 	rm -f $(addprefix $(DESTDIR)$(MANDIR)/man1/,$(addsuffix .1,$(PROGRAMS)))
 	rm -f $(DESTDIR)$(MANDIR)/man5/pd-h5.5 $(DESTDIR)$(MANDIR)/man7/pd.7
-	rm -f $(DESTDIR)$(SHAREDIR)/python/pdh5.py
+	rm -f $(DESTDIR)$(SHAREDIR)/python/pdh5.py $(DESTDIR)$(SHAREDIR)/python/pdcost.py \
+	    $(DESTDIR)$(SHAREDIR)/cost.gp
 	-rmdir $(DESTDIR)$(SHAREDIR)/python $(DESTDIR)$(SHAREDIR) 2>/dev/null
 
 clean:
