@@ -47,7 +47,7 @@ struct options {
 static void usage(FILE *out)
 {
     fprintf(out,
-            "Usage: " PROG " [OPTION]... --steps N INPUT [-o FILE]\n"
+            "Usage: " PROG " [OPTION]... (--steps N | --time T) INPUT [-o FILE]\n"
             "  or:  " PROG " --restart RUN.h5 --steps N [--every N] [-o FILE]\n"
             "Integrate a peridynamic model (pd-h5 with /bonds); INPUT '-' is stdin.\n"
             "\n"
@@ -138,6 +138,9 @@ static void usage(FILE *out)
             "                        materials without --material\n"
             "Time:\n"
             "  --steps N             number of steps\n"
+            "  --time T              or: run to time T, s, in the fewest equal steps of\n"
+            "                        at most the time step (the later of --steps and\n"
+            "                        --time wins)\n"
             "  --dt DT               time step, s (default: stable step x safety)\n"
             "  --safety F            safety factor on the stable step (default 0.8)\n"
             "  --force-dt            run a --dt above the stable step anyway\n"
@@ -433,7 +436,7 @@ static int parse_options(int argc, char **argv, struct options *o)
            OPT_BODY, OPT_G, OPT_INFLUENCE, OPT_PROJECTILE, OPT_ELLIPSOID, OPT_MATERIAL,
            OPT_INTERFACE, OPT_FIBRE, OPT_LAMBDA, OPT_TAU, OPT_YIELD, OPT_BONDLIST,
            OPT_OVERLAP, OPT_STRICT, OPT_BALANCE, OPT_DAMPING, OPT_NO_FAILURE, OPT_SERIES,
-           OPT_RELAX, OPT_RELAX_TOL, OPT_RELAX_IT };
+           OPT_RELAX, OPT_RELAX_TOL, OPT_RELAX_IT, OPT_TIME };
     static const struct option longopts[] = {
         {"model", required_argument, 0, OPT_MODEL},
         {"c", required_argument, 0, OPT_C},
@@ -447,6 +450,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"contact-skin", required_argument, 0, OPT_SKIN},
         {"indenter", required_argument, 0, OPT_INDENTER},
         {"steps", required_argument, 0, OPT_STEPS},
+        {"time", required_argument, 0, OPT_TIME},
         {"dt", required_argument, 0, OPT_DT},
         {"safety", required_argument, 0, OPT_SAFETY},
         {"force-dt", no_argument, 0, OPT_FORCE_DT},
@@ -605,6 +609,13 @@ static int parse_options(int argc, char **argv, struct options *o)
                 return usage_error("--steps must be a non-negative integer, not", optarg);
             o->spec.sc.steps = iv;
             o->has_steps = 1;
+            o->spec.has_time = 0; /* the later of --steps and --time */
+            break;
+        case OPT_TIME:
+            if ((rc = positive("--time", optarg, &o->spec.end_time)))
+                return rc;
+            o->spec.has_time = 1;
+            o->has_steps = 0;
             break;
         case OPT_DT:
             if ((rc = positive("--dt", optarg, &o->spec.sc.dt)))
@@ -774,8 +785,8 @@ static int parse_options(int argc, char **argv, struct options *o)
     }
     if (status)
         return status;
-    if (!o->has_steps)
-        return usage_error("--steps is required", NULL);
+    if (!o->has_steps && !o->spec.has_time)
+        return usage_error("--steps or --time is required", NULL);
     if (pd_scene_check(&o->spec) != PD_OK) /* the options each model takes */
         return usage_error(pd_errmsg(), NULL);
     if (o->restart) { /* the run file is the input and, without -o, the output */

@@ -747,6 +747,9 @@ typedef struct {
     int has_material, has_interface; /* some law of either kind           */
     int has_proj_k;     /* the projectile's K given (else its default)    */
     int has_dt;         /* dt given (else safety x the stable step)       */
+    int has_time;       /* --time: sc.steps from end_time once dt is known */
+    double end_time;    /* the run's end, s: the fewest steps of at most
+                           dt that reach it, dt = end_time / steps        */
     int force_dt;       /* run a dt above the stable step anyway          */
     int nlaws;          /* laws[0..nlaws-1] (sc.laws points here once
                            resolved)                                     */

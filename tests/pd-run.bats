@@ -47,9 +47,9 @@ print(v.decode() if isinstance(v, bytes) else repr(v) if isinstance(v, float) el
     [ ! -e r.h5 ]
 }
 
-@test "--steps is required" {
+@test "--steps or --time is required" {
     make_block
-    expect_usage_error "--steps" pd-run --c 1e21 model.h5 -o r.h5
+    expect_usage_error "--steps or --time" pd-run --c 1e21 model.h5 -o r.h5
 }
 
 @test "the stiffness is required: --c or --bulk-modulus" {
@@ -336,6 +336,63 @@ s = h5py.File(sys.argv[1], 'r')['scene'].attrs
 assert s['dt'] == 0.5 * s['dt_stable'], (s['dt'], s['dt_stable'])
 print('ok')" r.h5
     assert_output ok
+}
+
+@test "--time T runs the fewest equal steps of at most the time step that reach T" {
+    make_block
+    pd-run -q --bulk-modulus "$BULK" --steps 0 model.h5 -o ref.h5
+    stable=$(scene_attr ref.h5 dt_stable)
+    # 10.3 default steps (safety 0.8): 11 steps of T / 11; 13 steps of a
+    # given dt = T / 13: 13 steps, whichever way T / dt rounds
+    T=$(py "print(repr(10.3 * 0.8 * float(sys.argv[1])))" "$stable")
+    pd-run -q --bulk-modulus "$BULK" --time "$T" --every 5 model.h5 -o r.h5
+    dt=$(py "print(repr(float(sys.argv[1]) / 13))" "$T")
+    pd-run -q --bulk-modulus "$BULK" --time "$T" --dt "$dt" model.h5 -o d.h5
+    run -0 py "
+T = float(sys.argv[3])
+for path, steps, dt_max in ((sys.argv[1], 11, 0.8 * float(sys.argv[4])), (sys.argv[2], 13, float(sys.argv[5]))):
+    f = h5py.File(path, 'r')
+    s = f['scene'].attrs
+    assert int(s['steps']) == steps, (path, s['steps'])
+    assert s['dt'] == T / steps and s['dt'] <= dt_max * (1 + 1e-15), (path, s['dt'], dt_max)
+    last = f['frames/%08d' % steps].attrs
+    assert abs(last['time'] - T) <= 1e-14 * T, (path, last['time'], T)
+    opts = s['options'].decode() if isinstance(s['options'], bytes) else s['options']
+    assert 'steps %d\\n' % steps in opts and 'time' not in opts, opts
+print('ok')" r.h5 d.h5 "$T" "$stable" "$dt"
+    assert_output ok
+    run -0 frames r.h5
+    assert_equal "$(echo "$output" | awk '{print $2}' | tr '\n' ' ')" "0 5 10 11 "
+}
+
+@test "of --steps and --time the later wins, and a restart goes on by --steps" {
+    make_block
+    pd-run -q --bulk-modulus "$BULK" --steps 0 model.h5 -o ref.h5
+    T=$(py "print(repr(4.5 * float(sys.argv[1])))" "$(scene_attr ref.h5 dt_stable)")
+    pd-run -q --bulk-modulus "$BULK" --time "$T" --steps 3 model.h5 -o s.h5
+    pd-run -q --bulk-modulus "$BULK" --steps 3 --time "$T" model.h5 -o t.h5
+    assert_equal "$(scene_attr s.h5 steps)" 3
+    assert_equal "$(scene_attr t.h5 steps)" 6
+    # the run file holds the resolved dt and steps: a restart goes on with
+    # that dt, to the bit of a run of 8 steps of it
+    pd-run -q --restart t.h5 --steps 2 -o more.h5
+    pd-run -q --bulk-modulus "$BULK" --dt "$(scene_attr t.h5 dt)" --steps 8 model.h5 -o all.h5
+    run -0 py "
+a, b = h5py.File(sys.argv[1], 'r'), h5py.File(sys.argv[2], 'r')
+for k in ('displacement', 'velocity'):
+    assert np.array_equal(a['frames/00000008'][k][()], b['frames/00000008'][k][()]), k
+print('ok')" more.h5 all.h5
+    assert_output ok
+    expect_usage_error "--restart goes on" pd-run --restart t.h5 --time "$T" -o x.h5
+}
+
+@test "bad --time is a usage error, and --relax takes --steps" {
+    make_block
+    for t in 0 -1e-6 nan abc; do
+        expect_usage_error "--time" pd-run --c 1e21 --time "$t" model.h5 -o r.h5
+    done
+    expect_usage_error "--relax takes --steps" \
+        pd-run --c 1e21 --relax --dt 1 --time 1e-6 model.h5 -o r.h5
 }
 
 @test "--dt above the stable step is refused with a message naming the limit" {

@@ -110,6 +110,9 @@ static pd_status relax_check(const pd_scene_spec *o, const pd_model *m)
     if (o->sc.damping_set[0] != '\0')
         return pd_fail(PD_ERR_INVALID, "--relax takes --damping C, the relaxation's own "
                        "damping of every particle, without a set");
+    if (o->has_time)
+        return pd_fail(PD_ERR_INVALID, "--relax takes --steps, the number of load steps, not "
+                       "--time");
     if (!o->has_dt)
         return pd_fail(PD_ERR_INVALID, "--relax needs --dt, the time of a load step: load "
                        "step n holds the loads of time n dt");
@@ -164,6 +167,23 @@ pd_status pd_scene_check(pd_scene_spec *o)
     return PD_OK;
 }
 
+/* --time T: the fewest steps of at most the time step that reach T, and
+ * the time step T / steps, so that the last step ends at T. */
+static pd_status steps_to_end(pd_scene_spec *o)
+{
+    pd_scene *sc = &o->sc;
+    const double n = ceil(o->end_time / sc->dt);
+    if (!(n <= 1e15))
+        return pd_fail(PD_ERR_INVALID, "--time %g s takes more than 1e15 steps of %g s",
+                       o->end_time, sc->dt);
+    int64_t steps = (int64_t)n;
+    if (steps > 1 && o->end_time / (double)(steps - 1) <= sc->dt)
+        steps--; /* T / dt is a whole number but for its rounding */
+    sc->steps = steps;
+    sc->dt = o->end_time / (double)steps;
+    return PD_OK;
+}
+
 pd_status pd_scene_resolve(pd_scene_spec *o, const pd_particles *p, const pd_bonds *b,
                            const char *body)
 {
@@ -215,7 +235,7 @@ pd_status pd_scene_resolve(pd_scene_spec *o, const pd_particles *p, const pd_bon
     } else if (sc->dt > sc->dt_stable && !o->force_dt)
         return pd_fail(PD_ERR_INVALID, "--dt %g s exceeds the stable time step %g s (seed 004 eq. "
                        "46); use --force-dt to run anyway", sc->dt, sc->dt_stable);
-    return PD_OK;
+    return o->has_time && !sc->relax ? steps_to_end(o) : PD_OK;
 }
 
 /* ------------------------------------------------------------ frames */
