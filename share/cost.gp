@@ -25,7 +25,9 @@ set output out
 set multiplot layout 1, n title title
 set logscale xy
 set grid
-set key top right
+set format xy "%g"
+if (!exists("keypos")) keypos = "bottom left"
+eval("set key " . keypos)
 y(c) = (column(c) > 0 ? column(c) : 1/0)
 do for [i = 1:n] {
     s = word(sweeps, i)
