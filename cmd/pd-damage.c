@@ -4,7 +4,9 @@
  * phi_i = 1 - sum_{j intact} V_j / sum_{j in reference family} V_j
  * (seed 000 eq. 10, as LAMMPS compute damage/atom), stored as the frame
  * field `damage`, and a table on stdout per frame: step, time, broken bonds,
- * mean and max damage, and the number of particles with damage > 0.3.
+ * mean and max damage, and the number of particles with damage > 0.3;
+ * with --fragments the number of fragments and the largest one's share of
+ * the body's volume (pd_fragments).
  *
  * Pre-cracked bonds (/bonds/precrack, pd-bonds --crack) are broken bonds and
  * count in phi.  With --no-precrack they are left out of both sums
@@ -29,6 +31,7 @@ struct options {
     const char *output;  /* NULL: update INPUT in place (through a copy) */
     double threshold;
     int no_precrack;     /* damage without the pre-crack, field damage_run */
+    int fragments;       /* the table's fragments columns (pd_fragments) */
     int no_write, quiet, debug;
 };
 
@@ -48,6 +51,8 @@ static void usage(FILE *out)
             "  --threshold D       count particles with damage above D (default %g)\n"
             "  --no-precrack       leave the pre-crack (pd-bonds --crack) out: damage and\n"
             "                      broken bonds of the run alone, stored as 'damage_run'\n"
+            "  --fragments         add the number of fragments (the pieces the intact bonds\n"
+            "                      hold together) and the largest one's share of the volume\n"
             "      --debug         print HDF5's own error stack\n"
             "  -h, --help          show this help\n"
             "  -V, --version       show the version\n",
@@ -56,13 +61,14 @@ static void usage(FILE *out)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_THRESHOLD = 256, OPT_NO_PRECRACK };
+    enum { OPT_THRESHOLD = 256, OPT_NO_PRECRACK, OPT_FRAGMENTS };
     static const struct option longopts[] = {
         {"output", required_argument, 0, 'o'},
         {"no-write", no_argument, 0, 'n'},
         {"quiet", no_argument, 0, 'q'},
         {"threshold", required_argument, 0, OPT_THRESHOLD},
         {"no-precrack", no_argument, 0, OPT_NO_PRECRACK},
+        {"fragments", no_argument, 0, OPT_FRAGMENTS},
         COMMON_LONGOPTS,
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
@@ -85,6 +91,9 @@ static int parse_options(int argc, char **argv, struct options *o)
             break;
         case OPT_NO_PRECRACK:
             o->no_precrack = 1;
+            break;
+        case OPT_FRAGMENTS:
+            o->fragments = 1;
             break;
         default:
             return option_error(argv, longopts);
@@ -129,14 +138,17 @@ static pd_status frames_pass(pd_file *f, const struct options *o, enum pass_mode
             s = pd_fail(PD_ERR_NOMEM, "out of memory");
     }
     const char *field = o->no_precrack ? "damage_run" : "damage";
+    double volume = 0; /* the body's, for the largest fragment's share */
+    for (int64_t i = 0; s == PD_OK && i < p->n; i++)
+        volume += p->volume[i];
     for (int64_t k = 0; k < nframes && s == PD_OK; k++) {
         pd_frame_info fi;
         if ((s = pd_read_frame_info(f, names[k], &fi)) != PD_OK ||
             (s = pd_read_frame_state(f, names[k], b->count, intact)) != PD_OK)
             break;
         if (k == 0 && table) /* only once a frame is known to be readable */
-            fprintf(table, "# step time_s broken_bonds mean_damage max_damage n_damage_gt_%g\n",
-                    o->threshold);
+            fprintf(table, "# step time_s broken_bonds mean_damage max_damage n_damage_gt_%g%s\n",
+                    o->threshold, o->fragments ? " fragments largest_fraction" : "");
         if (o->no_precrack)
             pd_damage_no_precrack(p, b, intact, damage);
         else
@@ -151,9 +163,18 @@ static pd_status frames_pass(pd_file *f, const struct options *o, enum pass_mode
             max = damage[i] > max ? damage[i] : max;
             above += damage[i] > o->threshold;
         }
+        int64_t pieces = 0;
+        double largest = 0;
+        if (o->fragments && table &&
+            (s = pd_fragments(p, b, intact, NULL, &pieces, &largest)) != PD_OK)
+            break;
         if (table)
-            fprintf(table, "%lld %.9e %lld %.9f %.9f %lld\n", (long long)fi.step, fi.time,
+            fprintf(table, "%lld %.9e %lld %.9f %.9f %lld", (long long)fi.step, fi.time,
                     (long long)broken, sum / (double)p->n, max, (long long)above);
+        if (table && o->fragments)
+            fprintf(table, " %lld %.9f", (long long)pieces, volume > 0 ? largest / volume : 0.0);
+        if (table)
+            fputc('\n', table);
         if (mode == WRITE)
             s = pd_write_frame_scalar(f, names[k], field, p->n, damage);
         else if (mode == COMPARE && *same) {

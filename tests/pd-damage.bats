@@ -537,3 +537,73 @@ del b['precrack']
 b['precrack'] = p.astype(np.float64)"
     expect_runtime_error "'bad.h5': dataset '/bonds/precrack' is float64, expected uint8" pd-damage -n bad.h5
 }
+
+@test "--fragments: a cube cut through by a pre-crack is two fragments, 5 and 6 of its 11 layers" {
+    make_block
+    pd-bonds -q --horizon "$HORIZON" --crack rect,0.005,-1,-1,0,2,0,0,0,2 lattice.h5 -o cut.h5
+    pd-run -q --bulk-modulus "$BULK" --steps 1 cut.h5 -o run.h5
+    run pd-damage -n --fragments run.h5
+    [ "$status" -eq 0 ]
+    [[ "${lines[0]}" == *" fragments largest_fraction" ]]
+    read -r -a row <<< "${lines[1]}"
+    [ "${row[6]}" = 2 ]
+    [ "${row[7]}" = 0.545454545 ] # 6/11: the plane's layer is on the +x side
+    # the table without --fragments is the same, less the two columns
+    diff <(pd-damage -n run.h5 | sed 's/ fragments largest_fraction$//') \
+        <(pd-damage -n --fragments run.h5 | sed 's/ fragments largest_fraction$//; /^[0-9]/s/ [^ ]* [^ ]*$//')
+}
+
+@test "--fragments equals a union-find over the bond lists, bonds broken at random" {
+    make_run
+    # each frame: pairs broken at random (both of their bonds), more each frame
+    py "
+f = h5py.File(sys.argv[1], 'a')
+off, nb = pdh5.bonds(f)[:2]
+n, count = off.size - 1, nb.size
+rng = np.random.default_rng(17)
+frames = sorted(f['frames'].values(), key=lambda g: g.attrs['step'])
+for k, g in enumerate(frames):
+    bits = np.unpackbits(g['state'][:], bitorder='little')
+    p = [0.3, 0.5, 0.8, 0.9, 0.95, 0.99][k]
+    for i in range(n):
+        for q in range(off[i], off[i + 1]):
+            j = nb[q]
+            if j > i and rng.random() < p:
+                m = off[j] + np.searchsorted(nb[off[j]:off[j + 1]], i)
+                assert nb[m] == i
+                bits[q] = bits[m] = 0
+    g['state'][...] = np.packbits(bits, bitorder='little')[:g['state'].shape[0]]
+f.close()" run.h5
+    pd-damage -n --fragments run.h5 > table
+    py "
+f = h5py.File(sys.argv[1], 'r')
+V = f['particles/volume'][:]
+off, nb = pdh5.bonds(f)[:2]
+n, count = V.size, nb.size
+rows = np.repeat(np.arange(n), np.diff(off))
+frames = sorted(f['frames'].values(), key=lambda g: g.attrs['step'])
+table = [l.split() for l in open(sys.argv[2]) if not l.startswith('#')]
+assert len(table) == len(frames) == 6, (len(table), len(frames))
+seen = set()
+for g, row in zip(frames, table):
+    b = np.arange(count)
+    intact = (g['state'][:][b // 8] >> (b % 8)) & 1
+    parent = list(range(n))
+    def root(x):
+        while parent[x] != x:
+            x = parent[x]
+        return x
+    for i, j in zip(rows[intact == 1], nb[intact == 1]):
+        a, c = root(i), root(j)
+        if a != c:
+            parent[max(a, c)] = min(a, c)
+    roots = np.array([root(i) for i in range(n)])
+    vol = np.bincount(roots, V, minlength=n)
+    pieces = np.unique(roots).size
+    assert int(row[6]) == pieces, (row, pieces)
+    assert abs(float(row[7]) - vol.max() / V.sum()) <= 1e-9, (row, vol.max() / V.sum())
+    seen.add(pieces)
+assert len(seen) >= 3 and max(seen) > 50, seen
+print('ok', sorted(seen))
+" run.h5 table
+}

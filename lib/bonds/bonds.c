@@ -209,6 +209,67 @@ void pd_damage_no_precrack(const pd_particles *p, const pd_bonds *b, const uint6
     damage_over(p, b, intact, b->precrack, damage);
 }
 
+/* The root of x; each step on the way points x at its grandparent
+ * (path halving).  parent[x] <= x holds throughout. */
+static int64_t piece_root(int64_t *parent, int64_t x)
+{
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    return x;
+}
+
+pd_status pd_fragments(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
+                       int64_t *piece, int64_t *pieces, double *largest)
+{
+    const int64_t n = b->n;
+    int64_t *parent = piece ? piece : malloc((size_t)(n > 0 ? n : 1) * sizeof *parent);
+    double *volume = malloc((size_t)(n > 0 ? n : 1) * sizeof *volume);
+    if (parent == NULL || volume == NULL) {
+        if (parent != piece)
+            free(parent);
+        free(volume);
+        return pd_fail(PD_ERR_NOMEM, "out of memory finding the fragments");
+    }
+    for (int64_t i = 0; i < n; i++)
+        parent[i] = i;
+    /* union by the smaller root: a root is the first particle of its piece */
+    for (int64_t i = 0; i < n; i++) {
+        pd_bond_iter it;
+        for (pd_family_start_partners(b, p, i, &it); pd_family_next(&it);) {
+            if (it.j <= i || !pd_bond_intact(intact, it.q))
+                continue; /* each bond once, from its lower end */
+            int64_t ri = piece_root(parent, i), rj = piece_root(parent, it.j);
+            if (ri < rj)
+                parent[rj] = ri;
+            else if (rj < ri)
+                parent[ri] = rj;
+        }
+    }
+    /* ascending, parent[x] < x already holds its piece's number: number
+     * the roots in order and give every other particle its parent's */
+    int64_t count = 0;
+    double most = 0;
+    for (int64_t i = 0; i < n; i++) {
+        if (parent[i] == i) {
+            volume[count] = 0;
+            parent[i] = count++;
+        } else {
+            parent[i] = parent[parent[i]];
+        }
+        volume[parent[i]] += p->volume[i];
+    }
+    for (int64_t k = 0; k < count; k++)
+        most = volume[k] > most ? volume[k] : most;
+    if (parent != piece)
+        free(parent);
+    free(volume);
+    *pieces = count;
+    *largest = most;
+    return PD_OK;
+}
+
 typedef struct {
     uint64_t key;
     int64_t index;
