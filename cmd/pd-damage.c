@@ -139,7 +139,7 @@ static pd_status frames_pass(pd_file *f, const struct options *o, enum pass_mode
     }
     const char *field = o->no_precrack ? "damage_run" : "damage";
     double volume = 0; /* the body's, for the largest fragment's share */
-    for (int64_t i = 0; s == PD_OK && i < p->n; i++)
+    for (int64_t i = 0; s == PD_OK && o->fragments && i < p->n; i++)
         volume += p->volume[i];
     for (int64_t k = 0; k < nframes && s == PD_OK; k++) {
         pd_frame_info fi;
@@ -166,15 +166,16 @@ static pd_status frames_pass(pd_file *f, const struct options *o, enum pass_mode
         int64_t pieces = 0;
         double largest = 0;
         if (o->fragments && table &&
-            (s = pd_fragments(p, b, intact, NULL, &pieces, &largest)) != PD_OK)
+            (s = pd_fragments(p, b, intact, &pieces, &largest)) != PD_OK)
             break;
-        if (table)
+        if (table) {
             fprintf(table, "%lld %.9e %lld %.9f %.9f %lld", (long long)fi.step, fi.time,
                     (long long)broken, sum / (double)p->n, max, (long long)above);
-        if (table && o->fragments)
-            fprintf(table, " %lld %.9f", (long long)pieces, volume > 0 ? largest / volume : 0.0);
-        if (table)
+            if (o->fragments)
+                fprintf(table, " %lld %.9f", (long long)pieces,
+                        volume > 0 ? largest / volume : 0.0);
             fputc('\n', table);
+        }
         if (mode == WRITE)
             s = pd_write_frame_scalar(f, names[k], field, p->n, damage);
         else if (mode == COMPARE && *same) {

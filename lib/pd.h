@@ -426,10 +426,9 @@ void pd_damage_no_precrack(const pd_particles *p, const pd_bonds *b, const uint6
 /* Fragments: the pieces the intact bonds hold together, the connected
  * components of the bond graph (a particle without intact bond is a piece
  * of its own).  *pieces their number, *largest the volume of the largest,
- * m^3; piece (NULL, or N values) numbers them 0, 1, ... in the order of
- * their first particles. */
+ * m^3. */
 pd_status pd_fragments(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
-                       int64_t *piece, int64_t *pieces, double *largest);
+                       int64_t *pieces, double *largest);
 /* Number of cleared bits of `bits` among the first `count` whose bit in
  * `skip` is clear (skip NULL: all of them), e.g. bonds broken during a run
  * but not pre-cracked. */

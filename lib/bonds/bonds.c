@@ -221,14 +221,13 @@ static int64_t piece_root(int64_t *parent, int64_t x)
 }
 
 pd_status pd_fragments(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
-                       int64_t *piece, int64_t *pieces, double *largest)
+                       int64_t *pieces, double *largest)
 {
     const int64_t n = b->n;
-    int64_t *parent = piece ? piece : malloc((size_t)(n > 0 ? n : 1) * sizeof *parent);
+    int64_t *parent = malloc((size_t)(n > 0 ? n : 1) * sizeof *parent);
     double *volume = malloc((size_t)(n > 0 ? n : 1) * sizeof *volume);
     if (parent == NULL || volume == NULL) {
-        if (parent != piece)
-            free(parent);
+        free(parent);
         free(volume);
         return pd_fail(PD_ERR_NOMEM, "out of memory finding the fragments");
     }
@@ -262,8 +261,7 @@ pd_status pd_fragments(const pd_particles *p, const pd_bonds *b, const uint64_t 
     }
     for (int64_t k = 0; k < count; k++)
         most = volume[k] > most ? volume[k] : most;
-    if (parent != piece)
-        free(parent);
+    free(parent);
     free(volume);
     *pieces = count;
     *largest = most;
