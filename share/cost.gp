@@ -12,11 +12,13 @@
 # their titles, '|' between).  An error of 0 (the reference itself)
 # cannot sit on a log axis and is not drawn.  The sweeps listed in walls
 # (optional) change no figure at all: their panel draws the wall time
-# against the setting instead.
+# against the setting instead.  program (optional, default pd-run): whose
+# wall time it is.
 if (!exists("data")) data = 'cost.txt'
 if (!exists("out")) out = 'cost.png'
 if (!exists("title")) title = 'What accuracy costs'
 if (!exists("walls")) walls = ''
+if (!exists("program")) program = 'pd-run'
 field(s, i) = (i == 1 ? (strstrt(s, "|") ? s[1:strstrt(s, "|") - 1] : s) : \
               field(s[strstrt(s, "|") + 1:], i - 1))
 n = words(sweeps)
@@ -34,12 +36,12 @@ do for [i = 1:n] {
     set title field(names, i)
     if (strstrt(" " . walls . " ", " " . s . " ")) {
         set xlabel "setting"
-        set ylabel "wall time of pd-run (s)"
+        set ylabel "wall time of " . program . " (s)"
         plot data using (strcol(1) eq s ? $2 : 1/0):7 with linespoints pt 7 ps 1.3 lw 2 \
                  title "every setting: the same figures"
         continue
     }
-    set xlabel "wall time of pd-run (s)"
+    set xlabel "wall time of " . program . " (s)"
     set ylabel "relative error"
     plot for [k = 1:words(errs)] data \
              using (strcol(1) eq s ? $7 : 1/0):(y(int(word(errs, k)))) \

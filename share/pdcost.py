@@ -7,8 +7,10 @@ A sweep's rule runs
     /usr/bin/time -f '%e %M' -o STEM.time pd-run ... -o STEM.h5.tmp 2> STEM.log
 
 so that STEM.time holds pd-run's wall seconds and peak resident kB, and
-STEM.log its log: the threads it ran on and its last line, "N steps in T s
-(R bond updates/s)".  run_cost(STEM) reads both.
+STEM.log its log: the threads it ran on ("pd-run: N threads") and its last
+line, "N steps in T s (R bond updates/s)".  run_cost(STEM) reads both; a
+program of one's own over libpd that logs the same two lines under its
+own name (examples/library/impact.c) is read the same way.
 
 Every example's cost.txt has the same leading columns,
 
@@ -22,7 +24,7 @@ import re
 import sys
 
 LOOP = re.compile(r"(\d+) steps in ([0-9.eE+-]+) s \(([0-9.eE+-]+) bond updates/s\)")
-THREADS = re.compile(r"pd-run: (\d+) threads?\b")
+THREADS = re.compile(r"^[\w.-]+: (\d+) threads?\b", re.M)
 
 LEAD = ["sweep", "setting", "particles", "bonds", "steps", "threads", "wall_s", "loop_s",
         "peak_MiB", "updates_per_s"]

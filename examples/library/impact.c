@@ -11,8 +11,16 @@
  *          --steps 200 --every 50 model.h5 -o run.h5
  *
  * does, and writes the same run file, bit for bit but for the history:
- * the programs are glue over these calls.  Usage: impact [RUN.h5]
- * (default run.h5); prints the energy balance at each frame.
+ * the programs are glue over these calls.
+ *
+ * Usage: impact [RUN.h5 [SPACING]] (default run.h5); prints the energy
+ * balance at each frame, and on stderr the threads and what the steps
+ * cost, as pd-run's log does.  With a spacing (m), the same block at that
+ * spacing, for `make convergence`: the horizon 3.0002 spacings (m = 3, as
+ * 0.0015001 is at 0.5 mm), the fracture energy of the 0.5 mm block held
+ * (s00 from G0, seed 004 eq. 27), and the run to END_TIME, where the 0.5
+ * mm block's 200 steps end, in the fewest equal steps of at most 0.8 of
+ * the stable step (pd-run --failure-energy, --time).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,6 +31,8 @@
 
 #define SPACING 0.0005   /* m                                         */
 #define HORIZON 0.0015001 /* m: just above 3 spacings (DESIGN.md)     */
+#define M_SWEEP 3.0002   /* the horizon of a spacing given, / spacing */
+#define END_TIME 2.3e-5  /* s: 200 steps at 0.5 mm end at 2.3008e-5  */
 
 static int fail(const char *what)
 {
@@ -33,6 +43,17 @@ static int fail(const char *what)
 int main(int argc, char **argv)
 {
     const char *path = argc > 1 ? argv[1] : "run.h5";
+    const int sweep = argc > 2;
+    double spacing = SPACING, horizon = HORIZON;
+    char *end = NULL;
+    if (sweep)
+        spacing = strtod(argv[2], &end);
+    if (argc > 3 || (sweep && (end == argv[2] || *end != '\0' || !(spacing > 0)))) {
+        fprintf(stderr, "usage: impact [RUN.h5 [SPACING]]\n");
+        return 2;
+    }
+    if (sweep)
+        horizon = M_SWEEP * spacing;
     pd_h5_debug(0);
 
     /* the body: a box of sites on the simple cubic lattice, in the
@@ -40,11 +61,11 @@ int main(int argc, char **argv)
     pd_region box;
     pd_particles *p = NULL;
     pd_bonds *b = NULL;
-    const pd_lattice_params lp = {.spacing = SPACING, .density = 2200, .material = 1, .seed = 1};
+    const pd_lattice_params lp = {.spacing = spacing, .density = 2200, .material = 1, .seed = 1};
     if (pd_region_parse(PD_REGION_BOX, "0,0.01,0,0.01,0,0.004", &box) != PD_OK ||
         pd_lattice_make(&box, 1, &lp, &p) != PD_OK)
         return fail("the lattice");
-    if (pd_particles_sort_spatial(p, HORIZON) != PD_OK || pd_bonds_build(p, HORIZON, &b) != PD_OK)
+    if (pd_particles_sort_spatial(p, horizon) != PD_OK || pd_bonds_build(p, horizon, &b) != PD_OK)
         return fail("the bonds");
 
     /* the scene as a user says it, then resolved against the body */
@@ -70,6 +91,12 @@ int main(int argc, char **argv)
     sc->every = 50;
     sc->series = 20;           /* a row of the time series every 20    */
     sc->threads = omp_get_max_threads();
+    if (sweep) {               /* G0 of s00 = 0.0005 at delta = 1.5 mm: */
+        spec.has_g0 = 1;       /* 9 K delta s00^2 / 5                   */
+        spec.g0 = 9 * 14.9e9 * 0.0015 * 0.0005 * 0.0005 / 5;
+        spec.has_time = 1;
+        spec.end_time = END_TIME;
+    }
     if (pd_scene_resolve(&spec, p, b, "the block") != PD_OK)
         return fail("the scene");
 
@@ -83,6 +110,8 @@ int main(int argc, char **argv)
         pd_run_file_start(f, 0, NULL, p, b, NULL, sc, pd_sim_effects(sim), "impact", text, 0) !=
             PD_OK)
         return fail(path);
+    fprintf(stderr, "impact: %d threads\n", sc->threads);
+    const double t0 = omp_get_wtime();
     pd_status s = pd_sim_setup(sim);
     for (int64_t n = 0; n <= sc->steps && s == PD_OK; n++) {
         if (n > 0)
@@ -90,14 +119,19 @@ int main(int argc, char **argv)
         pd_energy e;
         if (s == PD_OK && pd_frame_at(sc, n) &&
             (s = pd_run_file_frame(f, p, b, sim, sc->fields, &e)) == PD_OK)
-            printf("step %3lld  t %.4e s  kinetic %.6e J  projectile %.6e J  balance %.6e J  "
-                   "broken %lld\n",
-                   (long long)n, pd_sim_time(sim), e.kinetic, e.projectile, pd_energy_total(&e),
-                   (long long)pd_sim_broken(sim));
+            printf("step %3lld  t %.4e s  kinetic %.6e J  projectile %.6e J  released %.6e J  "
+                   "balance %.6e J  broken %lld\n",
+                   (long long)n, pd_sim_time(sim), e.kinetic, e.projectile, e.released,
+                   pd_energy_total(&e), (long long)pd_sim_broken(sim));
         else if (s == PD_OK && pd_run_file_sample_due(f, n) && /* the series' row alone */
                  (s = pd_sim_energy(sim, &e, NULL)) == PD_OK)
             s = pd_run_file_sample(f, sim, &e);
     }
+    const double wall = omp_get_wtime() - t0;
+    if (s == PD_OK)
+        fprintf(stderr, "impact: %lld steps in %.3f s (%.3g bond updates/s)\n",
+                (long long)sc->steps, wall,
+                wall > 0 ? (double)b->count * (double)sc->steps / wall : 0.0);
     if (s == PD_OK)
         s = pd_file_close(f);
     else
