@@ -60,6 +60,19 @@ def cheapest(rows, err, limit=0.05):
     return min(ok, key=lambda r: r["wall"]) if ok else None
 
 
+def say_cheapest(kind, rows, ref, checks, unit="", out=sys.stdout):
+    """A comment line for each (err, what) of checks that some row meets:
+    the cheapest setting of kind (its unit after it) within 5% of the
+    finest, ref, on what (the figure, with its article), and its wall time
+    against ref's."""
+    for err, what in checks:
+        best = cheapest(rows, err)
+        if best:
+            print("# cheapest %s within 5%% of the finest on %s: %s%s, wall %.2f s against "
+                  "%.2f s (%.3f)" % (kind, what, best["setting"], unit, best["wall"], ref["wall"],
+                                     best["wall"] / ref["wall"]), file=out)
+
+
 def _fmt(v):
     if isinstance(v, str):
         return v

@@ -111,14 +111,9 @@ def main():
             r["shift_onset"] = (r["onset_MPa"] - sphere[0]["onset_MPa"]) / sphere[0]["onset_MPa"]
     pdcost.write(by_dx + by_a, FIGURES)
     print("# reference of the spacing sweep: its finest run, dx = %g mm" % ref["dx_mm"])
-    for err, what in (("err_peak", "peak axial stress"), ("err_onset", "onset of yield"),
-                      ("err_all", "both")):
-        best = pdcost.cheapest(by_dx, err)
-        if best:
-            print("# cheapest spacing within 5%% of the finest on the %s: %s mm, wall %.2f s "
-                  "against %.2f s (%.3f)" % (what, best["setting"], best["wall"], ref["wall"],
-                                             best["wall"] / ref["wall"]))
-
+    pdcost.say_cheapest("spacing", by_dx, ref, (
+        ("err_peak", "the peak axial stress"), ("err_onset", "the onset of yield"),
+        ("err_all", "both")), unit=" mm")
 
 if __name__ == "__main__":
     main()

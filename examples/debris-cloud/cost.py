@@ -92,16 +92,11 @@ def main():
         r["err_all"] = max(r[e] for _, e in ERRS)
     pdcost.write(rows, FIGURES)
     print("# reference: the finest run, dx = %g mm (m = 3)" % ref["dx_mm"])
-    for err, what in (("err_lead", "leading velocity"), ("err_spread", "spread"),
-                      ("err_debris", "debris fraction"), ("err_sphere", "sphere's speed"),
-                      ("err_largest", "largest fragment's share"),
-                      ("err_all", "five figures together")):
-        best = pdcost.cheapest(rows, err)
-        if best:
-            print("# cheapest spacing within 5%% of the finest on the %s: %s mm, wall %.2f s "
-                  "against %.2f s (%.3f)" % (what, best["setting"], best["wall"], ref["wall"],
-                                             best["wall"] / ref["wall"]))
-
+    pdcost.say_cheapest("spacing", rows, ref, (
+        ("err_lead", "the leading velocity"), ("err_spread", "the spread"),
+        ("err_debris", "the debris fraction"), ("err_sphere", "the sphere's speed"),
+        ("err_largest", "the largest fragment's share"),
+        ("err_all", "the five figures together")), unit=" mm")
 
 if __name__ == "__main__":
     main()

@@ -93,14 +93,6 @@ def sweep(names, kind, finest):
     return rows, ref
 
 
-def say(kind, rows, ref, err, what):
-    best = pdcost.cheapest(rows, err)
-    if best:
-        print("# cheapest %s within 5%% of the finest on the %s: %s, wall %.2f s against %.2f s "
-              "(%.3f)" % (kind, what, best["setting"], best["wall"], ref["wall"],
-                          best["wall"] / ref["wall"]))
-
-
 def main():
     ap = argparse.ArgumentParser(prog="cost.py")
     ap.add_argument("--spacing", required=True)
@@ -117,9 +109,9 @@ def main():
     print("# reference of the spacing sweeps: dx = %g mm (m = %g); of the m sweep: m = %g "
           "(dx = %g mm)" % (ref_dx["dx_mm"], ref_dx["m"], ref_m["m"], ref_m["dx_mm"]))
     for kind, rs, ref in (("spacing", by_dx, ref_dx), ("m", by_m, ref_m), ("s0", by_s0, ref_s0)):
-        say(kind, rs, ref, "err_angle", "cone angle")
-        say(kind, rs, ref, "err_rebound", "rebound velocity")
-        say(kind, rs, ref, "err_all", "cone angle, its depth and the rebound together")
+        pdcost.say_cheapest(kind, rs, ref, (
+            ("err_angle", "the cone angle"), ("err_rebound", "the rebound velocity"),
+            ("err_all", "the cone angle, its depth and the rebound together")))
 
 
 if __name__ == "__main__":

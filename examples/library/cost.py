@@ -84,14 +84,9 @@ def main():
     pdcost.write(rows, FIGURES)
     print("# reference: the finest run, dx = %g mm (the balance: the 25 J the sphere brings)"
           % ref["dx_mm"])
-    for err, what in (("err_sphere", "the sphere's residual speed"),
-                      ("err_released", "the energy released"), ("err_both", "both")):
-        best = pdcost.cheapest(rows, err)
-        if best:
-            print("# cheapest spacing within 5%% of the finest on %s: %s mm, wall %.2f s "
-                  "against %.2f s (%.3f)" % (what, best["setting"], best["wall"], ref["wall"],
-                                             best["wall"] / ref["wall"]))
-
+    pdcost.say_cheapest("spacing", rows, ref, (
+        ("err_sphere", "the sphere's residual speed"), ("err_released", "the energy released"),
+        ("err_both", "both")), unit=" mm")
 
 if __name__ == "__main__":
     main()
