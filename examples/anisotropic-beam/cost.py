@@ -33,7 +33,6 @@ from the mean axial stress over the middle third of the beam, -sigma_xx
 The comment lines at the end say which spacing is the cheapest within 5%.
 """
 import argparse
-import math
 import os
 import sys
 
