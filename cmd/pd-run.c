@@ -990,6 +990,9 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
         fprintf(stderr, PROG ": bonds walked as a lattice stencil of %d offsets%s%s\n",
                 pd_sim_stencil(sim), pd_sim_stencil_tiles(sim) ? " in AVX-512 tiles" : "",
                 sc->has_contact ? ", with the contact of its pairs" : "");
+    else if (pd_sim_list_rows(sim))
+        fprintf(stderr, PROG ": bonds walked as a bond list in AVX-512 rows%s\n",
+                sc->has_contact ? ", with the contact of its pairs" : "");
     log_constants(p, sc, o);
     if (sc->relax)
         fprintf(stderr,

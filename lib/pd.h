@@ -858,9 +858,11 @@ pd_status pd_sim_relax(pd_sim *sim, pd_relax_info *info);
 const char *pd_sim_effects(const pd_sim *sim);
 /* The PMB bonds' kernel: the half-stencil offsets of the lattice kernel
  * (lib/stencil/grid.c), or 0 when the bond list is walked; whether the stencil
- * walks its rows in AVX-512 tiles. */
+ * walks its rows in AVX-512 tiles; whether the PMB bond list is walked in
+ * AVX-512 rows (lib/models/pmb.c). */
 int pd_sim_stencil(const pd_sim *sim);
 int pd_sim_stencil_tiles(const pd_sim *sim);
+int pd_sim_list_rows(const pd_sim *sim);
 int64_t pd_sim_stepno(const pd_sim *sim);
 double pd_sim_time(const pd_sim *sim);
 double pd_sim_kinetic(const pd_sim *sim);

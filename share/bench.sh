@@ -87,6 +87,13 @@
 #       ms per step and bond updates per second beside (a)'s; and the fill
 #       of the same disk's surface by pd-lattice --inside at 0.14 mm (a box
 #       of 10^7 sites) against --cylinder (the better of two each);
+#   (n) an irregular body ("perturbed"): the seed disk with every site
+#       moved by up to BENCH_PERTURB (5e-5 m, a tenth of the spacing) per
+#       axis (pd-lattice --perturb): no lattice stencil, so pd-run walks
+#       the bond list, as it does a meshed body; the full scene of (a)
+#       against LAMMPS on the same particles (tests/lammps/pd2lmp.py writes
+#       its data file, positions bit for bit, and the scene's input script,
+#       without its dump and with the thermo interval of (a));
 # Wall time and peak RSS come from /usr/bin/time -f '%e %M' around pd-run,
 # around mpirun (wall) and around each LAMMPS rank (peak RSS, summed).
 #
@@ -95,7 +102,7 @@
 # the 1.6M disk needs about 6 GB of memory and 3 GB in BENCH_DIR, and
 # minutes to build), BENCH_SKIP (words among lammps, lps, effects,
 # roofline, scaling, threads, kernels, files, sweep, plate, frames,
-# shattered, mesh: the parts left out),
+# shattered, mesh, perturbed: the parts left out), BENCH_PERTURB (5e-5),
 # BENCH_SWEEP_STEPS (100), BENCH_DIR (cache of the
 # models and the runs, default $TMPDIR/pd-bench), PD_BIN (default: bin/ of
 # this tree), LMP (lmp), MPIRUN (mpirun), CC (cc, for share/stream.c).
@@ -136,8 +143,8 @@ case $THREADS in '' | *[!0-9]*) die "BENCH_THREADS must be a positive integer, n
 [ "$THREADS" -gt 0 ] || die "BENCH_THREADS must be a positive integer"
 for w in $SKIP; do
     case $w in
-    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep | plate | frames | shattered | mesh) ;;
-    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames, shattered, mesh)" ;;
+    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep | plate | frames | shattered | mesh | perturbed) ;;
+    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames, shattered, mesh, perturbed)" ;;
     esac
 done
 # skip PART: is PART left out?
@@ -617,6 +624,32 @@ if ! skip mesh; then
         2>fill.log || die "pd-lattice --inside failed"
     rm -f mesh-particles.h5 mesh-model.h5 disk-surface.h5
 fi
+# --- (n) an irregular body: the seed perturbed, its bond list against LAMMPS ----
+PERTURB=${BENCH_PERTURB:-5e-5}
+if ! skip perturbed; then
+    echo "$prog: the seed disk perturbed by $PERTURB m (the bond list; $STEPS steps)" >&2
+    # shellcheck disable=SC2086 # a list of options
+    "$PD_BIN/pd-lattice" --spacing 0.0005 --cylinder y,0,0,0.037,-0.0025,0 --density 2200 \
+        --perturb "$PERTURB" -q -o p-lattice.h5 &&
+        "$PD_BIN/pd-bonds" --horizon "$HORIZON" -q p-lattice.h5 -o p-model.h5 ||
+        die "cannot build the perturbed disk"
+    rm -f p-lattice.h5
+    pd_bench perturbed p-model.h5 "$STEPS" --scene "$SCENE" --status "$THERMO"
+    if ! skip lammps; then
+        C=$(sed -n 's/^c  *//p' "$SCENE")
+        FAILURE=$(sed -n 's/^failure  *//p' "$SCENE")
+        INDENTER=$(sed -n 's/^indenter  *//p' "$SCENE")
+        DT=$(sed -n 's/^dt  *//p' "$SCENE")
+        "$PY" "$ROOT/tests/lammps/pd2lmp.py" p-model.h5 -d perturbed.data -i in.perturbed.tmp \
+            --c "$C" --horizon "$HORIZON" --failure "$FAILURE" --dt "$DT" --indenter "$INDENTER" \
+            --steps "$STEPS" --every "$STEPS" || die "pd2lmp.py failed on the perturbed disk"
+        sed -e '/^dump/d' -e "s/^thermo .*/thermo          $THERMO/" in.perturbed.tmp >in.perturbed
+        grep -q "^thermo  *$THERMO\$" in.perturbed || die "cannot set the thermo interval in in.perturbed"
+        lmp_bench lmp-perturbed in.perturbed
+        rm -f in.perturbed.tmp perturbed.data
+    fi
+    rm -f p-model.h5
+fi
 rm -f full.h5
 
 # --- report ---------------------------------------------------------------------
@@ -893,6 +926,13 @@ EOF
     awk -v fin="$fin" -v fcy="$fcy" -v tri="$tri" -v n="$nfill" 'BEGIN {
         printf "  fill: pd-lattice --inside the disk'"'"'s %s triangles at 0.14 mm (%s particles, 1.0e7 sites)\n", tri, n
         printf "        %.2f s, against %.2f s for --cylinder (the whole program, the better of two)\n", fin, fcy }'
+fi
+if ! skip perturbed; then
+    echo
+    lmp=lmp-perturbed
+    skip lammps && lmp=
+    versus "perturbed: the seed disk with its sites moved by up to $PERTURB m ($(body perturbed.log); the bond list; LAMMPS peri/pmb on the same particles):" perturbed "$lmp"
+    sed -n 's/^pd-run: \(bonds walked as a bond list.*\)$/  pd-run: \1/p' perturbed.log
 fi
 echo
 echo "(runs and logs in $DIR; the models are kept there for the next run)"

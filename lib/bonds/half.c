@@ -4,6 +4,7 @@
  * lib/models/lps.c through their state bits), built from the file's
  * directed families, and their state kept in step with the directed bits.
  */
+#include <math.h>
 #include <stdlib.h>
 
 #ifdef _OPENMP
@@ -38,6 +39,7 @@ void pd_half_free(pd_half_bonds *h)
     free(h->released);
     free(h->cursor);
     free(h->kfail);
+    free(h->pack);
 }
 
 /* The state bits of row i's half bonds (i-j, j > i: the bit of its copy
@@ -123,6 +125,33 @@ int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j)
 {
     int64_t q = lower_bound(h->neighbor, h->offset[i], h->offset[i + 1], (int32_t)j);
     return q < h->offset[i + 1] && h->neighbor[q] == j ? q : -1;
+}
+
+pd_status pd_half_gap(const pd_half_bonds *h, const pd_particles *p, double radius, double *gap)
+{
+    pd_cells c;
+    pd_status s = pd_cells_build(&c, p->n, p->x, radius);
+    if (s != PD_OK)
+        return s;
+    double best = radius; /* a min in any order is exact */
+#pragma omp parallel for schedule(static) reduction(min : best)
+    for (int64_t i = 0; i < p->n; i++) {
+        const double xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
+        int64_t lo[9], hi[9];
+        const int rows = pd_cells_adjacent_rows(&c, xi, lo, hi);
+        for (int q = 0; q < rows; q++)
+            for (int64_t e = lo[q]; e < hi[q]; e++) {
+                const int32_t j = c.index[e];
+                const double dx = p->x[0][j] - xi[0], dy = p->x[1][j] - xi[1],
+                             dz = p->x[2][j] - xi[2];
+                const double d2 = dx * dx + dy * dy + dz * dz;
+                if (j > i && d2 < best * best && pd_half_find(h, i, j) < 0)
+                    best = sqrt(d2) < best ? sqrt(d2) : best;
+            }
+    }
+    pd_cells_free(&c);
+    *gap = best;
+    return PD_OK;
 }
 
 void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i)

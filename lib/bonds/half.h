@@ -29,6 +29,19 @@ typedef struct {
                           all 1, the kernel of old                       */
     uint64_t epoch;    /* bumped when `intact` is changed from outside the
                           kernels (a restart, a lost particle)           */
+    double *pack;      /* n x 8, 64-byte aligned, or NULL: the AVX-512
+                          rows' own copy of each particle's position (m)
+                          and s0 (4 doubles), then its force density
+                          (N/m^3) and new s0 (4), one cache line a
+                          particle (lib/models/pmb.c)                    */
+    int contact;       /* the AVX-512 rows take the contact of the pairs of
+                          the half bonds, intact or not: the contact list
+                          holds only the other pairs (lib/effects/contact.c) */
+    double gap;        /* with `contact`: no pair that is not a half bond
+                          is closer than this in the reference
+                          configuration, m                               */
+    double contact_cap;/* with `contact`: 1.35 (r_i + r_j) when every node
+                          radius is the same, else +inf, m               */
 } pd_half_bonds;
 /* The half bonds of b: rows, partners and state (what every kernel needs);
  * lib/models/pmb.c's pd_half_weights adds the lengths and the weights
@@ -42,5 +55,9 @@ void pd_half_expand(const pd_half_bonds *h, const pd_bonds *b, uint64_t *intact)
 void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i);
 /* The half bond i-j (i < j): its index, or -1 when there is none. */
 int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j);
+/* The smallest reference distance between two particles that are not a
+ * half bond, or `radius` when no such pair is closer (a cell search of
+ * that radius over p's positions). */
+pd_status pd_half_gap(const pd_half_bonds *h, const pd_particles *p, double radius, double *gap);
 
 #endif

@@ -129,8 +129,10 @@ static int64_t candidates(const pd_sim *sim, const cell_search *cs, const cell_r
     double *const *y = sim->y;
     if (sim->lost && sim->lost[i]) /* out of the body for good: no contact */
         return 0;
-    /* the stencil pairs' contact is the lattice kernel's (lib/stencil/grid.c) */
+    /* the stencil pairs' contact is the lattice kernel's (lib/stencil/grid.c),
+     * the half bonds' that of the bond list's AVX-512 rows (lib/models/pmb.c) */
     const pd_grid *grid = pd_grid_contact(sim->grid) ? sim->grid : NULL;
+    const pd_half_bonds *hb = sim->half.contact ? &sim->half : NULL;
     const double yi[3] = {y[0][i], y[1][i], y[2][i]};
     const int64_t *lo = rows->lo, *hi = rows->hi;
     int64_t m = 0;
@@ -146,7 +148,8 @@ static int64_t candidates(const pd_sim *sim, const cell_search *cs, const cell_r
             }
             for (int a = 0; a < nn; a++) {
                 const int32_t j = c->index[near[a]];
-                if (j == i || (grid && pd_grid_pair(grid, i, j)))
+                if (j == i || (grid && pd_grid_pair(grid, i, j)) ||
+                    (hb && pd_half_find(hb, j < i ? j : i, j < i ? i : j) >= 0))
                     continue;
                 if (out) {
                     double ex = p->x[0][i] - p->x[0][j], ey = p->x[1][i] - p->x[1][j],
@@ -213,7 +216,8 @@ static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
 /* The list with the lattice stencil, which takes the contact of every
  * pair that started within the horizon: the list holds only pairs that
  * started at least `gap` apart (the shortest lattice distance the stencil
- * lacks), and such a pair comes within `reach` only when |u_i| + |u_j| >=
+ * lacks; with the bond list's AVX-512 rows, which take the half bonds'
+ * pairs, the shortest distance of a pair that is not one), and such a pair comes within `reach` only when |u_i| + |u_j| >=
  * gap - reach, so one of its ends (a "mover") has moved at least (gap -
  * reach)/2 from its site.  Only the movers search the cells; a pair of a
  * mover i and another particle j goes into j's list too when j is not a
@@ -223,7 +227,8 @@ static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
  * are out of contact. */
 static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
 {
-    const double umin = 0.5 * (pd_grid_gap(sim->grid) - reach);
+    const double gap = sim->grid ? pd_grid_gap(sim->grid) : sim->half.gap;
+    const double umin = 0.5 * (gap - reach);
     const double umin2 = umin > 0 ? umin * umin : 0.0; /* 0: every particle */
     double *const *y = sim->y, *const *x = sim->p->x;
     const uint8_t *lost = sim->lost;
@@ -369,8 +374,8 @@ static pd_status contact_build(pd_sim *sim, contact_list *cl)
 {
     double t0 = pd_wtime();
     const double reach = cl->cutoff + cl->skin;
-    pd_status s = pd_grid_contact(sim->grid) ? build_movers(sim, cl, reach)
-                                             : build_all(sim, cl, reach);
+    pd_status s = pd_grid_contact(sim->grid) || sim->half.contact ? build_movers(sim, cl, reach)
+                                                                  : build_all(sim, cl, reach);
     if (s != PD_OK)
         return s;
     const int64_t n = sim->n;
@@ -481,6 +486,7 @@ static void contact_energy(const pd_sim *sim, void *state, double *e)
 {
     const contact_list *cl = state;
     pd_grid_contact_energy(sim, e);
+    pd_half_contact_energy(sim, e);
     if (sim->contact_builds == 0)
         return;
     const double k = PD_CONTACT_SCALE * sim->sc.c / sim->b->horizon;

@@ -68,6 +68,12 @@ double pd_bond_stiffness_laws(const pd_particles *p, const pd_bonds *b, const pd
  * walks (not needed by the lattice stencil nor by LPS). */
 pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h);
 
+/* The contact energy of the pairs the AVX-512 rows take (sim->half.contact;
+ * nothing otherwise), half of each pair to each end, as lib/effects/contact.c
+ * counts its list's: e_i += sum_j 1/4 (c_S/delta) (d_ij - r)^2 V_i V_j over
+ * i's family (lib/models/pmb.c). */
+void pd_half_contact_energy(const pd_sim *sim, double *e);
+
 /* The models' forces in the step's effect table. */
 extern const pd_effect pd_effect_pmb;
 extern const pd_effect pd_effect_pmb_failure;

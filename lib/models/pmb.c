@@ -28,11 +28,23 @@
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "models/model.h"
 #include "stencil/grid.h"
 
 #define PMB_CHUNK 256 /* bonds per vector pass */
+
+/* The rows in AVX-512 (pmb_row512) are written for x86-64 with GCC or
+ * clang and taken when the processor has AVX-512 (and PD_NO_AVX512 is not
+ * set); any other build or processor walks pmb_row. */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(PD_NO_CLONES)
+#define PMB_AVX512 1
+#include <immintrin.h>
+#define PMB_TARGET_AVX512 __attribute__((target("avx512f,avx512vl,avx512dq")))
+#else
+#define PMB_AVX512 0
+#endif
 
 pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h)
 {
@@ -197,39 +209,363 @@ PD_VECTOR_CLONES static void pmb_block_failure_laws(pd_sim *sim, int64_t lo, int
         pmb_row(sim, i, PD_BONDS_FAILURE_LAWS, released);
 }
 
-static void pmb_kernel(pd_sim *sim, pd_bond_mode failure)
+#if PMB_AVX512
+/* The bond list in AVX-512, 8 bonds of a row at a time.  The scalar-looking
+ * list kernel above gathers each partner's position and s0 from four
+ * arrays and scatters its force and new s0 into four more, one element at
+ * a time: on a processor whose gathers are slow (AMD Zen 4: about 10 cycles
+ * for one of 8 doubles) those moves cost more than the arithmetic.  Here
+ * each particle's position and s0 sit in one 32-byte row of h->pack, and
+ * its force and new s0 in the next 32 bytes (one cache line a particle):
+ * a partner is one aligned 256-bit load, eight partners are turned into
+ * four vectors by a transpose in registers (about twice as fast as four
+ * gathers on Zen 4), and the partners' updates go back through the
+ * inverse transpose as one 256-bit read-modify-write each.  Own sums stay
+ * in registers over the row.  The partners of one row are distinct, so
+ * the 8 lanes never update one particle twice.  The arithmetic is pmb_row's
+ * with one division for its three: q = 1/(|xi| r), the force w dr q and
+ * the stretch dr (r q) (the stencil too takes the stretch as a product,
+ * dr times 1/|xi|), so the two kernels agree to rounding; each is the same
+ * at any thread count. */
+
+/* 8 rows of 4 (a_l b_l c_l d_l, lanes l = 0..7) into 4 vectors of 8. */
+PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
+rows_to_lanes(const __m256d r[8], __m512d *a, __m512d *b, __m512d *c, __m512d *d)
+{
+    const __m512d p0 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[0]), r[4], 1);
+    const __m512d p1 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[1]), r[5], 1);
+    const __m512d p2 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[2]), r[6], 1);
+    const __m512d p3 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[3]), r[7], 1);
+    const __m512d q0 = _mm512_unpacklo_pd(p0, p1), q1 = _mm512_unpackhi_pd(p0, p1);
+    const __m512d q2 = _mm512_unpacklo_pd(p2, p3), q3 = _mm512_unpackhi_pd(p2, p3);
+    const __m512i lo = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0),
+                  hi = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
+    *a = _mm512_permutex2var_pd(q0, lo, q2);
+    *c = _mm512_permutex2var_pd(q0, hi, q2);
+    *b = _mm512_permutex2var_pd(q1, lo, q3);
+    *d = _mm512_permutex2var_pd(q1, hi, q3);
+}
+
+/* The inverse: 4 vectors of 8 into 8 rows of 4. */
+PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
+lanes_to_rows(__m512d a, __m512d b, __m512d c, __m512d d, __m256d r[8])
+{
+    const __m512d q0 = _mm512_unpacklo_pd(a, b), q1 = _mm512_unpackhi_pd(a, b);
+    const __m512d q2 = _mm512_unpacklo_pd(c, d), q3 = _mm512_unpackhi_pd(c, d);
+    const __m512i lo = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0),
+                  hi = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
+    const __m512d p0 = _mm512_permutex2var_pd(q0, lo, q2), p2 = _mm512_permutex2var_pd(q0, hi, q2);
+    const __m512d p1 = _mm512_permutex2var_pd(q1, lo, q3), p3 = _mm512_permutex2var_pd(q1, hi, q3);
+    r[0] = _mm512_castpd512_pd256(p0);
+    r[4] = _mm512_extractf64x4_pd(p0, 1);
+    r[1] = _mm512_castpd512_pd256(p1);
+    r[5] = _mm512_extractf64x4_pd(p1, 1);
+    r[2] = _mm512_castpd512_pd256(p2);
+    r[6] = _mm512_extractf64x4_pd(p2, 1);
+    r[3] = _mm512_castpd512_pd256(p3);
+    r[7] = _mm512_extractf64x4_pd(p3, 1);
+}
+
+/* The state bits of bonds k .. k+7 (those past the last word read 0). */
+static inline unsigned bits8(const uint64_t *bits, int64_t k, int64_t nwords)
+{
+    const int64_t w = k >> 6;
+    const int sh = (int)(k & 63);
+    uint64_t v = __atomic_load_n(&bits[w], __ATOMIC_RELAXED) >> sh;
+    if (sh > 56 && w + 1 < nwords)
+        v |= __atomic_load_n(&bits[w + 1], __ATOMIC_RELAXED) << (64 - sh);
+    return (unsigned)(v & 0xff);
+}
+
+/* pmb_row on h->pack (its comment holds the maths), 8 bonds at a time; a
+ * row's last 8 are masked.  With `failure` the bonds of `brk` that may
+ * break (--no-failure) break here, their energy released, in bond order. */
+/* The contact of the pairs of `near` (lanes of bonds k.. of row i closer
+ * than 0.9 |xi| and the common cap): seed 000 eqs. 13-15 as
+ * lib/effects/contact.c computes them, each pair once for both ends, in
+ * lane order, into h->pack.  Lost particles are out of contact. */
+static void rows_contact(pd_sim *sim, int64_t i, int64_t k, const int64_t *jj, unsigned near,
+                         const double *r, const double *dx, const double *dy, const double *dz)
+{
+    double *pk = sim->half.pack;
+    const double *rad = sim->p->radius, *V = sim->p->volume, *len = sim->half.length;
+    const double kc = PD_CONTACT_SCALE * sim->sc.c / sim->b->horizon;
+    for (int l = 0; l < 8; l++) {
+        const int64_t j = jj[l];
+        if (!((near >> l) & 1) || (sim->lost && (sim->lost[i] || sim->lost[j])))
+            continue;
+        const double d = fmin(PD_CONTACT_REF_FRAC * len[k + l],
+                              PD_CONTACT_RADIUS_FAC * (rad[i] + rad[j]));
+        if (!(r[l] < d) || !(r[l] > 0.0))
+            continue;
+        const double fs = kc * (r[l] - d) / r[l];
+        pk[8 * i + 4] += fs * V[j] * dx[l];
+        pk[8 * i + 5] += fs * V[j] * dy[l];
+        pk[8 * i + 6] += fs * V[j] * dz[l];
+        pk[8 * j + 4] -= fs * V[i] * dx[l];
+        pk[8 * j + 5] -= fs * V[i] * dy[l];
+        pk[8 * j + 6] -= fs * V[i] * dz[l];
+    }
+}
+
+PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
+pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact,
+           double *released, int64_t nwords)
+{
+    pd_half_bonds *h = &sim->half;
+    double *restrict pk = h->pack;
+    const double *restrict len = h->length, *restrict wij = h->w_ij, *restrict wji = h->w_ji;
+    const double *restrict kf = h->kfail;
+    const int32_t *restrict nb = h->neighbor;
+    const int64_t k1 = h->offset[i + 1];
+    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+    const __m512d ninf = _mm512_set1_pd(-INFINITY), vnz = _mm512_set1_pd(PD_NEAR_ZERO);
+    const __m512d vs00 = _mm512_set1_pd(sim->sc.s00), valpha = _mm512_set1_pd(sim->sc.alpha);
+    const __m512d vref = _mm512_set1_pd(PD_CONTACT_REF_FRAC), vcap = _mm512_set1_pd(h->contact_cap);
+    const __m512d yi0 = _mm512_set1_pd(pk[8 * i]), yi1 = _mm512_set1_pd(pk[8 * i + 1]),
+                  yi2 = _mm512_set1_pd(pk[8 * i + 2]), s0i = _mm512_set1_pd(pk[8 * i + 3]);
+    __m512d ax = zero, ay = zero, az = zero, sm = ninf;
+    for (int64_t k = h->offset[i]; k < k1; k += 8) {
+        const int m = k1 - k < 8 ? (int)(k1 - k) : 8;
+        const __mmask8 act = (__mmask8)(m == 8 ? 0xff : (1u << m) - 1);
+        const __mmask8 kmu = (__mmask8)(act & bits8(h->intact, k, nwords));
+        int64_t jj[8];
+        __m256d row[8];
+        for (int l = 0; l < 8; l++) { /* a lane past the row reads its own row */
+            jj[l] = l < m ? nb[k + l] : i;
+            row[l] = _mm256_load_pd(pk + 8 * jj[l]);
+        }
+        __m512d xj, yj, zj, sj;
+        rows_to_lanes(row, &xj, &yj, &zj, &sj);
+        const __m512d L = _mm512_mask_loadu_pd(one, act, len + k);
+        const __m512d dx = _mm512_sub_pd(xj, yi0), dy = _mm512_sub_pd(yj, yi1),
+                      dz = _mm512_sub_pd(zj, yi2);
+        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(
+            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz)));
+        __m512d dr = _mm512_sub_pd(r, L);
+        dr = _mm512_mask_mov_pd(dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), vnz, _CMP_LT_OQ), zero);
+        /* one division for both: q = 1/(|xi| r), s/r = dr q, s = dr (r q)
+         * (dr/|xi| itself where r = 0) */
+        const __mmask8 pos = _mm512_mask_cmp_pd_mask(act, r, zero, _CMP_GT_OQ);
+        const __m512d q = _mm512_maskz_div_pd(pos, one, _mm512_mul_pd(L, r));
+        const __m512d g = _mm512_maskz_mul_pd((__mmask8)(kmu & pos), dr, q);
+        const __m512d fi = _mm512_mul_pd(_mm512_maskz_loadu_pd(act, wij + k), g);
+        const __m512d fj = _mm512_mul_pd(_mm512_maskz_loadu_pd(act, wji + k), g);
+        ax = _mm512_add_pd(ax, _mm512_mul_pd(fi, dx));
+        ay = _mm512_add_pd(ay, _mm512_mul_pd(fi, dy));
+        az = _mm512_add_pd(az, _mm512_mul_pd(fi, dz));
+        __m512d t = zero;
+        __mmask8 brk = 0;
+        if (failure) {
+            __m512d s = _mm512_mul_pd(dr, _mm512_mul_pd(r, q));
+            if ((__mmask8)(act & ~pos))
+                s = _mm512_mask_div_pd(s, (__mmask8)(act & ~pos), dr, L);
+            __m512d thr = _mm512_min_pd(s0i, sj);
+            if (failure == PD_BONDS_FAILURE_LAWS)
+                thr = _mm512_mul_pd(_mm512_maskz_loadu_pd(act, kf + k), thr);
+            brk = _mm512_mask_cmp_pd_mask(kmu, s, thr, _CMP_GT_OQ);
+            t = _mm512_mask_sub_pd(ninf, kmu, vs00, _mm512_mul_pd(valpha, s));
+            sm = _mm512_max_pd(sm, t);
+        }
+        __m256d out[8];
+        lanes_to_rows(_mm512_mul_pd(fj, dx), _mm512_mul_pd(fj, dy), _mm512_mul_pd(fj, dz), t, out);
+        for (int l = 0; l < m; l++) {
+            double *p = pk + 8 * jj[l] + 4;
+            const __m256d v = _mm256_load_pd(p);
+            __m256d nv = _mm256_sub_pd(v, out[l]);
+            if (failure) /* the new s0: the larger */
+                nv = _mm256_mask_max_pd(nv, 0x8, v, out[l]);
+            _mm256_store_pd(p, nv);
+        }
+        /* contact: any pair of the row, intact or not, closer than its
+         * d_ij (or, with radii of their own, than 0.9 |xi|); rare */
+        const __mmask8 near =
+            contact ? _mm512_mask_cmp_pd_mask(act, r, _mm512_min_pd(_mm512_mul_pd(vref, L), vcap),
+                                              _CMP_LT_OQ)
+                    : 0;
+        if (near) {
+            double rr[8], ex[8], ey[8], ez[8];
+            _mm512_storeu_pd(rr, r);
+            _mm512_storeu_pd(ex, dx);
+            _mm512_storeu_pd(ey, dy);
+            _mm512_storeu_pd(ez, dz);
+            rows_contact(sim, i, k, jj, near, rr, ex, ey, ez);
+        }
+        for (int l = 0; brk && l < m; l++)
+            if (((brk >> l) & 1) && pd_sim_may_break(sim, i, jj[l])) {
+                pd_bond_break(h->intact, k + l);
+                *released += bond_energy(sim, i, k + l);
+            }
+    }
+    double *p = pk + 8 * i + 4;
+    p[0] += _mm512_reduce_add_pd(ax);
+    p[1] += _mm512_reduce_add_pd(ay);
+    p[2] += _mm512_reduce_add_pd(az);
+    if (failure) {
+        const double s0 = _mm512_reduce_max_pd(sm);
+        p[3] = s0 > p[3] ? s0 : p[3];
+    }
+}
+
+/* The rows of a block, a variant per failure mode and contact. */
+#define PMB_ROWS(mode, contact)                                                                \
+    for (int64_t i = lo; i < hi; i++)                                                          \
+    pmb_row512(sim, i, mode, contact, released, nwords)
+
+PMB_TARGET_AVX512 static void pmb_block512(pd_sim *sim, int64_t lo, int64_t hi,
+                                           const pd_bond_mode failure, double *released)
+{
+    const int64_t nwords = pd_bits_words(sim->half.count);
+    const int contact = sim->half.contact;
+    if (failure == PD_BONDS_FAILURE_LAWS && contact)
+        PMB_ROWS(PD_BONDS_FAILURE_LAWS, 1);
+    else if (failure == PD_BONDS_FAILURE_LAWS)
+        PMB_ROWS(PD_BONDS_FAILURE_LAWS, 0);
+    else if (failure && contact)
+        PMB_ROWS(PD_BONDS_FAILURE, 1);
+    else if (failure)
+        PMB_ROWS(PD_BONDS_FAILURE, 0);
+    else if (contact)
+        PMB_ROWS(PD_BONDS_ELASTIC, 1);
+    else
+        PMB_ROWS(PD_BONDS_ELASTIC, 0);
+}
+#endif
+
+void pd_half_contact_energy(const pd_sim *sim, double *e)
+{
+    if (!sim->half.contact)
+        return;
+    const pd_bonds *b = sim->b;
+    const double k = PD_CONTACT_SCALE * sim->sc.c / b->horizon;
+    const double *V = sim->p->volume, *rad = sim->p->radius;
+    double *const *y = sim->y;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        if (sim->lost && sim->lost[i])
+            continue;
+        double sum = 0;
+        for (int64_t q = b->offset[i]; q < b->offset[i + 1]; q++) {
+            const int32_t j = b->neighbor[q];
+            if (sim->lost && sim->lost[j])
+                continue;
+            const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i], dz = y[2][j] - y[2][i];
+            const double r = sqrt(dx * dx + dy * dy + dz * dz);
+            const double d = fmin(PD_CONTACT_REF_FRAC * b->length[q],
+                                  PD_CONTACT_RADIUS_FAC * (rad[i] + rad[j]));
+            if (r < d)
+                sum += 0.25 * k * (d - r) * (d - r) * V[j];
+        }
+        e[i] += sum * V[i];
+    }
+}
+
+/* Does this run take the AVX-512 rows?  Then h->pack is there. */
+static pd_status pmb_rows_init(pd_sim *sim)
+{
+#if PMB_AVX512
+    pd_half_bonds *h = &sim->half;
+    if (h->pack || !__builtin_cpu_supports("avx512f") || getenv("PD_NO_AVX512"))
+        return PD_OK;
+    size_t bytes = (size_t)(sim->n > 0 ? sim->n : 1) * 8 * sizeof(double);
+    if ((h->pack = aligned_alloc(64, bytes)) == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the bond list's rows");
+    if (!sim->sc.has_contact)
+        return PD_OK;
+    /* the rows take the contact of the half bonds' pairs; the contact list
+     * the others, which started at least `gap` apart (the horizon, unless
+     * the families leave out a closer pair) */
+    pd_status s = pd_half_gap(h, sim->p, sim->b->horizon, &h->gap);
+    if (s != PD_OK)
+        return s;
+    double rmin = INFINITY, rmax = 0;
+    for (int64_t i = 0; i < sim->n; i++) {
+        rmin = fmin(rmin, sim->p->radius[i]);
+        rmax = fmax(rmax, sim->p->radius[i]);
+    }
+    h->contact_cap = rmin == rmax ? PD_CONTACT_RADIUS_FAC * (rmax + rmax) : INFINITY;
+    h->contact = 1;
+#else
+    (void)sim;
+#endif
+    return PD_OK;
+}
+
+/* The blocks of the half bonds: even blocks in parallel, then odd ones (a
+ * block writes only to itself and the next).  Every sum is in an order the
+ * blocks fix, whatever the thread count. */
+static void pmb_blocks(pd_sim *sim, pd_bond_mode failure)
 {
     const pd_half_bonds *h = &sim->half;
-    /* failure's bookkeeping outside the fused loop (the s0_new reset and
-     * finish, the released-energy sum) goes to its own timer, taken out of
-     * the bonds' one that pd_sim_compute_forces charges the whole call to */
-    double tf = pd_wtime();
-    if (failure)
-#pragma omp parallel for schedule(static)
-        for (int64_t i = 0; i < sim->n; i++)
-            sim->s0_new[i] = -INFINITY;
-    tf = pd_wtime() - tf;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel for schedule(dynamic, 1)
         for (int64_t blk = phase; blk < h->nblocks; blk += 2) {
             int64_t lo = blk * h->block, hi = lo + h->block < sim->n ? lo + h->block : sim->n;
-            if (failure) {
+            if (failure)
                 h->released[blk] = 0;
-                if (h->kfail)
-                    pmb_block_failure_laws(sim, lo, hi, &h->released[blk]);
-                else
-                    pmb_block_failure(sim, lo, hi, &h->released[blk]);
-            } else
+#if PMB_AVX512
+            if (h->pack) {
+                pmb_block512(sim, lo, hi, failure, &h->released[blk]);
+                continue;
+            }
+#endif
+            if (failure == PD_BONDS_FAILURE_LAWS)
+                pmb_block_failure_laws(sim, lo, hi, &h->released[blk]);
+            else if (failure)
+                pmb_block_failure(sim, lo, hi, &h->released[blk]);
+            else
                 pmb_block_elastic(sim, lo, hi);
         }
     }
+}
+
+static void pmb_kernel(pd_sim *sim, pd_bond_mode failure)
+{
+    const pd_half_bonds *h = &sim->half;
+    double *restrict pk = h->pack;
+    /* failure's bookkeeping outside the fused loop (the s0_new reset and
+     * finish, the released-energy sum) goes to its own timer, taken out of
+     * the bonds' one that pd_sim_compute_forces charges the whole call to;
+     * the rows' copy in and out, which does the reset and finish too, is
+     * the bonds' */
+    double tf = 0, t0;
+    if (pk) /* the rows' copy: positions and s0, forces 0 and new s0 -inf */
+#pragma omp parallel for schedule(static)
+        for (int64_t i = 0; i < sim->n; i++) {
+            double *p = pk + 8 * i;
+            p[0] = sim->y[0][i];
+            p[1] = sim->y[1][i];
+            p[2] = sim->y[2][i];
+            p[3] = failure ? sim->s0[i] : 0.0;
+            p[4] = p[5] = p[6] = 0.0;
+            p[7] = -INFINITY;
+        }
+    else if (failure) {
+        t0 = pd_wtime();
+#pragma omp parallel for schedule(static)
+        for (int64_t i = 0; i < sim->n; i++)
+            sim->s0_new[i] = -INFINITY;
+        tf += pd_wtime() - t0;
+    }
+    pmb_blocks(sim, !failure ? PD_BONDS_ELASTIC : h->kfail ? PD_BONDS_FAILURE_LAWS : failure);
+    if (pk) /* the rows' forces added to the step's, and their new s0 */
+#pragma omp parallel for schedule(static)
+        for (int64_t i = 0; i < sim->n; i++) {
+            const double *p = pk + 8 * i + 4;
+            sim->f[0][i] += p[0];
+            sim->f[1][i] += p[1];
+            sim->f[2][i] += p[2];
+            if (failure) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
+                sim->s0_new[i] = p[3] == -INFINITY ? DBL_MAX : p[3];
+        }
     if (!failure)
         return;
-    double t0 = pd_wtime();
+    t0 = pd_wtime();
+    if (!pk)
 #pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
-        if (sim->s0_new[i] == -INFINITY)
-            sim->s0_new[i] = DBL_MAX;
+        for (int64_t i = 0; i < sim->n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
+            if (sim->s0_new[i] == -INFINITY)
+                sim->s0_new[i] = DBL_MAX;
     for (int64_t blk = 0; blk < h->nblocks; blk++) /* in block order: any thread count */
         sim->released += h->released[blk];
     tf += pd_wtime() - t0;
@@ -440,6 +776,8 @@ static pd_status pmb_init(pd_sim *sim, void **state)
         s = pd_half_weights(sim->p, sim->b, sim->sc.c, &sim->half);
     if (s == PD_OK && !sim->grid && pd_scene_has_laws(&sim->sc))
         s = pd_half_laws(sim->p, sim->b, &sim->sc, &sim->half);
+    if (s == PD_OK && !sim->grid)
+        s = pmb_rows_init(sim);
     return s;
 }
 

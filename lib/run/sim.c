@@ -588,6 +588,11 @@ int pd_sim_stencil_tiles(const pd_sim *sim)
     return pd_grid_tiles(sim->grid);
 }
 
+int pd_sim_list_rows(const pd_sim *sim)
+{
+    return sim->grid == NULL && sim->half.pack != NULL;
+}
+
 /* 1/2 rho V |v|^2 of every particle into e. */
 static void kinetic_each(const pd_sim *sim, double *e)
 {
