@@ -309,7 +309,7 @@ static void rows_contact(pd_sim *sim, int64_t i, int64_t k, const int64_t *jj, u
 }
 
 PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
-pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact,
+pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact, const int sym,
            double *released, int64_t nwords)
 {
     pd_half_bonds *h = &sim->half;
@@ -349,11 +349,20 @@ pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact
         const __mmask8 pos = _mm512_mask_cmp_pd_mask(act, r, zero, _CMP_GT_OQ);
         const __m512d q = _mm512_maskz_div_pd(pos, one, _mm512_mul_pd(L, r));
         const __m512d g = _mm512_maskz_mul_pd((__mmask8)(kmu & pos), dr, q);
+        /* the force on i, and (the same unless the weights differ) j's */
         const __m512d fi = _mm512_mul_pd(_mm512_maskz_loadu_pd(act, wij + k), g);
-        const __m512d fj = _mm512_mul_pd(_mm512_maskz_loadu_pd(act, wji + k), g);
-        ax = _mm512_add_pd(ax, _mm512_mul_pd(fi, dx));
-        ay = _mm512_add_pd(ay, _mm512_mul_pd(fi, dy));
-        az = _mm512_add_pd(az, _mm512_mul_pd(fi, dz));
+        const __m512d gx = _mm512_mul_pd(fi, dx), gy = _mm512_mul_pd(fi, dy),
+                      gz = _mm512_mul_pd(fi, dz);
+        ax = _mm512_add_pd(ax, gx);
+        ay = _mm512_add_pd(ay, gy);
+        az = _mm512_add_pd(az, gz);
+        __m512d hx = gx, hy = gy, hz = gz;
+        if (!sym) {
+            const __m512d fj = _mm512_mul_pd(_mm512_maskz_loadu_pd(act, wji + k), g);
+            hx = _mm512_mul_pd(fj, dx);
+            hy = _mm512_mul_pd(fj, dy);
+            hz = _mm512_mul_pd(fj, dz);
+        }
         __m512d t = zero;
         __mmask8 brk = 0;
         if (failure) {
@@ -368,7 +377,7 @@ pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact
             sm = _mm512_max_pd(sm, t);
         }
         __m256d out[8];
-        lanes_to_rows(_mm512_mul_pd(fj, dx), _mm512_mul_pd(fj, dy), _mm512_mul_pd(fj, dz), t, out);
+        lanes_to_rows(hx, hy, hz, t, out);
         for (int l = 0; l < m; l++) {
             double *p = pk + 8 * jj[l] + 4;
             const __m256d v = _mm256_load_pd(p);
@@ -407,10 +416,17 @@ pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact
     }
 }
 
-/* The rows of a block, a variant per failure mode and contact. */
+/* The rows of a block, a variant per failure mode, contact and symmetric
+ * weights (w_ji the same array as w_ij: one force for both ends). */
 #define PMB_ROWS(mode, contact)                                                                \
-    for (int64_t i = lo; i < hi; i++)                                                          \
-    pmb_row512(sim, i, mode, contact, released, nwords)
+    do {                                                                                       \
+        if (sim->half.w_ji == sim->half.w_ij)                                                  \
+            for (int64_t i = lo; i < hi; i++)                                                  \
+                pmb_row512(sim, i, mode, contact, 1, released, nwords);                        \
+        else                                                                                   \
+            for (int64_t i = lo; i < hi; i++)                                                  \
+                pmb_row512(sim, i, mode, contact, 0, released, nwords);                        \
+    } while (0)
 
 PMB_TARGET_AVX512 static void pmb_block512(pd_sim *sim, int64_t lo, int64_t hi,
                                            const pd_bond_mode failure, double *released)
@@ -450,9 +466,13 @@ void pd_half_contact_energy(const pd_sim *sim, double *e)
             if (sim->lost && sim->lost[j])
                 continue;
             const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i], dz = y[2][j] - y[2][i];
-            const double r = sqrt(dx * dx + dy * dy + dz * dz);
-            const double d = fmin(PD_CONTACT_REF_FRAC * b->length[q],
-                                  PD_CONTACT_RADIUS_FAC * (rad[i] + rad[j]));
+            const double r2 = dx * dx + dy * dy + dz * dz;
+            const double d0 = PD_CONTACT_REF_FRAC * b->length[q],
+                         d1 = PD_CONTACT_RADIUS_FAC * (rad[i] + rad[j]);
+            const double d = d0 < d1 ? d0 : d1; /* fmin, inlined */
+            if (!(r2 < d * d)) /* most pairs: no square root */
+                continue;
+            const double r = sqrt(r2);
             if (r < d)
                 sum += 0.25 * k * (d - r) * (d - r) * V[j];
         }
@@ -608,6 +628,29 @@ static pd_status pmb_failure_force(pd_sim *sim, void *state)
 
 /* The bonds' energy, half of each bond to each end (directed bonds, each
  * row its own sum): e_i += sum_j 1/4 c s^2 |xi| nu_ij V_i V_j. */
+/* sum_j 1/4 c s^2 |xi| nu V_j over the intact bonds of family F of
+ * particle i, branch-free (a broken bond times 0) so that it vectorizes. */
+PD_VECTOR_CLONES static double family_energy(const pd_family *F, const uint64_t *intact,
+                                             double *const *y, const double *V, double c,
+                                             int64_t i)
+{
+    double sum = 0, mu[PMB_CHUNK];
+    for (int64_t c0 = 0; c0 < F->n; c0 += PMB_CHUNK) {
+        const int64_t m = F->n - c0 < PMB_CHUNK ? F->n - c0 : PMB_CHUNK;
+        chunk_states(intact, F->first + c0, m, mu);
+        for (int64_t t = 0; t < m; t++) {
+            const int32_t j = F->j[c0 + t];
+            const double L = F->length[c0 + t];
+            const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i], dz = y[2][j] - y[2][i];
+            double dr = sqrt(dx * dx + dy * dy + dz * dz) - L;
+            dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+            const double s = dr / L;
+            sum += mu[t] * (0.25 * c * s * s * L * F->vfactor[c0 + t] * V[j]);
+        }
+    }
+    return sum;
+}
+
 static void pmb_energy_uniform(const pd_sim *sim, void *state, double *e)
 {
     (void)state;
@@ -625,19 +668,7 @@ static void pmb_energy_uniform(const pd_sim *sim, void *state, double *e)
                 e[i] = NAN; /* out of memory: never a wrong number */
                 continue;
             }
-            double sum = 0;
-            for (int64_t t = 0; t < F.n; t++) {
-                if (!pd_bond_intact(intact, F.first + t))
-                    continue;
-                const int32_t j = F.j[t];
-                const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i],
-                             dz = y[2][j] - y[2][i];
-                double dr = sqrt(dx * dx + dy * dy + dz * dz) - F.length[t];
-                dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-                const double s = dr / F.length[t];
-                sum += 0.25 * c * s * s * F.length[t] * F.vfactor[t] * V[j];
-            }
-            e[i] += sum * V[i];
+            e[i] += family_energy(&F, intact, y, V, c, i) * V[i];
         }
         pd_family_buf_free(&fb);
     }
