@@ -277,9 +277,6 @@ static inline unsigned bits8(const uint64_t *bits, int64_t k, int64_t nwords)
     return (unsigned)(v & 0xff);
 }
 
-/* pmb_row on h->pack (its comment holds the maths), 8 bonds at a time; a
- * row's last 8 are masked.  With `failure` the bonds of `brk` that may
- * break (--no-failure) break here, their energy released, in bond order. */
 /* The contact of the pairs of `near` (lanes of bonds k.. of row i closer
  * than 0.9 |xi| and the common cap): seed 000 eqs. 13-15 as
  * lib/effects/contact.c computes them, each pair once for both ends, in
@@ -308,6 +305,28 @@ static void rows_contact(pd_sim *sim, int64_t i, int64_t k, const int64_t *jj, u
     }
 }
 
+#define PMB_ROW_CHUNKS 32 /* chunks of 8 whose breaks a row keeps to the end */
+
+/* The bonds of `brks` (lanes of the n chunks of 8 from bond k of row i)
+ * that may break (--no-failure) break, their energy released, in bond
+ * order. */
+static void row_breaks(pd_sim *sim, int64_t i, int64_t k, const uint8_t *brks, int n,
+                       double *released)
+{
+    for (int c = 0; c < n; c++)
+        for (int l = 0; brks[c] >> l; l++) {
+            const int64_t b = k + 8 * c + l;
+            if (((brks[c] >> l) & 1) && pd_sim_may_break(sim, i, sim->half.neighbor[b])) {
+                pd_bond_break(sim->half.intact, b);
+                *released += bond_energy(sim, i, b);
+            }
+        }
+}
+
+/* pmb_row on h->pack (its comment holds the maths), 8 bonds at a time; a
+ * row's last 8 are masked.  With `failure` the bonds whose stretch breaks
+ * them are kept a chunk's lanes at a time and broken after the row's
+ * chunks (row_breaks): a chunk reads only its own bonds' bits. */
 PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
 pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact, const int sym,
            double *released, int64_t nwords)
@@ -325,6 +344,10 @@ pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact
     const __m512d yi0 = _mm512_set1_pd(pk[8 * i]), yi1 = _mm512_set1_pd(pk[8 * i + 1]),
                   yi2 = _mm512_set1_pd(pk[8 * i + 2]), s0i = _mm512_set1_pd(pk[8 * i + 3]);
     __m512d ax = zero, ay = zero, az = zero, sm = ninf;
+    uint8_t brks[PMB_ROW_CHUNKS]; /* each chunk's breaking lanes, from kbrk on */
+    int nbrk = 0;
+    int64_t kbrk = h->offset[i];
+    unsigned anybrk = 0;
     for (int64_t k = h->offset[i]; k < k1; k += 8) {
         const int m = k1 - k < 8 ? (int)(k1 - k) : 8;
         const __mmask8 act = (__mmask8)(m == 8 ? 0xff : (1u << m) - 1);
@@ -400,12 +423,18 @@ pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact
             _mm512_storeu_pd(ez, dz);
             rows_contact(sim, i, k, jj, near, rr, ex, ey, ez);
         }
-        for (int l = 0; brk && l < m; l++)
-            if (((brk >> l) & 1) && pd_sim_may_break(sim, i, jj[l])) {
-                pd_bond_break(h->intact, k + l);
-                *released += bond_energy(sim, i, k + l);
+        if (failure) { /* the breaks after the chunks, in bond order */
+            if (nbrk == PMB_ROW_CHUNKS) {
+                row_breaks(sim, i, kbrk, brks, nbrk, released);
+                kbrk = k;
+                nbrk = 0;
             }
+            brks[nbrk++] = brk;
+            anybrk |= brk;
+        }
     }
+    if (anybrk)
+        row_breaks(sim, i, kbrk, brks, nbrk, released);
     double *p = pk + 8 * i + 4;
     p[0] += _mm512_reduce_add_pd(ax);
     p[1] += _mm512_reduce_add_pd(ay);
