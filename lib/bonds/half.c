@@ -103,8 +103,16 @@ pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++)
         row_state(h, b, b->intact, i, 1);
-    h->block = span;
-    h->nblocks = (n + span - 1) / span;
+    /* blocks of at least `span` rows (a block writes only to itself and
+     * the next), as many as fit rounded down to a multiple of 4, so that
+     * each of the two phases has an even count: two threads share a phase
+     * evenly (a rule of the body alone: the sums' order, hence every bit,
+     * is the same at any thread count) */
+    int64_t nb = span > 0 ? n / span : n;
+    nb = nb >= 4 ? nb - nb % 4 : nb > 0 ? nb : 1;
+    h->block = (n + nb - 1) / nb;
+    h->block = h->block > span ? h->block : span;
+    h->nblocks = h->block > 0 ? (n + h->block - 1) / h->block : 0;
     h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
     if (h->released == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");
