@@ -18,7 +18,12 @@
  * DIR/NAME_projectile_STEP.vtu, the sphere's surface at that frame, listed
  * in the .pvd at the frame's time as parts 1 and on (the particles are
  * part 0), each named.
+ *
+ * With --xdmf it copies nothing: it writes an XDMF file that describes the
+ * frames of RUN.h5 where they are (pd_xdmf_write), which ParaView's XDMF
+ * Reader opens as the same time series.
  */
+#define _XOPEN_SOURCE 700 /* realpath (XSI) */
 #include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -34,6 +39,8 @@ struct options {
     const char *dir;   /* -o DIR                                       */
     const char *name;  /* --name; NULL: from the input's file name      */
     int level;         /* --compress: zlib level, 0 raw                 */
+    int has_level;
+    int xdmf;          /* --xdmf: -o names the XDMF file (optional)     */
     int quiet, debug;
 };
 
@@ -41,6 +48,7 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "Usage: " PROG " [OPTION]... RUN.h5 -o DIR\n"
+            "  or:  " PROG " --xdmf RUN.h5 [-o FILE.xdmf]\n"
             "Write every frame of a run as DIR/NAME_STEP.vtu (VTK XML, points at the current\n"
             "positions with displacement, velocity, damage, material and id) and the\n"
             "ParaView collection DIR/NAME.pvd of all frames with their times.  NAME is the\n"
@@ -50,9 +58,13 @@ static void usage(FILE *out)
             "have them: strain_energy_density, stress (a tensor) and von_mises.  A run with\n"
             "an indenter or a projectile also gets its sphere at every frame,\n"
             "DIR/NAME_indenter_STEP.vtu and DIR/NAME_projectile_STEP.vtu, in the .pvd.\n"
+            "With --xdmf nothing is copied: FILE.xdmf (default RUN.xdmf beside RUN.h5)\n"
+            "describes the frames where they are in RUN.h5, for ParaView's XDMF Reader.\n"
             "\n"
             "Options:\n"
-            "  -o, --output DIR    directory of the output, created when missing (required)\n"
+            "  -o, --output DIR    directory of the output, created when missing (required);\n"
+            "                      with --xdmf the XDMF file\n"
+            "      --xdmf          describe the frames in XDMF instead of copying them\n"
             "      --name NAME     base name of the output files\n"
             "      --compress LEVEL  zlib level of the arrays, 1 (fast, the default) to 9\n"
             "                      (small); 0 writes them raw\n"
@@ -64,11 +76,12 @@ static void usage(FILE *out)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { OPT_NAME = 256, OPT_COMPRESS };
+    enum { OPT_NAME = 256, OPT_COMPRESS, OPT_XDMF };
     static const struct option longopts[] = {
         {"output", required_argument, 0, 'o'},
         {"name", required_argument, 0, OPT_NAME},
         {"compress", required_argument, 0, OPT_COMPRESS},
+        {"xdmf", no_argument, 0, OPT_XDMF},
         {"quiet", no_argument, 0, 'q'},
         COMMON_LONGOPTS,
         {0, 0, 0, 0}};
@@ -88,6 +101,10 @@ static int parse_options(int argc, char **argv, struct options *o)
             if (!pd_parse_int64(optarg, &level) || level < 0 || level > 9)
                 return usage_error("--compress needs a zlib level 0 to 9, not", optarg);
             o->level = (int)level;
+            o->has_level = 1;
+            break;
+        case OPT_XDMF:
+            o->xdmf = 1;
             break;
         case 'q':
             o->quiet = 1;
@@ -100,6 +117,15 @@ static int parse_options(int argc, char **argv, struct options *o)
         return status;
     if ((status = one_input(argc, argv, "RUN.h5", &o->input)) != 0)
         return status;
+    if (o->xdmf) {
+        if (strcmp(o->input, "-") == 0)
+            return usage_error("--xdmf describes a run file in place: give its name, not", "-");
+        if (o->name || o->has_level)
+            return usage_error("--xdmf copies nothing: it takes no --name or --compress", NULL);
+        if (o->dir && o->dir[0] == '\0')
+            return usage_error("-o needs a file name", NULL);
+        return 0;
+    }
     if (o->dir == NULL)
         return usage_error("missing -o DIR", NULL);
     if (o->dir[0] == '\0')
@@ -264,6 +290,65 @@ static pd_status dump_frame(const pd_file *f, const pd_particles *p, const char 
     return s == PD_OK ? dump_spheres(f, &fi, o, name, c) : s;
 }
 
+/* The folder of `path` as an absolute path without links, or NULL (caller
+ * frees). */
+static char *real_dir(const char *path)
+{
+    char *copy = strdup(path);
+    if (copy == NULL)
+        return NULL;
+    char *slash = strrchr(copy, '/');
+    char *dir = realpath(slash == NULL ? "." : slash == copy ? "/" : (*slash = '\0', copy), NULL);
+    free(copy);
+    return dir;
+}
+
+/* --xdmf: OUT.xdmf (default: RUN.h5 less '.h5', plus '.xdmf') describing
+ * the frames of RUN.h5 in place.  The run file is named in it by its file
+ * name when both are in one folder (the pair can then move together), else
+ * by its absolute path. */
+static int describe(const struct options *o)
+{
+    size_t len = strlen(o->input);
+    char *out = NULL, *h5dir = NULL, *outdir = NULL, *h5ref = NULL;
+    if (o->dir)
+        out = strdup(o->dir);
+    else if ((out = malloc(len + 6)) != NULL) {
+        memcpy(out, o->input, len + 1);
+        if (len > 3 && strcmp(out + len - 3, ".h5") == 0)
+            out[len - 3] = '\0';
+        strcat(out, ".xdmf");
+    }
+    pd_status s = out ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory");
+    if (s == PD_OK && (h5dir = real_dir(o->input)) == NULL)
+        s = pd_fail(PD_ERR_IO, "cannot find the folder of '%s'", o->input);
+    if (s == PD_OK && (outdir = real_dir(out)) == NULL)
+        s = pd_fail(PD_ERR_IO, "cannot write '%s': no such folder", out);
+    if (s == PD_OK) {
+        const char *slash = strrchr(o->input, '/');
+        h5ref = strcmp(h5dir, outdir) == 0 ? strdup(slash ? slash + 1 : o->input)
+                                           : realpath(o->input, NULL);
+        if (h5ref == NULL)
+            s = pd_fail(PD_ERR_IO, "cannot find '%s'", o->input);
+    }
+    pd_file *f = NULL;
+    pd_particles *p = NULL;
+    int64_t nframes = 0;
+    if (s == PD_OK && (s = pd_file_open(o->input, &f)) == PD_OK &&
+        (s = pd_read_particles(f, &p)) == PD_OK)
+        s = pd_xdmf_write(f, h5ref, out, &nframes);
+    if (s == PD_OK && !o->quiet)
+        fprintf(stderr, PROG ": %lld frames of %lld particles described in place, %s (ParaView: XDMF Reader)\n",
+                (long long)nframes, (long long)p->n, out);
+    pd_particles_free(p);
+    pd_file_close(f);
+    free(out);
+    free(h5dir);
+    free(outdir);
+    free(h5ref);
+    return s == PD_OK ? 0 : fail();
+}
+
 int main(int argc, char **argv)
 {
     struct options o;
@@ -272,6 +357,8 @@ int main(int argc, char **argv)
         return rc;
     pd_h5_debug(o.debug);
     remove_temps_on_signal();
+    if (o.xdmf)
+        return describe(&o);
 
     char *name = output_name(&o);
     if (name == NULL) {

@@ -1416,6 +1416,14 @@ pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr);
  * zlib_level as pd_vtk_frame's. */
 pd_status pd_vtk_write_sphere(const char *path, const pd_frame_sphere *sphere, int zlib_level);
 
+/* The complete frames of run file f described in XDMF at `path` (written
+ * whole or not at all), for ParaView's XDMF Reader to read them from the
+ * run file in place (lib/io/xdmf.c): the run file named `h5ref` in it, a
+ * path relative to the folder of `path` or absolute, without ':'.
+ * *nframes gets the frames described. */
+pd_status pd_xdmf_write(const pd_file *f, const char *h5ref, const char *path,
+                        int64_t *nframes);
+
 /* A ParaView collection listing files (relative names) with their times,
  * parts (NULL: all part 0) and names of the parts (NULL, or a NULL entry:
  * none).  ParaView reads the files of one time as the blocks of one

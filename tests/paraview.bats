@@ -6,7 +6,9 @@
 # frames' times, the named blocks (particles, indenter, projectile), the
 # arrays bit for bit against the run file and tests/vtu.py, each sphere's
 # radius, centre and area (ParaView's IntegrateVariables), and a picture of
-# the last frame.
+# the last frame.  tests/paraview/check_xdmf.py opens a run file through
+# pd-dump2vtk --xdmf's description with ParaView's XDMF Reader: every
+# frame's time, points and arrays bit for bit against the run file.
 
 load test_helper
 
@@ -53,16 +55,21 @@ pv_check() {
     pd-dump2vtk -q "$run" -o zlib && pd-dump2vtk -q --compress 0 "$run" -o raw || return 1
     grep -q 'compressor="vtkZLibDataCompressor"' "zlib/${name}_00000000.vtu" || return 1
     ! grep -q 'compressor=' "raw/${name}_00000000.vtu" || return 1
-    # pvbatch's messages (its MPI start, Mesa) are not ours: keep its last
-    # line.  Should pvbatch still abort (SIGABRT, "Aborted", before
-    # check_dump.py says anything), that crash, and only that one, gets one
-    # more try.  A check that fails exits 1 with its traceback and is not
-    # retried.
+    pv_run "$BATS_TEST_DIRNAME/paraview/check_dump.py" "$run" "zlib/$name.pvd" "raw/$name.pvd" \
+        last.png "$@"
+}
+
+# pv_run SCRIPT ARG...: pvbatch on a check script, its output in pv.out;
+# prints the last line.  pvbatch's messages (its MPI start, Mesa) are not
+# ours: only its last line counts.  Should pvbatch still abort (SIGABRT,
+# "Aborted", before the script says anything), that crash, and only that
+# one, gets one more try.  A check that fails exits 1 with its traceback
+# and is not retried.
+pv_run() {
     local try rc
     for try in 1 2; do
         rc=0
-        pvbatch "$BATS_TEST_DIRNAME/paraview/check_dump.py" "$run" \
-            "zlib/$name.pvd" "raw/$name.pvd" last.png "$@" >pv.out 2>&1 || rc=$?
+        pvbatch "$@" >pv.out 2>&1 || rc=$?
         [ "$rc" -eq 134 ] || [ "$(tail -n 1 pv.out)" = Aborted ] || break
         echo "pvbatch aborted (try $try)" >&2
     done
@@ -94,4 +101,19 @@ pv_check() {
     pd-run -q --bulk-modulus "$BULK" --velocity-bc top,z,1 --steps 20 --every 10 model.h5 -o bare.h5
     run -0 --separate-stderr pv_check bare.h5
     assert_output "ok 3"
+}
+
+@test "ParaView's XDMF Reader opens a run in place (pd-dump2vtk --xdmf): every frame, bit for bit" {
+    make_block
+    pd-run -q "${RUN_OPTS[@]}" --steps 100 --every 25 --fields energy,stress model.h5 -o run.h5
+    pd-dump2vtk -q --xdmf run.h5
+    run -0 --separate-stderr pv_run "$BATS_TEST_DIRNAME/paraview/check_xdmf.py" run.h5 run.xdmf xdmf.png
+    assert_output "ok 5"
+    [ -s xdmf.png ]
+    # from another folder, through the absolute path it names
+    mkdir -p view
+    pd-dump2vtk -q --xdmf run.h5 -o view/run.xdmf
+    run -0 --separate-stderr pv_run "$BATS_TEST_DIRNAME/paraview/check_xdmf.py" run.h5 \
+        view/run.xdmf xdmf.png
+    assert_output "ok 5"
 }

@@ -412,3 +412,99 @@ for k, g in f['frames'].items():
 print('ok')" run.h5 out2
     assert_output ok
 }
+
+# check_xdmf RUN XDMF H5REF: the XDMF file describes RUN's complete frames
+# in step order with their times, each DataItem naming a dataset H5REF:PATH
+# that RUN has, with its shape and number type; the geometry the sum of the
+# reference positions and the frame's displacement.  Prints "ok NFRAMES".
+check_xdmf() {
+    "$PY" - "$@" <<'EOF2'
+import sys
+import xml.etree.ElementTree as ET
+import h5py
+
+run, xdmf, ref = sys.argv[1:4]
+f = h5py.File(run, "r")
+n = len(f["particles/id"])
+frames = sorted((g for g in f["frames"].values() if g.attrs["complete"] == 1),
+                key=lambda g: g.attrs["step"])
+root = ET.parse(xdmf).getroot()
+assert root.tag == "Xdmf" and root.get("Version") == "2.0", root.attrib
+coll = root.find("./Domain/Grid")
+assert coll.get("GridType") == "Collection" and coll.get("CollectionType") == "Temporal"
+grids = coll.findall("./Grid")
+assert len(grids) == len(frames), (len(grids), len(frames))
+kinds = {"f": "Float", "i": "Int", "u": "UInt"}
+for g, grid in zip(frames, grids):
+    assert float(grid.find("Time").get("Value")) == float(g.attrs["time"]), g.name
+    top = grid.find("Topology")
+    assert top.get("TopologyType") == "Polyvertex" and int(top.get("NumberOfElements")) == n
+    fn = grid.find("./Geometry/DataItem")
+    assert fn.get("ItemType") == "Function" and fn.get("Function") == "$0 + $1"
+    items = grid.findall(".//DataItem[@Format='HDF']")
+    paths = []
+    for it in items:
+        file, path = it.text.split(":")
+        assert file == ref, (file, ref)
+        d = f[path]
+        assert tuple(int(v) for v in it.get("Dimensions").split()) == d.shape, (path, d.shape)
+        assert it.get("NumberType") == kinds[d.dtype.kind] and int(it.get("Precision")) == d.dtype.itemsize, path
+        paths.append(path)
+    assert paths[:2] == ["/particles/position", g.name + "/displacement"], paths[:2]
+    names = [a.get("Name") for a in grid.findall("Attribute")]
+    want = [k for k in ("displacement", "velocity", "damage", "damage_run",
+                        "strain_energy_density", "von_mises", "stress") if k in g]
+    assert names == want + ["material", "id"], names
+    for a in grid.findall("Attribute"):
+        p = a.find("DataItem").text.split(":")[1]
+        assert p.rsplit("/", 1)[1] == a.get("Name"), (p, a.get("Name"))
+print("ok", len(frames))
+EOF2
+}
+
+@test "--xdmf describes every frame in place: no copy, each array a dataset of the run file" {
+    cp "$RUN" run.h5
+    run -0 --separate-stderr pd-dump2vtk --xdmf run.h5
+    assert_equal "${stderr_lines[0]}" "pd-dump2vtk: 5 frames of $(h5ls run.h5/particles/id | sed -n 's/.*{\([0-9]*\)}.*/\1/p') particles described in place, run.xdmf (ParaView: XDMF Reader)"
+    run -0 check_xdmf run.h5 run.xdmf run.h5
+    assert_output "ok 5"
+    # the run file is only read
+    cmp run.h5 "$RUN"
+    # elsewhere, the XDMF names the run file by its absolute path
+    mkdir -p sub
+    pd-dump2vtk -q --xdmf run.h5 -o sub/r.xdmf
+    run -0 check_xdmf run.h5 sub/r.xdmf "$PWD/run.h5"
+    assert_output "ok 5"
+    # the optional fields go along
+    pd-run -q "${RUN_OPTS[@]}" --steps 20 --every 10 --fields energy,stress "$MODEL" -o fields.h5
+    pd-dump2vtk -q --xdmf fields.h5
+    run -0 check_xdmf fields.h5 fields.xdmf fields.h5
+    assert_output "ok 3"
+    grep -q 'Name="stress" AttributeType="Tensor"' fields.xdmf
+}
+
+@test "--xdmf of a pre-cracked run takes its damage_run where pd-damage stored it" {
+    make_cracked_run
+    pd-damage -q --no-precrack run.h5
+    pd-dump2vtk -q --xdmf run.h5
+    run -0 check_xdmf run.h5 run.xdmf run.h5
+    assert_output "ok 6"
+    grep -q 'Name="damage_run"' run.xdmf
+}
+
+@test "--xdmf: usage errors exit 2; a missing folder or a run without frames is one error line and no file" {
+    expect_usage_error "give its name" pd-dump2vtk --xdmf - -o x.xdmf
+    expect_usage_error "no --name or --compress" pd-dump2vtk --xdmf --compress 3 "$RUN"
+    expect_usage_error "no --name or --compress" pd-dump2vtk --xdmf --name a "$RUN"
+    expect_usage_error "-o needs a file name" pd-dump2vtk --xdmf "$RUN" -o ""
+    cp "$RUN" run.h5
+    run -1 --separate-stderr pd-dump2vtk --xdmf run.h5 -o nowhere/r.xdmf
+    assert_equal "${#stderr_lines[@]}" 1
+    assert_regex "${stderr_lines[0]}" "^pd-dump2vtk: error: cannot write 'nowhere/r.xdmf'"
+    [ ! -e nowhere ]
+    run -1 --separate-stderr pd-dump2vtk --xdmf "$MODEL" -o m.xdmf
+    assert_equal "${#stderr_lines[@]}" 1
+    assert_regex "${stderr_lines[0]}" "^pd-dump2vtk: error: .*has no /frames"
+    [ ! -e m.xdmf ]
+    [ -z "$(find . -name '.*.tmp.*')" ]
+}

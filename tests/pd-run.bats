@@ -844,6 +844,14 @@ with h5py.File('model.h5') as f:
         run -0 pd-damage -n k.h5
         run -0 pd-crack-tip k.h5
         run -0 pd-dump2vtk -q k.h5 -o "vtk$k"
+        # the XDMF description lists the complete frames, at their times
+        run -0 pd-dump2vtk -q --xdmf k.h5 -o "k$k.xdmf"
+        py "
+import xml.etree.ElementTree as ET
+with h5py.File(sys.argv[1]) as f:
+    times = sorted(float(g.attrs['time']) for g in f['frames'].values() if g.attrs['complete'] == 1)
+grids = ET.parse(sys.argv[2]).getroot().find('./Domain/Grid').findall('Grid')
+assert [float(g.find('Time').get('Value')) for g in grids] == times, times" k.h5 "k$k.xdmf"
         py "
 import numpy as np
 with h5py.File(sys.argv[1]) as f:

@@ -35,90 +35,13 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include "io/pending.h"
 #include "pd.h"
 
 #define VTK_VERTEX 1          /* VTK cell type of a single point         */
 #define VTK_TRIANGLE 5        /* VTK cell type of a triangle             */
 #define OUT_BUFFER (1 << 16)  /* bytes gathered before each fwrite        */
 #define ZBLOCK (1u << 16)     /* bytes of each block zlib compresses     */
-
-/* ------------------------------------------------------------ publishing */
-
-/* An output being written: the stream, its temporary path and the target. */
-typedef struct {
-    FILE *fp;
-    char *tmp;
-    const char *path;
-} pending;
-
-/* Open a new temporary file beside `path`.  It is created with mode 0666 so
- * that the umask, not mkstemp's 0600, decides who may read the result. */
-static pd_status pending_open(const char *path, pending *out)
-{
-    static _Atomic unsigned counter;
-    memset(out, 0, sizeof *out);
-    struct stat st;
-    if (path == NULL || path[0] == '\0')
-        return pd_fail(PD_ERR_INVALID, "empty output path");
-    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
-        return pd_fail(PD_ERR_IO, "cannot write '%s': is a directory", path);
-    char *copy = strdup(path), *base = strdup(path);
-    size_t len = strlen(path) + 64;
-    char *tmp = malloc(len);
-    if (copy == NULL || base == NULL || tmp == NULL) {
-        free(copy);
-        free(base);
-        free(tmp);
-        return pd_fail(PD_ERR_NOMEM, "out of memory");
-    }
-    const char *dir = dirname(copy), *name = basename(base);
-    int fd = -1;
-    for (int attempt = 0; attempt < 100 && fd < 0; attempt++) {
-        snprintf(tmp, len, "%s/.%s.tmp.%ld.%u", dir, name, (long)getpid(), counter++);
-        fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL, 0666);
-        if (fd < 0 && errno != EEXIST)
-            break;
-    }
-    free(copy);
-    free(base);
-    if (fd < 0) {
-        pd_status s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", path, strerror(errno));
-        free(tmp);
-        return s;
-    }
-    out->fp = fdopen(fd, "wb");
-    if (out->fp == NULL) {
-        pd_status s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", path, strerror(errno));
-        close(fd);
-        unlink(tmp);
-        free(tmp);
-        return s;
-    }
-    out->tmp = tmp;
-    out->path = path;
-    return PD_OK;
-}
-
-/* Finish: when `s` is PD_OK flush, sync and rename over the target;
- * otherwise (or when that fails) remove the temporary.  Returns the status. */
-static pd_status pending_close(pending *w, pd_status s)
-{
-    if (w->fp == NULL)
-        return s;
-    if (s == PD_OK && (ferror(w->fp) || fflush(w->fp) != 0 || fsync(fileno(w->fp)) != 0))
-        s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", w->path,
-                    errno ? strerror(errno) : "write error");
-    if (fclose(w->fp) != 0 && s == PD_OK)
-        s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", w->path, strerror(errno));
-    w->fp = NULL;
-    if (s == PD_OK && rename(w->tmp, w->path) != 0)
-        s = pd_fail(PD_ERR_IO, "cannot rename the output to '%s': %s", w->path, strerror(errno));
-    if (s != PD_OK)
-        unlink(w->tmp);
-    free(w->tmp);
-    w->tmp = NULL;
-    return s;
-}
 
 /* ------------------------------------------------------------ binary data */
 
@@ -354,10 +277,10 @@ static pd_status write_grid(const char *path, varray *a, int na, int npoint, con
         a[k].offset = offset;
         offset += block_size(&a[k]);
     }
-    pending out = {0};
+    pd_pending out = {0};
     le_writer *w = NULL;
     if (s == PD_OK)
-        s = pending_open(path, &out);
+        s = pd_pending_open(path, &out);
     if (s == PD_OK && (w = malloc(sizeof *w)) == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory");
     if (s == PD_OK) {
@@ -400,7 +323,7 @@ static pd_status write_grid(const char *path, varray *a, int na, int npoint, con
     free(w);
     for (int k = 0; k < na; k++)
         free(a[k].z);
-    return pending_close(&out, s);
+    return pd_pending_close(&out, s);
 }
 
 pd_status pd_vtk_write(const char *path, const pd_vtk_frame *fr)
@@ -542,31 +465,6 @@ pd_status pd_vtk_write_sphere(const char *path, const pd_frame_sphere *sp, int z
 
 /* ------------------------------------------------------------ .pvd */
 
-/* A string as the text of an XML attribute value. */
-static void xml_escaped(FILE *fp, const char *s)
-{
-    for (; *s; s++) {
-        switch (*s) {
-        case '&':
-            fputs("&amp;", fp);
-            break;
-        case '<':
-            fputs("&lt;", fp);
-            break;
-        case '>':
-            fputs("&gt;", fp);
-            break;
-        case '"':
-            fputs("&quot;", fp);
-            break;
-        case '\'':
-            fputs("&apos;", fp);
-            break;
-        default:
-            fputc(*s, fp);
-        }
-    }
-}
 
 pd_status pd_pvd_write(const char *path, int64_t nfiles, char *const *files, const double *times,
                        const int *parts, const char *const *names)
@@ -584,8 +482,8 @@ pd_status pd_pvd_write(const char *path, int64_t nfiles, char *const *files, con
             return pd_fail(PD_ERR_INVALID, "ParaView collection entry '%s' has part %d",
                            files[k], parts[k]);
     }
-    pending out;
-    pd_status s = pending_open(path, &out);
+    pd_pending out;
+    pd_status s = pd_pending_open(path, &out);
     if (s != PD_OK)
         return s;
     FILE *fp = out.fp;
@@ -597,13 +495,13 @@ pd_status pd_pvd_write(const char *path, int64_t nfiles, char *const *files, con
                 parts ? parts[k] : 0);
         if (names && names[k]) {
             fprintf(fp, " name=\"");
-            xml_escaped(fp, names[k]);
+            pd_xml_escaped(fp, names[k]);
             fprintf(fp, "\"");
         }
         fprintf(fp, " file=\"");
-        xml_escaped(fp, files[k]);
+        pd_xml_escaped(fp, files[k]);
         fprintf(fp, "\"/>\n");
     }
     fprintf(fp, "  </Collection>\n</VTKFile>\n");
-    return pending_close(&out, s);
+    return pd_pending_close(&out, s);
 }
