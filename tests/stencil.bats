@@ -167,6 +167,17 @@ for name in a['frames']:
     pd-run -q "${RUN_OPTS[@]}" --steps 40 --every 20 --threads 2 model.h5 -o half.h5
     pd-run -q --restart half.h5 --steps 40 --threads 2 -o rest.h5
     run -0 h5_same two.h5 rest.h5 'history|threads|^/scene|^/series'
+    # a meshed block: node radii of their own, so the rows flag the pairs
+    # closer than 0.9 |xi| and the contact pass takes each pair's d_ij
+    gmsh -v 0 -3 -format msh41 -o box.msh "$BATS_TEST_DIRNAME/fixtures/mesh/box.geo"
+    pd-mesh -q --density "$DENSITY" box.msh -o mesh.h5
+    pd-bonds -q --horizon 0.0016 mesh.h5 -o mesh-model.h5
+    mesh=(--bulk-modulus "$BULK" --failure 0.0005,0.25 --contact --allow-overlap
+          --indenter sphere,0.005,0.002,0.0045,0.003,1e17,0,0,-100 --steps 80 --every 20 -q)
+    pd-run "${mesh[@]}" mesh-model.h5 -o mesh-rows.h5
+    PD_NO_AVX512=1 pd-run "${mesh[@]}" mesh-model.h5 -o mesh-loop.h5
+    run -0 agree mesh-rows.h5 mesh-loop.h5
+    [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\ [0-9.e-]+$ ]]
 }
 
 @test "the status line's largest damage (counted on the stencil) is pd-damage's, and the list's" {
