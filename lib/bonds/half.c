@@ -135,21 +135,35 @@ int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j)
     return q < h->offset[i + 1] && h->neighbor[q] == j ? q : -1;
 }
 
-pd_status pd_half_gap(const pd_half_bonds *h, const pd_particles *p, double radius, double *gap)
+/* Particles j != i with |x_i - x_j|^2 <= cut2, by pd-bonds's arithmetic
+ * (lib/bonds/build.c), among the points of i's 27 cells. */
+static int64_t within(const pd_cells *c, const pd_particles *p, int64_t i, double cut2)
 {
-    pd_cells c;
-    pd_status s = pd_cells_build(&c, p->n, p->x, radius);
-    if (s != PD_OK)
-        return s;
+    const double xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
+    int64_t lo[9], hi[9], m = 0;
+    const int rows = pd_cells_adjacent_rows(c, xi, lo, hi);
+    for (int q = 0; q < rows; q++)
+        for (int64_t e = lo[q]; e < hi[q]; e++) {
+            const int32_t j = c->index[e];
+            const double dx = xi[0] - p->x[0][j], dy = xi[1] - p->x[1][j], dz = xi[2] - p->x[2][j];
+            m += (dx * dx + dy * dy + dz * dz <= cut2) & (j != i);
+        }
+    return m;
+}
+
+/* The closest pair that is not a half bond, searched pair by pair. */
+static double closest_unbonded(const pd_cells *c, const pd_half_bonds *h, const pd_particles *p,
+                               double radius)
+{
     double best = radius; /* a min in any order is exact */
 #pragma omp parallel for schedule(static) reduction(min : best)
     for (int64_t i = 0; i < p->n; i++) {
         const double xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
         int64_t lo[9], hi[9];
-        const int rows = pd_cells_adjacent_rows(&c, xi, lo, hi);
+        const int rows = pd_cells_adjacent_rows(c, xi, lo, hi);
         for (int q = 0; q < rows; q++)
             for (int64_t e = lo[q]; e < hi[q]; e++) {
-                const int32_t j = c.index[e];
+                const int32_t j = c->index[e];
                 const double dx = p->x[0][j] - xi[0], dy = p->x[1][j] - xi[1],
                              dz = p->x[2][j] - xi[2];
                 const double d2 = dx * dx + dy * dy + dz * dz;
@@ -157,8 +171,33 @@ pd_status pd_half_gap(const pd_half_bonds *h, const pd_particles *p, double radi
                     best = sqrt(d2) < best ? sqrt(d2) : best;
             }
     }
+    return best;
+}
+
+pd_status pd_half_gap(const pd_half_bonds *h, const pd_bonds *b, const pd_particles *p,
+                      double *gap)
+{
+    const double radius = b->horizon, cut2 = radius * radius;
+    pd_cells c;
+    pd_status s = pd_cells_build(&c, p->n, p->x, radius);
+    if (s != PD_OK)
+        return s;
+    /* the families of pd-bonds: every bond within the horizon and every
+     * pair within it a bond (as many as the family holds), so no pair
+     * that is not a bond is closer than the horizon */
+    int64_t odd = 0;
+#pragma omp parallel for schedule(static) reduction(+ : odd)
+    for (int64_t i = 0; i < p->n; i++) {
+        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
+            const int32_t j = h->neighbor[q];
+            const double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
+                         dz = p->x[2][i] - p->x[2][j];
+            odd += !(dx * dx + dy * dy + dz * dz <= cut2);
+        }
+        odd += within(&c, p, i, cut2) != b->offset[i + 1] - b->offset[i];
+    }
+    *gap = odd == 0 ? radius : closest_unbonded(&c, h, p, radius);
     pd_cells_free(&c);
-    *gap = best;
     return PD_OK;
 }
 

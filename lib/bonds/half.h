@@ -56,8 +56,11 @@ void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i);
 /* The half bond i-j (i < j): its index, or -1 when there is none. */
 int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j);
 /* The smallest reference distance between two particles that are not a
- * half bond, or `radius` when no such pair is closer (a cell search of
- * that radius over p's positions). */
-pd_status pd_half_gap(const pd_half_bonds *h, const pd_particles *p, double radius, double *gap);
+ * half bond, or the horizon of b when no such pair is closer (a cell
+ * search of that radius over p's positions: when b's families are those
+ * pd-bonds makes, every pair within the horizon, as many as a count
+ * finds, the horizon at once; else pair by pair). */
+pd_status pd_half_gap(const pd_half_bonds *h, const pd_bonds *b, const pd_particles *p,
+                      double *gap);
 
 #endif

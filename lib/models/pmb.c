@@ -524,7 +524,7 @@ static pd_status pmb_rows_init(pd_sim *sim)
     /* the rows take the contact of the half bonds' pairs; the contact list
      * the others, which started at least `gap` apart (the horizon, unless
      * the families leave out a closer pair) */
-    pd_status s = pd_half_gap(h, sim->p, sim->b->horizon, &h->gap);
+    pd_status s = pd_half_gap(h, sim->b, sim->p, &h->gap);
     if (s != PD_OK)
         return s;
     double rmin = INFINITY, rmax = 0;

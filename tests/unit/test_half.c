@@ -7,8 +7,12 @@
  * 1, 2, 3 and 7 threads, for rows in lattice order and shuffled (the rows'
  * span then near N), with every bond intact, none, and a fixed pseudo-random
  * third broken; and pd_half_set_state of the expanded bits gives the half
- * bits back.
+ * bits back.  And pd_half_gap, the closest pair that is not a bond: on a
+ * perturbed body whose families are pd-bonds's, the horizon; with the
+ * horizon raised over the families (the pairs between the two left out),
+ * the closest of those, as a search of every pair finds it.
  */
+#include <math.h>
 #include <omp.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -99,8 +103,57 @@ static void check_body(pd_particles *p, const char *order)
     pd_bonds_free(b);
 }
 
+/* The closest pair i < j that is not a half bond, below `cap`: every pair. */
+static double brute_gap(const pd_half_bonds *h, const pd_particles *p, double cap)
+{
+    double best = cap;
+    for (int64_t i = 0; i < p->n; i++)
+        for (int64_t j = i + 1; j < p->n; j++) {
+            const double dx = p->x[0][j] - p->x[0][i], dy = p->x[1][j] - p->x[1][i],
+                         dz = p->x[2][j] - p->x[2][i];
+            const double d = sqrt(dx * dx + dy * dy + dz * dz);
+            if (d < best && pd_half_find(h, i, j) < 0)
+                best = d;
+        }
+    return best;
+}
+
+static void check_gap(void)
+{
+    pd_region r;
+    if (pd_region_parse(PD_REGION_BOX, "0,0.0061,0,0.0041,0,0.0031", &r) != PD_OK)
+        die("region");
+    pd_lattice_params lp = {.spacing = 0.001, .density = 2200.0, .material = 1,
+                            .perturb = 1e-4, .seed = 11};
+    pd_particles *p = NULL;
+    pd_bonds *b = NULL;
+    if (pd_lattice_make(&r, 1, &lp, &p) != PD_OK || pd_bonds_build(p, 3.0001e-3, &b) != PD_OK)
+        die("perturbed body");
+    pd_half_bonds h;
+    memset(&h, 0, sizeof h);
+    if (pd_half_build(b, &h) != PD_OK)
+        die("half bonds");
+    double gap = 0;
+    CHECK(pd_half_gap(&h, b, p, &gap) == PD_OK && gap == b->horizon,
+          "pd-bonds's families: the gap is the horizon (%.17g, not %.17g)", b->horizon, gap);
+    CHECK(brute_gap(&h, p, b->horizon) == b->horizon,
+          "no pair within the horizon is left out of pd-bonds's families");
+    b->horizon = 3.4e-3; /* the pairs between 3.0001 and 3.4 mm: not bonds */
+    const double want = brute_gap(&h, p, b->horizon);
+    CHECK(want > 3.0001e-3 && want < 3.4e-3, "the raised horizon leaves pairs out (%g)", want);
+    CHECK(pd_half_gap(&h, b, p, &gap) == PD_OK && gap == want,
+          "families short of the horizon: the closest pair left out, %.17g (found %.17g)", want,
+          gap);
+    printf("ok: pd_half_gap: the horizon for pd-bonds's families, else the closest pair left out "
+           "(%.6g m)\n", gap);
+    pd_half_free(&h);
+    pd_bonds_free(b);
+    pd_particles_free(p);
+}
+
 int main(void)
 {
+    check_gap();
     pd_particles *p = box(0.001);
     check_body(p, "in lattice order");
     shuffle_rows(p);
