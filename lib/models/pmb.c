@@ -514,7 +514,8 @@ static pd_status pmb_rows_init(pd_sim *sim)
 {
 #if PMB_AVX512
     pd_half_bonds *h = &sim->half;
-    if (h->pack || !__builtin_cpu_supports("avx512f") || getenv("PD_NO_AVX512"))
+    if (h->pack || !__builtin_cpu_supports("avx512f") || !__builtin_cpu_supports("avx512vl") ||
+        !__builtin_cpu_supports("avx512dq") || getenv("PD_NO_AVX512"))
         return PD_OK;
     size_t bytes = (size_t)(sim->n > 0 ? sim->n : 1) * 8 * sizeof(double);
     if ((h->pack = aligned_alloc(64, bytes)) == NULL)
