@@ -12,6 +12,18 @@ setup() {
     cd "$BATS_TEST_TMPDIR"
 }
 
+# threads_and_restart MODEL: the RUN_OPTS scene on MODEL (80 steps, a frame
+# every 20) gives the same bits on 1 and 2 threads, and through a restart
+# at step 40.
+threads_and_restart() {
+    pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 --threads 1 "$1" -o one.h5
+    pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 --threads 2 "$1" -o two.h5
+    run -0 h5_same one.h5 two.h5 'history|threads'
+    pd-run -q "${RUN_OPTS[@]}" --steps 40 --every 20 --threads 2 "$1" -o half.h5
+    pd-run -q --restart half.h5 --steps 40 --threads 2 -o rest.h5
+    run -0 h5_same two.h5 rest.h5 'history|threads|^/scene|^/series'
+}
+
 # agree A B [TOL]: the two runs have the same frames, the same bond states
 # (by directed bond, or by the broken count when the particle orders
 # differ), displacements and velocities within TOL (default 1e-9) of the
@@ -125,12 +137,7 @@ for name in a['frames']:
     run -0 agree tile.h5 seg.h5
     [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\  ]]
     # 1 and 2 threads bit for bit, and a restart
-    pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 --threads 1 model.h5 -o one.h5
-    pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 --threads 2 model.h5 -o two.h5
-    run -0 h5_same one.h5 two.h5 'history|threads'
-    pd-run -q "${RUN_OPTS[@]}" --steps 40 --every 20 --threads 2 model.h5 -o half.h5
-    pd-run -q --restart half.h5 --steps 40 --threads 2 -o rest.h5
-    run -0 h5_same two.h5 rest.h5 'history|threads|^/scene|^/series'
+    threads_and_restart model.h5
 }
 
 @test "the bond list's AVX-512 rows and its portable loop (PD_NO_AVX512) give the same run" {
@@ -161,12 +168,7 @@ for name in a['frames']:
     run -0 agree rows-laws.h5 loop-laws.h5
     [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\  ]]
     # 1 and 2 threads bit for bit, and a restart
-    pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 --threads 1 model.h5 -o one.h5
-    pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 --threads 2 model.h5 -o two.h5
-    run -0 h5_same one.h5 two.h5 'history|threads'
-    pd-run -q "${RUN_OPTS[@]}" --steps 40 --every 20 --threads 2 model.h5 -o half.h5
-    pd-run -q --restart half.h5 --steps 40 --threads 2 -o rest.h5
-    run -0 h5_same two.h5 rest.h5 'history|threads|^/scene|^/series'
+    threads_and_restart model.h5
     # a meshed block: node radii of their own, so the rows flag the pairs
     # closer than 0.9 |xi| and the contact pass takes each pair's d_ij
     gmsh -v 0 -3 -format msh41 -o box.msh "$BATS_TEST_DIRNAME/fixtures/mesh/box.geo"
