@@ -13,7 +13,8 @@ void pd_cells_locate(const pd_cells *c, const double x[3], int64_t cell[3])
 {
     for (int d = 0; d < 3; d++) {
         double t = floor((x[d] - c->lo[d]) / c->size);
-        int64_t k = isfinite(t) ? (int64_t)fmax(0.0, fmin(t, (double)(c->dim[d] - 1))) : 0;
+        const double top = (double)(c->dim[d] - 1); /* clamped, without calls */
+        int64_t k = isfinite(t) ? (int64_t)(t < 0.0 ? 0.0 : t < top ? t : top) : 0;
         cell[d] = k;
     }
 }
@@ -69,9 +70,9 @@ pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], doub
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int64_t i = 0; i < n; i++)
         for (int d = 0; d < 3; d++)
-            if (isfinite(x[d][i]) && !(skip && skip[i])) {
-                lo[d] = fmin(lo[d], x[d][i]);
-                hi[d] = fmax(hi[d], x[d][i]);
+            if (isfinite(x[d][i]) && !(skip && skip[i])) { /* fmin, fmax inlined */
+                lo[d] = x[d][i] < lo[d] ? x[d][i] : lo[d];
+                hi[d] = x[d][i] > hi[d] ? x[d][i] : hi[d];
             }
     for (int d = 0; d < 3; d++)
         if (!(lo[d] <= hi[d]))

@@ -71,37 +71,56 @@ static pd_status contact_init(pd_sim *sim, void **state)
 
 /* The cells of a search and the positions in the cells' order (ys[d][e]
  * is y[d][c.index[e]]: a cell's particles are read one after another, not
- * from all over the arrays). */
+ * from all over the arrays); with a kernel that takes the contact of the
+ * pairs that started within `gap` (the stencil, the bond list's rows), the
+ * displacements too (us, in the same order): a pair that started at least
+ * `gap` apart comes within `reach` only when |u_i - u_j| >= gap - reach,
+ * so a candidate displaced less than that from i started within the gap,
+ * is the kernel's, and is left out before it is looked up (fragments that
+ * move as one). */
 typedef struct {
     pd_cells c;
     double *ys[3];
+    double *us[3];  /* NULL: no gap to prune by                  */
+    double prune2;  /* |u_i - u_j|^2 below this: the kernel's pair */
 } cell_search;
 
 static void search_free(cell_search *cs)
 {
     pd_cells_free(&cs->c);
-    for (int d = 0; d < 3; d++)
+    for (int d = 0; d < 3; d++) {
         free(cs->ys[d]);
+        free(cs->us[d]);
+    }
 }
 
-/* The cells of the particles but the lost (reach: the cell edge). */
-static pd_status search_build(const pd_sim *sim, double reach, cell_search *cs)
+/* The cells of the particles but the lost (reach: the cell edge); with a
+ * gap above the reach, the displacements to prune by. */
+static pd_status search_build(const pd_sim *sim, double reach, double gap, cell_search *cs)
 {
     memset(cs, 0, sizeof *cs);
     pd_status s = pd_cells_build_except(&cs->c, sim->n, sim->y, reach, sim->lost);
     if (s != PD_OK)
         return s;
     const int64_t m = cs->c.start[cs->c.dim[0] * cs->c.dim[1] * cs->c.dim[2]];
+    const int prune = gap > reach;
     for (int d = 0; d < 3; d++)
-        if ((cs->ys[d] = malloc((size_t)(m > 0 ? m : 1) * sizeof(double))) == NULL) {
+        if ((cs->ys[d] = malloc((size_t)(m > 0 ? m : 1) * sizeof(double))) == NULL ||
+            (prune && (cs->us[d] = malloc((size_t)(m > 0 ? m : 1) * sizeof(double))) == NULL)) {
             search_free(cs);
             return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
         }
-    double *const *y = sim->y;
+    /* (gap - reach)^2 less a margin far above any rounding of |u| */
+    cs->prune2 = prune ? (gap - reach) * (gap - reach) * (1.0 - 1e-9) : 0.0;
+    double *const *y = sim->y, *const *x = sim->p->x;
 #pragma omp parallel for schedule(static)
     for (int64_t e = 0; e < m; e++)
-        for (int d = 0; d < 3; d++)
-            cs->ys[d][e] = y[d][cs->c.index[e]];
+        for (int d = 0; d < 3; d++) {
+            const int32_t i = cs->c.index[e];
+            cs->ys[d][e] = y[d][i];
+            if (prune)
+                cs->us[d][e] = y[d][i] - x[d][i];
+        }
     return PD_OK;
 }
 
@@ -137,6 +156,9 @@ static int64_t candidates(const pd_sim *sim, const cell_search *cs, const cell_r
     const int64_t *lo = rows->lo, *hi = rows->hi;
     int64_t m = 0;
     int64_t near[256]; /* the entries of a stretch of a row within reach */
+    const double *us0 = cs->us[0], *us1 = cs->us[1], *us2 = cs->us[2], prune2 = cs->prune2;
+    double *const *x = sim->p->x;
+    const double ui[3] = {yi[0] - x[0][i], yi[1] - x[1][i], yi[2] - x[2][i]};
     for (int q = 0; q < rows->n; q++)
         for (int64_t e0 = lo[q]; e0 < hi[q]; e0 += 256) {
             const int64_t e1 = hi[q] - e0 > 256 ? e0 + 256 : hi[q];
@@ -147,7 +169,13 @@ static int64_t candidates(const pd_sim *sim, const cell_search *cs, const cell_r
                 nn += !(dx * dx + dy * dy + dz * dz > reach2);
             }
             for (int a = 0; a < nn; a++) {
-                const int32_t j = c->index[near[a]];
+                const int64_t e = near[a];
+                const int32_t j = c->index[e];
+                if (us0) { /* displaced as i is: the kernel's pair, not looked up */
+                    const double vx = ui[0] - us0[e], vy = ui[1] - us1[e], vz = ui[2] - us2[e];
+                    if (vx * vx + vy * vy + vz * vz < prune2)
+                        continue;
+                }
                 if (j == i || (grid && pd_grid_pair(grid, i, j)) ||
                     (hb && pd_half_find(hb, j < i ? j : i, j < i ? i : j) >= 0))
                     continue;
@@ -188,7 +216,7 @@ static pd_status list_room(contact_list *cl, int64_t total)
 static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
 {
     cell_search c;
-    pd_status s = search_build(sim, reach, &c);
+    pd_status s = search_build(sim, reach, 0.0, &c);
     if (s != PD_OK)
         return s;
     const int64_t n = sim->n;
@@ -253,7 +281,7 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
     int64_t *who = malloc((size_t)nm * sizeof(int64_t)), *toff = malloc((size_t)(nm + 1) * sizeof(int64_t));
     int32_t *tp = NULL;
     double *td = NULL;
-    pd_status s = who && toff ? search_build(sim, reach, &c)
+    pd_status s = who && toff ? search_build(sim, reach, gap, &c)
                               : pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
     if (s == PD_OK) {
         for (int64_t i = 0, k = 0; i < n; i++)
