@@ -245,9 +245,10 @@ static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
  * pair that started within the horizon: the list holds only pairs that
  * started at least `gap` apart (the shortest lattice distance the stencil
  * lacks; with the bond list's AVX-512 rows, which take the half bonds'
- * pairs, the shortest distance of a pair that is not one), and such a pair comes within `reach` only when |u_i| + |u_j| >=
- * gap - reach, so one of its ends (a "mover") has moved at least (gap -
- * reach)/2 from its site.  Only the movers search the cells; a pair of a
+ * pairs, the shortest distance of a pair that is not one), and such a
+ * pair comes within `reach` only when |u_i| + |u_j| >= gap - reach, so
+ * one of its ends (a "mover") has moved at least (gap - reach)/2 from its
+ * site.  Only the movers search the cells; a pair of a
  * mover i and another particle j goes into j's list too when j is not a
  * mover (in ascending i: the same order at any thread count).  No mover,
  * no pair: not even the cells are built.  The pairs are those of
