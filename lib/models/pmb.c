@@ -28,23 +28,16 @@
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "models/model.h"
 #include "stencil/grid.h"
 
 #define PMB_CHUNK 256 /* bonds per vector pass */
 
-/* The rows in AVX-512 (pmb_row512) are written for x86-64 with GCC or
- * clang and taken when the processor has AVX-512 (and PD_NO_AVX512 is not
- * set); any other build or processor walks pmb_row. */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(PD_NO_CLONES)
-#define PMB_AVX512 1
-#include <immintrin.h>
+/* The rows in AVX-512 (pmb_row512; PD_AVX512_KERNELS, state/sim.h) are
+ * taken where the processor has AVX-512 F, VL and DQ and PD_NO_AVX512 is
+ * not set; any other build or processor walks pmb_row. */
 #define PMB_TARGET_AVX512 __attribute__((target("avx512f,avx512vl,avx512dq")))
-#else
-#define PMB_AVX512 0
-#endif
 
 pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h)
 {
@@ -209,7 +202,7 @@ PD_VECTOR_CLONES static void pmb_block_failure_laws(pd_sim *sim, int64_t lo, int
         pmb_row(sim, i, PD_BONDS_FAILURE_LAWS, released);
 }
 
-#if PMB_AVX512
+#if PD_AVX512_KERNELS
 /* The bond list in AVX-512, 8 bonds of a row at a time.  The scalar-looking
  * list kernel above gathers each partner's position and s0 from four
  * arrays and scatters its force and new s0 into four more, one element at
@@ -512,7 +505,7 @@ void pd_half_contact_energy(const pd_sim *sim, double *e)
 /* Does this run take the AVX-512 rows?  Then h->pack is there. */
 static pd_status pmb_rows_init(pd_sim *sim)
 {
-#if PMB_AVX512
+#if PD_AVX512_KERNELS
     pd_half_bonds *h = &sim->half;
     if (h->pack || !__builtin_cpu_supports("avx512f") || !__builtin_cpu_supports("avx512vl") ||
         !__builtin_cpu_supports("avx512dq") || getenv("PD_NO_AVX512"))
@@ -553,7 +546,7 @@ static void pmb_blocks(pd_sim *sim, pd_bond_mode failure)
             int64_t lo = blk * h->block, hi = lo + h->block < sim->n ? lo + h->block : sim->n;
             if (failure)
                 h->released[blk] = 0;
-#if PMB_AVX512
+#if PD_AVX512_KERNELS
             if (h->pack) {
                 pmb_block512(sim, lo, hi, failure, &h->released[blk]);
                 continue;

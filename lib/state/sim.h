@@ -76,6 +76,17 @@ typedef enum {
 #define PD_VECTOR_CLONES
 #endif
 
+/* Kernels written in AVX-512 intrinsics (the stencil's tiles, lib/stencil/;
+ * the bond list's rows, lib/models/pmb.c) are built for x86-64 with GCC or
+ * clang and taken at run time where the processor has the instructions;
+ * any other build walks the portable loops alone. */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(PD_NO_CLONES)
+#define PD_AVX512_KERNELS 1
+#include <immintrin.h>
+#else
+#define PD_AVX512_KERNELS 0
+#endif
+
 /* The state of a run.  Every per-particle array has n entries in the
  * rows of p (local indices; p->id holds the global ids). */
 struct pd_sim;

@@ -662,7 +662,7 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
         return ok < 0 ? pd_fail(PD_ERR_NOMEM, "out of memory for the lattice bonds") : PD_OK;
     }
     pd_grid_sync(sim, G);
-#if PD_GRID_AVX512
+#if PD_AVX512_KERNELS
     G->tile = !lps && G->words == 1 && __builtin_cpu_supports("avx512f") && !getenv("PD_NO_AVX512");
 #endif
     if (G->status != PD_OK) {

@@ -106,7 +106,7 @@ static int offsets_of_rows(pd_grid *G, const pd_bonds *b)
             put_word(&bw, 1);                                                                 \
     }
 GRID_ROWS(rows_plain, , gather)
-#if PD_GRID_AVX512 /* x86-64 with GCC or clang: pext where the processor has it */
+#if PD_AVX512_KERNELS /* x86-64 with GCC or clang: pext where the processor has it */
 GRID_ROWS(rows_bmi2, __attribute__((target("bmi2,popcnt"))), _pext_u64)
 #endif
 
@@ -150,7 +150,7 @@ int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
         int64_t g0, g1;
         pd_thread_share(n, &g0, &g1);
         if (g0 < g1 && b->offset[g1] > b->offset[g0]) {
-#if PD_GRID_AVX512
+#if PD_AVX512_KERNELS
             if (__builtin_cpu_supports("bmi2") && __builtin_cpu_supports("popcnt"))
                 rows_bmi2(G, b, intact, g0, g1);
             else

@@ -19,16 +19,6 @@
 #include <omp.h>
 #endif
 
-/* The tile kernel of PMB is written for AVX-512 (x86-64, GCC or clang),
- * taken when the processor has it; any other build or processor walks the
- * segments alone. */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(PD_NO_CLONES)
-#define PD_GRID_AVX512 1
-#include <immintrin.h>
-#else
-#define PD_GRID_AVX512 0
-#endif
-
 #define GRID_NU_TOL 1e-9 /* nu of one offset equal to this, relatively    */
 #define GRID_CHUNK 256   /* particles per vector pass of a segment        */
 #define GRID_SAFE 16     /* shifts below this take the two-pass loop      */

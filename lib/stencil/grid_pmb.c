@@ -166,7 +166,7 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
     return 0;
 }
 
-#if PD_GRID_AVX512
+#if PD_AVX512_KERNELS
 /* The broken bonds of a tile's segment: its bonds recomputed one by one
  * (bit for bit the vector loop's) and those with s > min(s0_g, s0_j)
  * cleared and recorded.  Breaks are rare: the vector loop only counts
@@ -491,7 +491,7 @@ static int energy_buffers(pd_grid *G)
 
 int grid_tile_energies(const pd_sim *sim)
 {
-#if PD_GRID_AVX512
+#if PD_AVX512_KERNELS
     pd_grid *G = sim->grid;
     if (!G->tile || G->epoch != sim->half.epoch || !energy_buffers(G))
         return 0;
@@ -571,7 +571,7 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
     const int contact = G->cmask != NULL;
     grid_block_fn fn =
         grid_blocks[8 * energy + 4 * (failure != 0) + 2 * contact + (G->words == 1)];
-#if PD_GRID_AVX512
+#if PD_AVX512_KERNELS
     static const grid_block_fn tiles[8] = {grid_tile_000, grid_tile_010, grid_tile_100,
                                            grid_tile_110, grid_tile_001, grid_tile_011,
                                            grid_tile_101, grid_tile_111};
