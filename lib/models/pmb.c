@@ -649,8 +649,6 @@ static pd_status pmb_failure_force(pd_sim *sim, void *state)
     return PD_OK;
 }
 
-/* The bonds' energy, half of each bond to each end (directed bonds, each
- * row its own sum): e_i += sum_j 1/4 c s^2 |xi| nu_ij V_i V_j. */
 /* sum_j 1/4 c s^2 |xi| nu V_j over the intact bonds of family F of
  * particle i, branch-free (a broken bond times 0) so that it vectorizes. */
 PD_VECTOR_CLONES static double family_energy(const pd_family *F, const uint64_t *intact,
@@ -674,6 +672,8 @@ PD_VECTOR_CLONES static double family_energy(const pd_family *F, const uint64_t 
     return sum;
 }
 
+/* The bonds' energy, half of each bond to each end (directed bonds, each
+ * row its own sum): e_i += sum_j 1/4 c s^2 |xi| nu_ij V_i V_j. */
 static void pmb_energy_uniform(const pd_sim *sim, void *state, double *e)
 {
     (void)state;
