@@ -19,13 +19,29 @@ SHAREDIR   = $(PREFIX)/share/pd
 
 CC        ?= cc
 CFLAGS    ?= -O3 -g
+# Serial HDF5 by name: with Debian's libhdf5-openmpi-dev installed too, the
+# plain `hdf5` of pkg-config is the MPI one.
+HDF5_PC   := $(shell pkg-config --exists hdf5-serial 2>/dev/null && echo hdf5-serial || echo hdf5)
 PD_CFLAGS  = -std=c11 -D_POSIX_C_SOURCE=200809L -Wall -Wextra -fopenmp -fno-math-errno -Ilib \
-             $(shell pkg-config --cflags hdf5 gsl zlib 2>/dev/null)
-PD_LIBS    = $(shell pkg-config --libs hdf5 gsl zlib 2>/dev/null) -fopenmp -lm
+             $(shell pkg-config --cflags $(HDF5_PC) gsl zlib 2>/dev/null)
+PD_LIBS    = $(shell pkg-config --libs $(HDF5_PC) gsl zlib 2>/dev/null) -fopenmp -lm
+
+# The MPI build of pd-run (mpi/bin/pd-run, its objects under mpi/): with
+# Open MPI's mpicc and parallel HDF5 (Debian's libhdf5-openmpi-dev).  MPI=1
+# asks for it, MPI=0 leaves it out; by default it is built when both are
+# there.  The serial build never needs MPI.
+MPICC     ?= mpicc
+MPI_FOUND := $(shell command -v $(MPICC) >/dev/null 2>&1 && pkg-config --exists hdf5-openmpi 2>/dev/null && echo 1)
+MPI       ?= $(if $(MPI_FOUND),1,0)
+MPI_CFLAGS = -std=c11 -D_POSIX_C_SOURCE=200809L -Wall -Wextra -fopenmp -fno-math-errno -Ilib \
+             -DPD_MPI=1 $(shell pkg-config --cflags hdf5-openmpi gsl zlib 2>/dev/null)
+MPI_LIBS   = $(shell pkg-config --libs hdf5-openmpi gsl zlib 2>/dev/null) -fopenmp -lm
 
 ifeq ($(SANITIZE),1)
 PD_CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer
 PD_LIBS   += -fsanitize=address,undefined
+MPI_CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer
+MPI_LIBS   += -fsanitize=address,undefined
 # tests that cannot run with the sanitizers (valgrind) skip themselves
 export PD_SANITIZE = 1
 endif
@@ -40,10 +56,12 @@ LIB_OBJ    = $(LIB_SRC:.c=.o)
 BIN        = $(addprefix bin/,$(PROGRAMS))
 UNIT_SRC   = $(wildcard tests/unit/*.c)
 UNIT_BIN   = $(UNIT_SRC:tests/unit/%.c=bin/test-%)
+MPI_OBJ    = $(LIB_SRC:%.c=mpi/%.o)
+MPI_BIN    = $(if $(filter 1,$(MPI)),mpi/bin/pd-run)
 
 .PHONY: all check test layers unit bats deps demo bench fuzz install uninstall clean
 
-all: $(BIN) lib/libpd.a
+all: $(BIN) lib/libpd.a $(MPI_BIN)
 
 lib/%.o: lib/%.c $(LIB_HDR)
 	$(CC) $(PD_CFLAGS) $(CFLAGS) -c -o $@ $<
@@ -61,6 +79,20 @@ lib/stencil/grid_pmb.o lib/stencil/grid_energy.o lib/stencil/grid_lps.o: PD_CFLA
 lib/libpd.a: $(LIB_OBJ)
 	rm -f $@
 	ar rcs $@ $^
+
+mpi/lib/%.o: lib/%.c $(LIB_HDR)
+	@mkdir -p $(dir $@)
+	$(MPICC) $(MPI_CFLAGS) $(CFLAGS) -c -o $@ $<
+mpi/lib/models/pmb.o mpi/lib/effects/contact.o: MPI_CFLAGS += $(VEC_CFLAGS)
+mpi/lib/stencil/grid_pmb.o mpi/lib/stencil/grid_energy.o mpi/lib/stencil/grid_lps.o: MPI_CFLAGS += -fno-trapping-math
+
+mpi/libpd.a: $(MPI_OBJ)
+	rm -f $@
+	ar rcs $@ $^
+
+mpi/bin/pd-run: cmd/pd-run.c cmd/cli.h mpi/libpd.a $(LIB_HDR)
+	@mkdir -p mpi/bin
+	$(MPICC) $(MPI_CFLAGS) $(CFLAGS) -o $@ $< mpi/libpd.a $(MPI_LIBS)
 
 bin/%: cmd/%.c cmd/cli.h lib/libpd.a $(LIB_HDR)
 	@mkdir -p bin
@@ -118,8 +150,8 @@ fuzz:
 	@mkdir -p bin tests/fuzz/corpus
 	$(FUZZ_CC) -std=c11 -D_POSIX_C_SOURCE=200809L -g -O1 -Wno-unknown-pragmas \
 	    -fsanitize=fuzzer,address,undefined -fno-math-errno -Ilib \
-	    $(shell pkg-config --cflags hdf5 gsl) -o bin/fuzz-readers tests/fuzz/fuzz_readers.c \
-	    $(LIB_SRC) $(shell pkg-config --libs hdf5 gsl) -lm
+	    $(shell pkg-config --cflags $(HDF5_PC) gsl) -o bin/fuzz-readers tests/fuzz/fuzz_readers.c \
+	    $(LIB_SRC) $(shell pkg-config --libs $(HDF5_PC) gsl) -lm
 	bin/fuzz-readers -max_total_time=$(FUZZ_SECONDS) -timeout=10 -len_control=0 -max_len=512 \
 	    tests/fuzz/corpus
 
@@ -128,6 +160,7 @@ install: all
 	    $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(MANDIR)/man5 $(DESTDIR)$(MANDIR)/man7 \
 	    $(DESTDIR)$(SHAREDIR)/python
 	install -m 755 $(BIN) $(DESTDIR)$(BINDIR)
+	$(if $(MPI_BIN),install -m 755 mpi/bin/pd-run $(DESTDIR)$(BINDIR)/pd-run)
 	install -m 644 lib/libpd.a $(DESTDIR)$(LIBDIR)
 	install -m 644 lib/pd.h $(DESTDIR)$(INCDIR)
 	install -m 644 man/man1/*.1 $(DESTDIR)$(MANDIR)/man1
@@ -135,7 +168,7 @@ install: all
 	install -m 644 man/man7/*.7 $(DESTDIR)$(MANDIR)/man7
 	install -m 644 share/pdh5.py share/pdcost.py $(DESTDIR)$(SHAREDIR)/python
 	install -m 644 share/cost.gp $(DESTDIR)$(SHAREDIR)
-	sed -e 's|@PREFIX@|$(PREFIX)|' share/pd.pc.in > $(DESTDIR)$(PCDIR)/pd.pc
+	sed -e 's|@PREFIX@|$(PREFIX)|' -e 's|@HDF5@|$(HDF5_PC)|' share/pd.pc.in > $(DESTDIR)$(PCDIR)/pd.pc
 
 uninstall:
 	rm -f $(addprefix $(DESTDIR)$(BINDIR)/,$(PROGRAMS))
@@ -147,4 +180,4 @@ uninstall:
 	-rmdir $(DESTDIR)$(SHAREDIR)/python $(DESTDIR)$(SHAREDIR) 2>/dev/null
 
 clean:
-	rm -rf bin lib/*/*.o lib/libpd.a
+	rm -rf bin lib/*/*.o lib/libpd.a mpi

@@ -913,11 +913,35 @@ static void log_constants(const pd_particles *p, const pd_scene *sc, const struc
 }
 
 /* Free what main holds. */
+/* On several MPI ranks the ranks > 0 print nothing but their own failure
+ * that no lower rank shares (stderr is /dev/null until then; real_stderr
+ * is the file descriptor of theirs). */
+static int real_stderr = -1;
+static int failure_told; /* 1: a lower rank tells the failure */
+
+/* A failure of any rank is every rank's (collective on several ranks). */
+static pd_status agreed(pd_status s)
+{
+    if (pd_comm_size() == 1 || !pd_comm_or(s != PD_OK))
+        return s;
+    const int64_t me = pd_comm_rank(), first = pd_comm_min(s != PD_OK ? me : INT64_MAX);
+    if (first != me) {
+        failure_told = 1;
+        return s != PD_OK ? s : pd_fail(PD_ERR_IO, "MPI rank %lld failed", (long long)first);
+    }
+    if (me > 0 && real_stderr >= 0) /* its own failure: its own stderr again */
+        dup2(real_stderr, STDERR_FILENO);
+    return s;
+}
+
 struct held {
     pd_file *in, *out;
     pd_particles *p;
     pd_bonds *b;
-    pd_sim *sim;
+    pd_sim *sim;   /* the whole body's run (on several MPI ranks, rank 0's
+                      frames and status lines come from it)            */
+    pd_sim *piece; /* NULL, or on several MPI ranks this rank's piece of
+                      it, which steps (pd_sim_piece)                   */
     pd_sets *sets;
     pd_restart r;
     double *v0[3];
@@ -933,6 +957,7 @@ static void release(struct held *h)
 {
     if (h->out != h->in)
         pd_file_close(h->in);
+    pd_sim_free(h->piece);
     pd_sim_free(h->sim);
     pd_bonds_free(h->b);
     pd_sets_free(h->sets);
@@ -983,7 +1008,11 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
             (long long)p->n, (long long)(h->b->count / 2), pd_sim_effects(sim), sc->dt,
             sc->dt_stable, (long long)nsteps, o->restart ? " more" : "");
     const char *wait = getenv("OMP_WAIT_POLICY"), *spin = getenv("GOMP_SPINCOUNT");
-    fprintf(stderr, PROG ": %d thread%s%s%s%s%s\n", sc->threads, sc->threads > 1 ? "s" : "",
+    if (pd_comm_mpi()) /* the MPI build: ranks x threads */
+        fprintf(stderr, PROG ": %d MPI rank%s x ", pd_comm_size(), pd_comm_size() > 1 ? "s" : "");
+    else
+        fprintf(stderr, PROG ": ");
+    fprintf(stderr, "%d thread%s%s%s%s%s\n", sc->threads, sc->threads > 1 ? "s" : "",
             wait ? ", OMP_WAIT_POLICY=" : "", wait ? wait : "", spin ? ", GOMP_SPINCOUNT=" : "",
             spin ? spin : "");
     if (pd_sim_stencil(sim) > 0)
@@ -1057,11 +1086,14 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
 static pd_status start_energy(struct held *h)
 {
     double t0 = pd_wtime();
-    pd_status s = pd_sim_setup(h->sim);
+    pd_sim *sim = h->piece ? h->piece : h->sim;
+    pd_status s = pd_sim_setup(sim);
+    if (s == PD_OK)
+        s = pd_sim_gather(sim, h->sim);
     h->t_setup = pd_wtime() - t0; /* the run's wall clock, as before */
     pd_scene_report *r = &h->report;
     if (s == PD_OK && r->nwarnings < PD_SCENE_WARNINGS &&
-        pd_sim_start_penalty(h->sim, r->warning[r->nwarnings], sizeof r->warning[0]))
+        pd_sim_start_penalty(sim, r->warning[r->nwarnings], sizeof r->warning[0]))
         r->nwarnings++;
     return s;
 }
@@ -1106,7 +1138,10 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_sim_new(h->p, h->b, sc, &h->sim);
     if (s == PD_OK && restart)
         s = pd_sim_restore(h->sim, *first, &h->r, h->v0, h->bits0);
-    else if (s == PD_OK) /* step 0's forces, and the check of its energy */
+    if (s == PD_OK && pd_comm_size() > 1) /* this rank's piece of the body */
+        s = pd_sim_piece(h->sim, &h->piece);
+    s = agreed(s);
+    if (s == PD_OK && !restart) /* step 0's forces, and the check of its energy */
         s = start_energy(h);
     if (s == PD_OK && o->strict && h->report.nwarnings > 0)
         s = pd_fail(PD_ERR_INVALID, "%s (--strict)", h->report.warning[0]);
@@ -1114,12 +1149,13 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_fail(PD_ERR_NOMEM, "out of memory for the scene's text");
     if (s == PD_OK && restart)
         h->out = h->in; /* the same file goes on */
-    else if (s == PD_OK)
+    else if (s == PD_OK && pd_comm_rank() == 0) /* rank 0 writes the run file */
         s = pd_file_create(o->output, &h->out);
-    if (s == PD_OK)
+    if (s == PD_OK && pd_comm_rank() == 0)
         s = pd_run_file_start(h->out, restart, h->in, h->p, h->b, h->sets, sc,
                               pd_sim_effects(h->sim), h->cmdline ? h->cmdline : PROG,
                               h->text, *first);
+    s = agreed(s);
     if (!restart) {
         pd_file_close(h->in);
         h->in = NULL;
@@ -1140,26 +1176,35 @@ static int start(struct options *o, struct held *h, int64_t *first)
 static pd_status run_steps(const struct options *o, struct held *h, int64_t first, double *t_output)
 {
     const pd_scene *sc = &o->spec.sc;
-    pd_sim *sim = h->sim;
+    pd_sim *sim = h->sim, *stepper = h->piece ? h->piece : h->sim;
+    const int root = pd_comm_rank() == 0;
     const int64_t nsteps = sc->steps - first;
     const int64_t status_every = status_interval(o, nsteps);
-    const int tty = isatty(STDERR_FILENO) && !o->quiet;
+    const int tty = isatty(STDERR_FILENO) && !o->quiet && root;
     double t_start = pd_wtime(), t_shown = 0;
     pd_status s = PD_OK;
-    if (!o->restart && pd_frame_at(sc, 0)) /* pd_sim_setup came in start() */
+    if (!o->restart && pd_frame_at(sc, 0) && root) /* pd_sim_setup came in start() */
         s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, NULL);
-    else if (!o->restart) /* the series' row of step 0 */
+    else if (!o->restart && root) /* the series' row of step 0 */
         s = timed_sample(h->out, sim, t_output, NULL);
+    s = agreed(s);
     int64_t lost = pd_sim_lost(sim);
     for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
         const int status = ((n - first) % status_every == 0 || n == sc->steps) && !o->quiet;
-        const int row = pd_run_file_sample_due(h->out, n);
-        if (status || row || pd_frame_at(sc, n)) /* the bond pass counts the energies */
-            pd_sim_energy_next(sim);
+        const int row = root && pd_run_file_sample_due(h->out, n); /* rank 0's file */
+        int output = status || row || pd_frame_at(sc, n);
+        if (h->piece) /* the run file is rank 0's: it says when */
+            output = pd_comm_or(root && output);
+        if (output) /* the bond pass counts the energies */
+            pd_sim_energy_next(stepper);
         pd_relax_info relaxed;
-        s = sc->relax ? pd_sim_relax(sim, &relaxed) : pd_sim_step(sim);
+        s = sc->relax ? pd_sim_relax(sim, &relaxed) : pd_sim_step(stepper);
+        if (s == PD_OK && output && h->piece) /* the pieces' state to rank 0's run */
+            s = agreed(pd_sim_gather(stepper, sim));
         if (s != PD_OK)
             break;
+        if (!output && h->piece)
+            continue;
         h->iterations += sc->relax ? relaxed.iterations : 0;
         if (sc->relax && status)
             fprintf(stderr,
@@ -1180,6 +1225,10 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
          * energies instead of another pass over the bonds */
         pd_energy e;
         int known = 0;
+        if (!root) { /* rank 0 writes, and says how the others go on */
+            s = agreed(PD_OK);
+            continue;
+        }
         if (pd_frame_at(sc, n)) { /* with the series' row of the step */
             s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, &e);
             known = s == PD_OK;
@@ -1195,6 +1244,8 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
         if (status && known) /* with the alarm's step too */
             status_line(sim, sc->steps, tty, &e, s == PD_OK);
         *t_output += pd_wtime() - t0;
+        if (h->piece)
+            s = agreed(s);
         if (tty) {
             double now = pd_wtime();
             if (now - t_shown > 0.2 || n == sc->steps) {
@@ -1222,20 +1273,57 @@ static pd_status finish(struct held *h, pd_status s)
     return s;
 }
 
+static int run_main(int argc, char **argv);
+
+/* The threads of a rank by default: the cores shared among the ranks of
+ * this node (Open MPI names their count). */
+static void rank_threads(const struct options *o)
+{
+    const char *local = getenv("OMPI_COMM_WORLD_LOCAL_SIZE");
+    int64_t k;
+    if (o->spec.sc.threads > 0 || getenv("OMP_NUM_THREADS") || !local ||
+        !pd_parse_int64(local, &k) || k <= 1)
+        return;
+    const int cores = omp_get_num_procs();
+    omp_set_num_threads(cores / k > 1 ? (int)(cores / k) : 1);
+}
+
 int main(int argc, char **argv)
 {
     pd_h5_debug(0); /* before any file is opened (a --restart reads its scene) */
     settle_threads(argv);
+    if (pd_comm_init(&argc, &argv) != PD_OK) {
+        fail();
+        return 1;
+    }
+    if (pd_comm_rank() > 0) { /* rank 0 speaks for the run */
+        real_stderr = dup(STDERR_FILENO);
+        if (freopen("/dev/null", "w", stderr) == NULL)
+            return 1;
+    }
+    int code = run_main(argc, argv);
+    pd_comm_finalize();
+    return code;
+}
+
+static int run_main(int argc, char **argv)
+{
     struct held h;
     memset(&h, 0, sizeof h);
     struct options o;
     h.cmdline = pd_join_argv(argc, argv);
     h.opts = &o;
     int rc = options(argc, argv, &o);
+    if (rc == 0 && pd_comm_size() > 1 && (o.restart || strcmp(o.input, "-") == 0))
+        rc = usage_error(o.restart ? "on several MPI ranks --restart is not yet carried; go on "
+                                     "from the run on one rank"
+                                   : "on several MPI ranks the model must be a file, not",
+                         o.restart ? NULL : "'-'");
     if (rc) {
         release(&h);
         return rc;
     }
+    rank_threads(&o);
     pd_h5_debug(o.debug);
     remove_temps_on_signal();
     if (o.spec.sc.threads > 0)
@@ -1247,6 +1335,8 @@ int main(int argc, char **argv)
         return rc;
     }
     const int64_t nsteps = o.spec.sc.steps - first;
+    if (pd_comm_rank() > 0)
+        o.quiet = 1;
     if (!o.quiet)
         log_scene(&o, &h, first, nsteps);
     double t_output = 0, t0 = pd_wtime();
@@ -1264,8 +1354,8 @@ int main(int argc, char **argv)
                 (long long)nsteps, wall,
                 wall > 0 ? (double)h.b->count * (double)nsteps / wall : 0.0,
                 (long long)pd_sim_contact_builds(h.sim));
-    if (s == PD_OK && o.timing)
+    if (s == PD_OK && o.timing && !o.quiet)
         print_timing(h.sim, wall, t_output);
     release(&h);
-    return s == PD_OK ? 0 : fail();
+    return s == PD_OK ? 0 : failure_told ? 1 : fail();
 }

@@ -641,6 +641,48 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
                      pd_sim **out);
 void pd_sim_free(pd_sim *sim);
 
+/* ------------------------------------------------------- ranks (MPI) */
+
+/* A run spread over MPI ranks (pd-run built with `make MPI=1`, started by
+ * mpirun).  The body's blocks (the runs of rows its bond kernel cuts the
+ * body into, each writing only to itself and the next: a rule of the body)
+ * are shared out among the ranks, whole and in order.  Each rank steps a
+ * piece: its own blocks, and as ghosts the block above them and the one
+ * or two below (an even count of blocks below, so that each block keeps
+ * its phase), whose bonds it walks again rather than receiving their
+ * forces.  Every particle's force is then summed in the one rank's order:
+ * the state is the same, bit for bit, on any number of ranks.  Before its
+ * forces a step brings the ghosts' positions and s0 from their owners;
+ * sums over the body (energies, the indenter's force, broken bonds'
+ * energy) are taken in the one rank's order too.
+ *
+ * Without MPI there is one rank and these are the one-rank answers. */
+int pd_comm_mpi(void);     /* 1: built with MPI                          */
+pd_status pd_comm_init(int *argc, char ***argv); /* MPI_Init_thread, funneled */
+void pd_comm_finalize(void);
+int pd_comm_rank(void);
+int pd_comm_size(void);
+/* Abort every rank (MPI_Abort) when there are several; else nothing. */
+void pd_comm_abort(int code);
+/* The logical or, and the smallest value, over the ranks (collective). */
+int pd_comm_or(int v);
+int64_t pd_comm_min(int64_t v);
+
+/* This rank's piece of the run `whole` (a pd_sim_new of the whole body, not
+ * yet set up), for pd_comm_size() ranks: *piece is a run of its own (its
+ * own particles and bonds, freed with it), stepped with pd_sim_setup and
+ * pd_sim_step by every rank together.  Bodies the rank count cannot share
+ * (fewer than two blocks a rank), and the effects pieces do not yet carry
+ * (named in the message), are refused with PD_ERR_INVALID. */
+pd_status pd_sim_piece(const pd_sim *whole, pd_sim **piece);
+/* The pieces' state into `whole` on rank 0 (collective: every rank calls
+ * it; `whole` is read on rank 0 only): positions, velocities, forces, s0,
+ * bond states, lost particles and the run's sums, so that rank 0 writes
+ * frames, series and status lines from `whole` as from a run of its own. */
+pd_status pd_sim_gather(const pd_sim *piece, pd_sim *whole);
+/* The rows [*lo, *hi) of the whole body that this piece owns. */
+void pd_sim_owned(const pd_sim *piece, int64_t *lo, int64_t *hi);
+
 /* PMB micromodulus from the bulk modulus: c = 18 K / (pi delta^4) (seed 000
  * eq. 6, 3-D). */
 double pd_pmb_c_from_bulk(double bulk_modulus, double horizon);

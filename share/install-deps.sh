@@ -6,7 +6,7 @@
 set -e
 pkgs="build-essential pkg-config valgrind libhdf5-dev libgsl-dev hdf5-tools bats bats-assert bats-support
 python3 python3-numpy python3-h5py python3-meshio lammps openmpi-bin gnuplot-nox groff-base time
-zlib1g-dev paraview python3-paraview xvfb xauth gmsh"
+zlib1g-dev paraview python3-paraview xvfb xauth gmsh libopenmpi-dev libhdf5-openmpi-dev"
 missing=""
 for p in $pkgs "$@"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" ||

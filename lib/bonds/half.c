@@ -119,6 +119,22 @@ pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
     return PD_OK;
 }
 
+pd_status pd_half_set_block(pd_half_bonds *h, int64_t block)
+{
+    int64_t span = 0;
+    for (int64_t i = 0; i < h->n; i++)
+        if (h->offset[i + 1] > h->offset[i])
+            span = h->neighbor[h->offset[i + 1] - 1] - i > span ? h->neighbor[h->offset[i + 1] - 1] - i : span;
+    if (block < span || block < 1)
+        return pd_fail(PD_ERR_INVALID, "blocks of %lld rows are shorter than a bond's span, %lld",
+                       (long long)block, (long long)span);
+    h->block = block;
+    h->nblocks = (h->n + block - 1) / block;
+    free(h->released);
+    h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
+    return h->released ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");
+}
+
 void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact)
 {
     h->epoch++;

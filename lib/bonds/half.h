@@ -48,6 +48,10 @@ typedef struct {
  * c V nu that its bond list walks. */
 pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h);
 void pd_half_free(pd_half_bonds *h);
+/* Blocks of `block` rows (a piece of a body cut as the whole body is,
+ * lib/run/piece.c), in place of pd_half_build's own: at least every
+ * bond's span j - i. */
+pd_status pd_half_set_block(pd_half_bonds *h, int64_t block);
 /* The half bonds' bits from directed state bits (the file's), and back. */
 void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact);
 void pd_half_expand(const pd_half_bonds *h, const pd_bonds *b, uint64_t *intact);

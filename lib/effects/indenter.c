@@ -27,6 +27,34 @@ void pd_sphere_push(pd_sim *sim, const double c[3], double R, double K, double F
     double *const *y = sim->y;
     const int64_t n = sim->n, nchunks = (n + PD_SUM_CHUNK - 1) / PD_SUM_CHUNK;
     F[0] = F[1] = F[2] = 0;
+    if (sim->piece) { /* a piece of the body: its own rows' V_i f_i, summed over the ranks */
+        double *w[3] = {sim->piece->sum3, sim->piece->sum3 + n, sim->piece->sum3 + 2 * n};
+        const int64_t own_lo = sim->piece->own_lo, own_hi = sim->piece->own_hi;
+#pragma omp parallel for schedule(static)
+        for (int64_t i = 0; i < n; i++) {
+            w[0][i] = w[1][i] = w[2][i] = 0;
+            const double dx = y[0][i] - c[0], dy = y[1][i] - c[1], dz = y[2][i] - c[2];
+            const double r2 = dx * dx + dy * dy + dz * dz;
+            if (r2 >= R * R || (lost && lost[i]))
+                continue;
+            const double r = sqrt(r2);
+            const double dr = r - R;
+            if (dr >= 0.0 || r <= 0.0)
+                continue;
+            const double fmag = K * dr * dr;
+            const double f0 = dx * fmag / r, f1 = dy * fmag / r, f2 = dz * fmag / r;
+            sim->f[0][i] += f0;
+            sim->f[1][i] += f1;
+            sim->f[2][i] += f2;
+            if (i >= own_lo && i < own_hi) {
+                w[0][i] = V[i] * f0;
+                w[1][i] = V[i] * f1;
+                w[2][i] = V[i] * f2;
+            }
+        }
+        pd_sim_sum(sim, (const double *const *)w, 3, F);
+        return;
+    }
     for (int64_t g = 0; g < nchunks; g += 64) {
         const int64_t m = nchunks - g < 64 ? nchunks - g : 64;
         double part[64][3];

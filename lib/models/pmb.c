@@ -609,8 +609,7 @@ static void pmb_kernel(pd_sim *sim, pd_bond_mode failure)
         for (int64_t i = 0; i < sim->n; i++) /* no intact bond: +inf (DBL_MAX, as LAMMPS) */
             if (sim->s0_new[i] == -INFINITY)
                 sim->s0_new[i] = DBL_MAX;
-    for (int64_t blk = 0; blk < h->nblocks; blk++) /* in block order: any thread count */
-        sim->released += h->released[blk];
+    pd_sim_add_released(sim, h->released, h->nblocks); /* in block order: any thread count */
     tf += pd_wtime() - t0;
     sim->timers[PD_T_FAILURE] += tf;
     sim->timers[PD_T_BONDS] -= tf;

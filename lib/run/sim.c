@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
 #include "effects/effect.h"
 #include "models/model.h"
 #include "stencil/grid.h"
@@ -113,6 +114,12 @@ static pd_status own_lists(pd_sim *sim)
 
 pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s, pd_sim **out)
 {
+    return pd_sim_new_cut(p, b, s, NULL, out);
+}
+
+pd_status pd_sim_new_cut(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
+                         pd_piece *piece, pd_sim **out)
+{
     if (!(s->dt > 0) || !isfinite(s->dt))
         return pd_fail(PD_ERR_INVALID, "time step must be positive");
     pd_sim *sim = calloc(1, sizeof *sim);
@@ -121,6 +128,7 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
     sim->p = p;
     sim->b = b;
     sim->sc = *s;
+    sim->piece = piece; /* the grid and the half bonds are cut as it says */
     sim->n = p->n;
     size_t n = (size_t)p->n;
     int ok = 1;
@@ -155,6 +163,8 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
         st = own_lists(sim);
     if (st == PD_OK)
         st = pd_half_build(sim->b, &sim->half);
+    if (st == PD_OK && piece && !piece->grid)
+        st = pd_half_set_block(&sim->half, piece->half_block);
     if (st == PD_OK)
         st = no_failure_rows(sim);
     if (st == PD_OK)
@@ -165,9 +175,13 @@ pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s
         st = own_lists(sim);
         if (st == PD_OK)
             st = pd_half_build(sim->b, &sim->half);
+        if (st == PD_OK && piece && !piece->grid)
+            st = pd_half_set_block(&sim->half, piece->half_block);
     }
+    if (st == PD_OK && piece && piece->grid != (sim->grid != NULL))
+        st = pd_fail(PD_ERR_INVALID, "a piece of the body is not walked as the whole body is");
     if (st != PD_OK) {
-        pd_sim_free(sim);
+        pd_sim_free(sim); /* the piece is the caller's still */
         return st;
     }
     if (s->has_failure)
@@ -220,6 +234,8 @@ void pd_sim_free(pd_sim *sim)
     free(sim->held);
     if (sim->relax_free)
         sim->relax_free(sim->relax);
+    if (sim->piece_owned)
+        pd_piece_free(sim->piece);
     free(sim);
 }
 
@@ -391,18 +407,41 @@ static pd_status take_lost(pd_sim *sim)
     double ratio;
     if (sim->lost == NULL && (sim->lost = calloc((size_t)sim->n, 1)) == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for lost particles");
-    for (int64_t i = 0; i < sim->n; i++) {
-        if (sim->lost[i] || !outside(sim, i))
-            continue;
-        if (pd_energy_runaway(sim, &e, &ratio))
+    const pd_piece *pc = sim->piece;
+    const int64_t own_lo = pc ? pc->own_lo : 0, own_hi = pc ? pc->own_hi : sim->n;
+    if (pd_energy_runaway(sim, &e, &ratio)) { /* the first particle away names it */
+        int64_t first = INT64_MAX, id = INT64_MAX;
+        for (int64_t i = own_lo; i < own_hi && first == INT64_MAX; i++)
+            if (!sim->lost[i] && outside(sim, i))
+                first = i + (pc ? pc->first : 0);
+        if (pc) {
+            first = pd_comm_min(first);
+            id = pd_comm_min(first - pc->first >= own_lo && first - pc->first < own_hi
+                                 ? sim->p->id[first - pc->first]
+                                 : INT64_MAX);
+        } else if (first < INT64_MAX)
+            id = sim->p->id[first];
+        if (first < INT64_MAX)
             return pd_fail(PD_ERR_UNSTABLE,
                            "particle %lld (id %lld) flew off at step %lld while the kinetic "
                            "energy is %.3g times the energy put in: the run is unstable; the "
                            "time step may be too large for the bonds or the contact stiffness",
-                           (long long)i, (long long)sim->p->id[i], (long long)sim->step, ratio);
+                           (long long)first, (long long)id, (long long)sim->step, ratio);
+    }
+    /* the kinetic energy each takes away, in row order (a piece: its own
+     * rows'; the ranks' then in rank order, the whole body's) */
+    double *ke = pc ? pc->sum3 : NULL;
+    int64_t nke = 0;
+    for (int64_t i = 0; i < sim->n; i++) {
+        if (sim->lost[i] || !outside(sim, i))
+            continue;
         const double *v[3] = {sim->v[0], sim->v[1], sim->v[2]};
-        sim->lost_energy += 0.5 * sim->p->density[i] * sim->p->volume[i] *
-                            (v[0][i] * v[0][i] + v[1][i] * v[1][i] + v[2][i] * v[2][i]);
+        const double k = 0.5 * sim->p->density[i] * sim->p->volume[i] *
+                         (v[0][i] * v[0][i] + v[1][i] * v[1][i] + v[2][i] * v[2][i]);
+        if (pc == NULL)
+            sim->lost_energy += k;
+        else if (i >= own_lo && i < own_hi)
+            ke[nke++] = k;
         for (int d = 0; d < 3; d++)
             sim->v[d][i] = sim->f[d][i] = 0;
         pd_half_break_all(&sim->half, sim->b, i);
@@ -410,6 +449,8 @@ static pd_status take_lost(pd_sim *sim)
         sim->lost[i] = 1;
         sim->nlost++;
     }
+    if (pc)
+        return pd_piece_add_in_order(sim, ke, nke, &sim->lost_energy);
     return PD_OK;
 }
 
@@ -453,6 +494,22 @@ static int half_kick(pd_sim *sim)
 /* The numerical guard: name the first particle whose state is not finite. */
 static pd_status not_finite(const pd_sim *sim)
 {
+    const pd_piece *pc = sim->piece;
+    if (pc) { /* the first over the ranks, named by its whole body's row */
+        int64_t mine = INT64_MAX, id = INT64_MAX;
+        for (int64_t i = pc->own_lo; i < pc->own_hi && mine == INT64_MAX; i++)
+            for (int d = 0; d < 3; d++)
+                if (!isfinite(sim->f[d][i]) || !isfinite(sim->y[d][i]) || !isfinite(sim->v[d][i]))
+                    mine = i;
+        if (mine < INT64_MAX)
+            id = sim->p->id[mine], mine += pc->first;
+        const int64_t first = pd_comm_min(mine);
+        id = pd_comm_min(mine == first ? id : INT64_MAX);
+        return pd_fail(PD_ERR_UNSTABLE,
+                       "the state of particle %lld (id %lld) is not finite at step %lld: the "
+                       "time step may be too large for the bonds or the contact stiffness",
+                       (long long)first, (long long)id, (long long)sim->step);
+    }
     for (int64_t i = 0; i < sim->n; i++) {
         const char *what = NULL;
         for (int d = 0; d < 3 && what == NULL; d++)
@@ -555,7 +612,12 @@ pd_status pd_sim_step(pd_sim *sim)
     sim->time = (double)sim->step * dt;
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
     pd_status s = pd_sim_constrain(sim, PD_PHASE_DRIFT);
-    if (s == PD_OK && away) {
+    int gone = away;
+    if (sim->piece && s == PD_OK) { /* the ghosts' positions and s0 from their owners */
+        s = pd_piece_halo(sim);
+        gone = pd_comm_or(away);
+    }
+    if (s == PD_OK && gone) {
         double tl = pd_wtime(); /* breaking the lost particles' bonds */
         s = take_lost(sim);
         sim->timers[PD_T_FAILURE] += pd_wtime() - tl;
@@ -566,7 +628,11 @@ pd_status pd_sim_step(pd_sim *sim)
     if (s != PD_OK)
         return s;
     t0 = pd_wtime();
+    if (sim->piece) /* the ghosts' forces lack bonds: they stay at rest */
+        pd_piece_ghosts_rest(sim);
     int bad = half_kick(sim);
+    if (sim->piece)
+        bad = pd_comm_or(bad);
     for (int k = 0; k < sim->neffects && s == PD_OK; k++)
         if (sim->effects[k]->kick)
             s = sim->effects[k]->kick(sim, sim->state[k], 1);
@@ -610,7 +676,8 @@ double pd_sim_kinetic(const pd_sim *sim)
     if (buf == NULL)
         return NAN;
     kinetic_each(sim, buf);
-    double e = pd_sum_fixed(buf, sim->n);
+    double e;
+    pd_sim_sum(sim, (const double *const *)&buf, 1, &e);
     free(buf);
     return e;
 }
@@ -622,7 +689,7 @@ pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density)
     if (buf == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the energies");
     kinetic_each(sim, buf);
-    e->kinetic = pd_sum_fixed(buf, sim->n);
+    pd_sim_sum(sim, (const double *const *)&buf, 1, &e->kinetic);
     if (density)
         memset(density, 0, (size_t)sim->n * sizeof(double));
     for (int k = 0; k < sim->neffects; k++) {
@@ -631,7 +698,8 @@ pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density)
             continue;
         memset(buf, 0, (size_t)sim->n * sizeof(double));
         ef->energy(sim, sim->state[k], buf);
-        double sum = pd_sum_fixed(buf, sim->n);
+        double sum;
+        pd_sim_sum(sim, (const double *const *)&buf, 1, &sum);
         if (ef->kind == PD_ENERGY_ELASTIC) {
             e->elastic += sum;
             if (density)

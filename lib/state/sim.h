@@ -87,6 +87,38 @@ typedef enum {
 #define PD_AVX512_KERNELS 0
 #endif
 
+/* A run's piece of a body spread over ranks (lib/run/piece.c, pd.h's
+ * pd_sim_piece): which of its rows it owns, where they sit in the whole
+ * body, and its halo.  Rows [0, own_lo) are ghosts owned by the rank
+ * below, [own_hi, n) by the rank above. */
+typedef struct pd_piece {
+    int rank, ranks;
+    int64_t n_whole;        /* rows of the whole body                       */
+    int64_t first;          /* the whole body's row of local row 0          */
+    int64_t own_lo, own_hi; /* local rows owned                             */
+    int64_t blk0;           /* the whole body's block of local block 0 (even) */
+    int64_t own_blk_lo, own_blk_hi; /* local blocks owned                   */
+    int64_t *rows;          /* ranks: rows each rank owns                    */
+    int64_t *blocks;        /* ranks: blocks each rank owns                  */
+    int64_t send_down;      /* rows [own_lo, own_lo + send_down) are the
+                               ghosts of the rank below                      */
+    int64_t send_up;        /* rows [own_hi - send_up, own_hi), those of the
+                               rank above                                    */
+    double *buf;            /* the halo's buffers, 4 doubles a row           */
+    double *sum3;           /* 3 n scratch doubles (pd_sphere_push's sums)   */
+    /* how the piece's kernel is cut, as the whole body's (pd_sim_new) */
+    int grid;               /* 1: the lattice stencil, 0: the bond list     */
+    int64_t half_block;     /* the bond list's rows per block               */
+    int axis[3];            /* the stencil's axes (inner, mid, outer)       */
+    double origin[3];       /* its lattice's origin, m                      */
+    const struct pd_grid *table; /* the whole body's stencil, whose offsets'
+                               lengths and partial volumes the piece's takes
+                               (each the first bond's of its offset: the
+                               whole body's first, not the piece's)          */
+    pd_particles *p;        /* the piece's particles and bonds (owned)      */
+    pd_bonds *b;
+} pd_piece;
+
 /* The state of a run.  Every per-particle array has n entries in the
  * rows of p (local indices; p->id holds the global ids). */
 struct pd_sim;
@@ -173,6 +205,9 @@ struct pd_sim {
                            relax.c), NULL until its first load step      */
     void (*relax_free)(struct pd_relax *r); /* and what frees them       */
     pd_relax_info relaxed;  /* what the last load step took              */
+    pd_piece *piece;    /* NULL: the whole body on one rank; else this
+                           rank's piece of it (lib/run/piece.c)          */
+    int piece_owned;    /* 1: freed with the run                         */
 };
 static inline int pd_sim_may_break(const struct pd_sim *sim, int64_t i, int64_t j)
 {
@@ -189,6 +224,26 @@ pd_status pd_sim_constrain(pd_sim *sim, int phase);
  * at the current time, m (as lib/effects/indenter.c places it; 0 without
  * one). */
 void pd_sim_reactions(const pd_sim *sim, double *const r[3]);
+/* lib/state/state.c: the energy of the bonds broken in a step, per block
+ * of the kernel (nblocks, in block order), added to sim->released in the
+ * whole body's block order (over the ranks, a piece's own blocks). */
+void pd_sim_add_released(pd_sim *sim, const double *released, int64_t nblocks);
+/* The sums of m per-row arrays of the run (x[c][0..n)) as pd_sum_fixed
+ * takes them over the whole body: over the ranks, of the rows each piece
+ * owns.  Every rank calls it and gets the same sums. */
+void pd_sim_sum(const pd_sim *sim, const double *const *x, int m, double *sums);
+/* lib/run/sim.c, for lib/run/piece.c: pd_sim_new with the cut of a piece's
+ * kernel taken from `piece` (NULL: its own). */
+/* lib/state/halo.c: a piece freed; for the step: the ghosts' positions (and s0, with
+ * failure) from their owners; the ghosts' forces and velocities zeroed; n
+ * values of each rank's (its own rows', in row order) added to *sum in
+ * rank order, as one rank adds them in row order. */
+pd_status pd_piece_halo(pd_sim *sim);
+void pd_piece_ghosts_rest(pd_sim *sim);
+pd_status pd_piece_add_in_order(const pd_sim *sim, const double *v, int64_t n, double *sum);
+void pd_piece_free(pd_piece *pc);
+pd_status pd_sim_new_cut(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
+                         pd_piece *piece, pd_sim **out);
 void pd_sim_indenter_centre(const pd_sim *sim, double c[3]);
 
 

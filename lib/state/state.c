@@ -5,6 +5,10 @@
  * lost particles, timers.  Nothing here steps or calls an effect: the
  * integrator that does is lib/run/sim.c.
  */
+#include <math.h>
+#include <stdlib.h>
+
+#include "base/comm.h"
 #include "state/sim.h"
 
 const char *pd_sim_effects(const pd_sim *sim)
@@ -66,4 +70,41 @@ double *const *pd_sim_forces(const pd_sim *sim)
 const double *pd_sim_s0(const pd_sim *sim)
 {
     return sim->sc.has_failure ? sim->s0 : NULL;
+}
+
+void pd_sim_add_released(pd_sim *sim, const double *released, int64_t nblocks)
+{
+    const pd_piece *pc = sim->piece;
+    if (pc == NULL) {
+        for (int64_t blk = 0; blk < nblocks; blk++) /* in block order: any thread count */
+            sim->released += released[blk];
+        return;
+    }
+    /* every rank's own blocks, in rank order: the whole body's order */
+    int64_t total = 0;
+    for (int r = 0; r < pc->ranks; r++)
+        total += pc->blocks[r];
+    double *all = malloc((size_t)(total > 0 ? total : 1) * sizeof(double));
+    if (all == NULL) { /* a few doubles a block; nothing sane goes on */
+        sim->released = NAN;
+        return;
+    }
+    pd_comm_allgather(released + pc->own_blk_lo, pc->blocks, all);
+    for (int64_t blk = 0; blk < total; blk++)
+        sim->released += all[blk];
+    free(all);
+}
+
+void pd_sim_sum(const pd_sim *sim, const double *const *x, int m, double *sums)
+{
+    const pd_piece *pc = sim->piece;
+    if (pc == NULL) {
+        for (int c = 0; c < m; c++)
+            sums[c] = pd_sum_fixed(x[c], sim->n);
+        return;
+    }
+    const double *own[8];
+    for (int c = 0; c < m && c < 8; c++)
+        own[c] = x[c] + pc->own_lo;
+    pd_comm_sum_fixed(own, m, pc->first + pc->own_lo, pc->own_hi - pc->own_lo, pc->n_whole, sums);
 }

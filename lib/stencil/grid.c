@@ -403,14 +403,24 @@ static int build_segments(pd_grid *G, const int64_t *inv)
     for (int k = 0; k < G->nk; k++)
         thick = G->off[k][2] > thick ? G->off[k][2] : thick;
     thick = thick > 0 ? thick : 1;
-    G->nblocks = (nout + thick - 1) / thick;
+    G->thick = thick;
+    const int64_t base = G->blk0 >= 0 ? G->blk0 * thick : lo[2]; /* outer plane of block 0 */
+    if (base > lo[2]) { /* a piece must begin on a block of the whole */
+        for (int a = 0; a < 3; a++)
+            free(gc[a]);
+        free(run);
+        free(row_first);
+        free(order);
+        return 0;
+    }
+    G->nblocks = (hi[2] - base + thick) / thick;
     G->block_run = calloc((size_t)G->nblocks + 1, sizeof(int64_t));
     G->run = malloc((size_t)(nrun + 1) * sizeof *G->run);
     int64_t cap = nrun * G->nk + 16, nseg = 0;
     G->seg = malloc((size_t)cap * sizeof *G->seg);
     int ok = G->block_run && G->run && G->seg;
     for (int64_t A = 0; A < nrun && ok; A++) {
-        const int64_t blk = (gc[2][run[A].start] - lo[2]) / thick;
+        const int64_t blk = (gc[2][run[A].start] - base) / thick;
         G->run[A].start = run[A].start;
         G->run[A].len = run[A].a1 - run[A].a0;
         G->run[A].seg0 = nseg;
@@ -570,7 +580,14 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
         G->lc[d] = malloc((size_t)n * sizeof(int32_t));
     int64_t *order = NULL, *inv = NULL;
     int ok = G->lc[0] && G->lc[1] && G->lc[2] ? 1 : -1;
-    if (ok > 0)
+    G->blk0 = -1;
+    if (ok > 0 && sim->piece) { /* a piece: the whole body's axes and lattice */
+        int32_t *c[3];
+        for (int a = 0; a < 3; a++)
+            c[G->axis[a] = sim->piece->axis[a]] = G->lc[a];
+        ok = pd_lattice_sites(p, sim->piece->origin, p->spacing, c);
+        G->blk0 = sim->piece->blk0;
+    } else if (ok > 0)
         ok = pd_lattice_coords(p, G->axis, G->lc);
     if (ok > 0 && (order = pd_lattice_sort(n, G->lc)) == NULL)
         ok = -1;
@@ -593,6 +610,17 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
     free(order);
     if (ok > 0)
         ok = build_stencil(G, p, b);
+    if (ok > 0 && sim->piece && sim->piece->table) { /* the whole body's table */
+        const pd_grid *W = sim->piece->table;
+        ok = W->nk == G->nk && W->reach == G->reach &&
+             memcmp(W->off, G->off, (size_t)G->nk * sizeof *G->off) == 0;
+        for (int k = 0; k < G->nk && ok; k++) {
+            G->len[k] = W->len[k];
+            G->inv_len[k] = W->inv_len[k];
+            G->nu[k] = W->nu[k];
+            G->dc[k] = W->dc[k];
+        }
+    }
     if (ok > 0) { /* the gap: over the offsets one beyond the stencil's reach */
         const int r = G->reach + 1;
         double d2min = INFINITY;
@@ -673,6 +701,28 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
     *out = G;
     sim->directed_bits = pd_grid_directed_bits;
     return PD_OK;
+}
+
+pd_status pd_grid_resync(pd_sim *sim)
+{
+    pd_grid *G = sim->grid;
+    if (G == NULL || G->epoch == sim->half.epoch)
+        return PD_OK;
+    pd_grid_sync(sim, G);
+    return G->status;
+}
+
+int64_t pd_grid_blocks(const pd_grid *G, int64_t *start, int axis[3], int *thick)
+{
+    if (G == NULL || G->perm)
+        return 0;
+    for (int64_t blk = 0; start && blk <= G->nblocks; blk++)
+        start[blk] = block_start(G, blk);
+    for (int a = 0; a < 3 && axis; a++)
+        axis[a] = G->axis[a];
+    if (thick)
+        *thick = G->thick;
+    return G->nblocks;
 }
 
 int pd_grid_offsets(const pd_grid *G)

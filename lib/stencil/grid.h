@@ -27,6 +27,15 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure);
  * tiles; does the kernel take the contact of the stencil pairs; is i-j a
  * stencil pair. */
 int pd_grid_offsets(const pd_grid *g);
+/* The masks brought up to the half bonds' bits when these changed from
+ * outside (their epoch): at once rather than at the next bond pass, for
+ * the energies of a state set from outside (lib/run/piece.c's gather). */
+pd_status pd_grid_resync(pd_sim *sim);
+/* The blocks of outer planes the kernel cuts the body into: their count,
+ * and (where not NULL) the first row of each and the row after the last
+ * in start[0..count], the axes (inner, mid, outer), the planes a block;
+ * 0 when there is no grid, or its rows are not in lattice order. */
+int64_t pd_grid_blocks(const pd_grid *g, int64_t *start, int axis[3], int *thick);
 int pd_grid_tiles(const pd_grid *g);
 /* The shortest reference distance of a pair that is not a stencil pair,
  * m (lib/effects/contact.c searches only particles that moved enough to close

@@ -90,6 +90,11 @@ struct pd_grid {
     int64_t nseg;        /* segments                                       */
     grid_run *run;       /* the runs and a last one with start n, seg0 nseg */
     int64_t nblocks;     /* blocks of outer planes                         */
+    int64_t blk0;        /* -1, or (a piece of a body, lib/run/piece.c) the
+                            whole body's block of block 0: blocks are cut
+                            from the whole body's outer plane 0 on, in its
+                            lattice coordinates                           */
+    int thick;           /* outer planes a block                           */
     int64_t *block_run;  /* nblocks + 1: block b holds the runs
                             [block_run[b], block_run[b + 1])               */
     double *block_at;    /* nblocks: where a block's middle particle falls

@@ -639,8 +639,7 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
                 G->released[blk] = rel;
             }
         }
-        for (int64_t blk = 0; blk < G->nblocks; blk++)
-            sim->released += G->released[blk];
+        pd_sim_add_released(sim, G->released, G->nblocks);
         /* the caller swaps s0 and s0_new (lib/models/pmb.c) */
         G->s0n_ready = perm ? NULL : sim->s0;
     }

@@ -1,0 +1,32 @@
+/*
+ * comm.h -- internal (lib/base/comm.c): what a run spread over MPI ranks
+ * asks of the others.  In the serial build there is one rank and each of
+ * these is the one-rank answer; only the master thread of a rank calls
+ * them (MPI_THREAD_FUNNELED).
+ */
+#ifndef PD_COMM_H
+#define PD_COMM_H
+
+#include "pd.h"
+
+/* Every rank's `count` doubles at `mine`, in rank order, into `all` on
+ * every rank; counts[r] is rank r's count (the same table on every rank). */
+void pd_comm_allgather(const double *mine, const int64_t *counts, double *all);
+/* The same to rank 0 alone, of bytes (`all` is read on rank 0 only). */
+void pd_comm_gather_bytes(const void *mine, const int64_t *bytes, void *all);
+/* Rank 0's `bytes` at buf into every rank's. */
+void pd_comm_bcast(void *buf, int64_t bytes);
+/* Send `ns` doubles to rank `to` and receive `nr` from rank `from` (either
+ * may be -1: none), at once. */
+void pd_comm_sendrecv(const double *send, int64_t ns, int to, double *recv, int64_t nr,
+                      int from);
+/* The sums of m arrays over rows spread over the ranks, bit for bit as
+ * pd_sum_fixed sums the whole rows on one rank: rank r holds the rows
+ * [lo, lo + count) of n (the ranks' ranges consecutive, in rank order),
+ * x[c] points at its values of array c.  sums[c] gets the same total on
+ * every rank.  A chunk of PD_SUM_CHUNK rows that two ranks share is summed
+ * on as a chain: the lower rank's partial sum goes on to the next. */
+void pd_comm_sum_fixed(const double *const *x, int m, int64_t lo, int64_t count, int64_t n,
+                       double *sums);
+
+#endif

@@ -1,0 +1,363 @@
+/*
+ * piece.c -- a run spread over MPI ranks: each rank steps a piece of the
+ * body (pd.h, pd_sim_piece), the same bits as one rank.
+ *
+ *   - Blocks.  A body's bond kernel cuts it into blocks of rows (the
+ *     stencil's slabs of outer planes, lib/stencil/grid.c; the bond list's
+ *     runs of rows, lib/bonds/half.c): a block's bonds write only to the
+ *     block and the next, even blocks run before odd ones, and every sum
+ *     is taken in an order the blocks fix.  The ranks own whole blocks, in
+ *     order, about as many rows each, at least two blocks each.
+ *   - Ghosts.  A piece is its own blocks, the block above them (whose
+ *     particles are partners of its last block's bonds) and the one or two
+ *     below (an even count of blocks below it, so that its blocks keep the
+ *     whole body's phases).  It walks the bonds of the blocks below again
+ *     rather than receiving the forces they put on its own particles: each
+ *     of its own particles then gets every bond's force, in the whole
+ *     body's order, and so the same bits.  Both walks of a bond see the
+ *     same positions and s0 and break it alike.  The ghosts' own forces
+ *     lack bonds; they are set to rest after the forces, and their
+ *     positions and s0 come from their owners before the next ones.
+ *   - Sums over the body (energies, the indenter's force, the energy of
+ *     broken bonds and of lost particles) are taken in the whole body's
+ *     order: pd_comm_sum_fixed, pd_sim_add_released, in rank order.
+ *   - Files.  pd_sim_gather brings the pieces' state to a run of the whole
+ *     body on rank 0, which writes frames, series and status lines as a
+ *     run of one rank does.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "base/comm.h"
+#include "effects/effect.h"
+#include "models/model.h"
+#include "stencil/grid.h"
+
+/* The whole body's rows [g0, g1) as particles of their own. */
+static pd_particles *slice_particles(const pd_particles *p, int64_t g0, int64_t g1)
+{
+    const int64_t n = g1 - g0;
+    pd_particles *q = pd_particles_new(n);
+    if (q == NULL)
+        return NULL;
+    for (int d = 0; d < 3; d++)
+        memcpy(q->x[d], p->x[d] + g0, (size_t)n * sizeof(double));
+    memcpy(q->volume, p->volume + g0, (size_t)n * sizeof(double));
+    memcpy(q->density, p->density + g0, (size_t)n * sizeof(double));
+    memcpy(q->radius, p->radius + g0, (size_t)n * sizeof(double));
+    memcpy(q->material, p->material + g0, (size_t)n * sizeof(int32_t));
+    memcpy(q->id, p->id + g0, (size_t)n * sizeof(int64_t));
+    q->spacing = p->spacing;
+    q->dimension = p->dimension;
+    q->thickness = p->thickness;
+    return q;
+}
+
+/* The bonds of rows [g0, g1) between rows of the range, as lists in the
+ * whole body's family order, with the states `intact` gives them.  The
+ * families of rows whose partners are all in the range are whole. */
+static pd_status slice_bonds(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
+                             int64_t g0, int64_t g1, pd_bonds **out)
+{
+    const int64_t n = g1 - g0;
+    int64_t count = 0;
+    for (int64_t i = g0; i < g1; i++) {
+        pd_bond_iter it;
+        for (pd_family_start_partners(b, p, i, &it); pd_family_next(&it);)
+            count += it.j >= g0 && it.j < g1;
+    }
+    pd_bonds *q = pd_bonds_alloc(n, count);
+    if (q == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of a piece of the body");
+    q->horizon = b->horizon;
+    int64_t k = 0;
+    for (int64_t i = g0; i < g1; i++) {
+        pd_bond_iter it;
+        for (pd_family_start(b, p, i, &it); pd_family_next(&it);) {
+            if (it.j < g0 || it.j >= g1)
+                continue;
+            q->neighbor[k] = (int32_t)(it.j - g0);
+            q->length[k] = it.length;
+            q->vfactor[k] = it.vfactor;
+            if (pd_bond_intact(intact, it.q))
+                q->intact[k >> 6] |= UINT64_C(1) << (k & 63);
+            k++;
+        }
+        q->offset[i - g0 + 1] = k;
+    }
+    *out = q;
+    return PD_OK;
+}
+
+/* What a piece does not yet carry: its name, or NULL. */
+static const char *not_carried(const pd_sim *whole)
+{
+    if (whole->model != &pd_model_pmb)
+        return whole->model->name;
+    if (whole->sc.relax)
+        return "--relax";
+    if (whole->nofail)
+        return "--no-failure";
+    for (int k = 1; k < whole->neffects; k++)
+        if (whole->effects[k] != &pd_effect_indenter)
+            return whole->effects[k]->name;
+    return NULL;
+}
+
+/* The first block of rank r's piece: the block below its own if that is
+ * even, else the one below that (rank 0: block 0). */
+static int64_t piece_first_block(const int64_t *K, int r)
+{
+    return r == 0 ? 0 : (K[r] - 1) - ((K[r] - 1) & 1);
+}
+
+/* The whole body's state into the piece: its rows', the run's sums. */
+static void copy_state(const pd_sim *whole, pd_sim *sim)
+{
+    const pd_piece *pc = sim->piece;
+    const size_t bytes = (size_t)sim->n * sizeof(double);
+    for (int d = 0; d < 3; d++) {
+        memcpy(sim->y[d], whole->y[d] + pc->first, bytes);
+        memcpy(sim->v[d], whole->v[d] + pc->first, bytes);
+        memcpy(sim->f[d], whole->f[d] + pc->first, bytes);
+    }
+    if (whole->s0) {
+        memcpy(sim->s0, whole->s0 + pc->first, bytes);
+        memcpy(sim->s0_new, whole->s0_new + pc->first, bytes);
+    }
+    if (whole->lost) {
+        sim->lost = malloc((size_t)sim->n); /* checked by the caller */
+        if (sim->lost) {
+            memcpy(sim->lost, whole->lost + pc->first, (size_t)sim->n);
+            for (int64_t i = 0; i < sim->n; i++)
+                sim->nlost += sim->lost[i] != 0;
+        }
+    }
+    sim->step = whole->step;
+    sim->time = whole->time;
+    sim->power = whole->power;
+    sim->work = whole->work;
+    sim->released = whole->released;
+    sim->energy0 = whole->energy0;
+    sim->penalty0 = whole->penalty0;
+    sim->damped = whole->damped;
+    sim->damp_power = whole->damp_power;
+    sim->lost_energy = whole->lost_energy;
+    memcpy(sim->ind_f, whole->ind_f, sizeof sim->ind_f);
+    memcpy(sim->box_lo, whole->box_lo, sizeof sim->box_lo);
+    memcpy(sim->box_hi, whole->box_hi, sizeof sim->box_hi);
+    pd_piece_ghosts_rest(sim);
+}
+
+pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
+{
+    *out = NULL;
+    const int P = pd_comm_size(), me = pd_comm_rank();
+    const char *no = not_carried(whole);
+    if (no)
+        return pd_fail(PD_ERR_INVALID,
+                       "on %d MPI ranks pd-run does not yet carry %s; run it on one rank", P, no);
+    /* the whole body's blocks: the first row of each, and the end */
+    const int grid = whole->grid != NULL;
+    int64_t nb = grid ? pd_grid_blocks(whole->grid, NULL, NULL, NULL) : whole->half.nblocks;
+    if (grid && nb == 0)
+        return pd_fail(PD_ERR_INVALID, "on MPI ranks the particles must be in lattice order, as "
+                                       "pd-bonds writes them");
+    pd_piece *pc = calloc(1, sizeof *pc);
+    int64_t *start = malloc((size_t)(nb + 1) * sizeof(int64_t));
+    int64_t *K = malloc((size_t)(P + 1) * sizeof(int64_t));
+    if (pc)
+        pc->rows = malloc((size_t)P * sizeof(int64_t)), pc->blocks = malloc((size_t)P * sizeof(int64_t));
+    if (!pc || !start || !K || !pc->rows || !pc->blocks) {
+        free(start);
+        free(K);
+        pd_piece_free(pc);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the pieces of the body");
+    }
+    const int64_t n = whole->n;
+    if (grid) {
+        int thick;
+        pd_grid_blocks(whole->grid, start, pc->axis, &thick);
+        pc->table = whole->grid;
+        double hi[3];
+        pd_particles_bounds(whole->p, pc->origin, hi);
+    } else {
+        pc->half_block = whole->half.block;
+        for (int64_t k = 0; k <= nb; k++)
+            start[k] = k * pc->half_block < n ? k * pc->half_block : n;
+    }
+    pd_status st = PD_OK;
+    if (nb < 2 * (int64_t)P)
+        st = pd_fail(PD_ERR_INVALID,
+                     "the body is cut into %lld blocks and each of the %d MPI ranks needs two: "
+                     "run it on at most %lld ranks",
+                     (long long)nb, P, (long long)(nb / 2));
+    /* the ranks' blocks: about n/P rows each, two blocks at least */
+    K[0] = 0;
+    K[P] = nb;
+    for (int r = 1; r < P && st == PD_OK; r++) {
+        int64_t k = K[r - 1] + 2;
+        while (k < nb - 2 * (P - r) && start[k] < (int64_t)((double)n * r / P))
+            k++;
+        K[r] = k;
+    }
+    if (st == PD_OK) {
+        for (int r = 0; r < P; r++) {
+            pc->rows[r] = start[K[r + 1]] - start[K[r]];
+            pc->blocks[r] = K[r + 1] - K[r];
+        }
+        const int64_t L = piece_first_block(K, me), U = K[me + 1] + 1 < nb ? K[me + 1] + 1 : nb;
+        pc->rank = me;
+        pc->ranks = P;
+        pc->n_whole = n;
+        pc->grid = grid;
+        pc->first = start[L];
+        pc->blk0 = L;
+        pc->own_lo = start[K[me]] - start[L];
+        pc->own_hi = start[K[me + 1]] - start[L];
+        pc->own_blk_lo = K[me] - L;
+        pc->own_blk_hi = K[me + 1] - L;
+        pc->send_down = me > 0 ? start[K[me] + 1] - start[K[me]] : 0;
+        pc->send_up = me < P - 1 ? start[K[me + 1]] - start[piece_first_block(K, me + 1)] : 0;
+        const int64_t g1 = start[U], rows = g1 - pc->first;
+        const int64_t halo = rows - (pc->own_hi - pc->own_lo) + pc->send_down + pc->send_up;
+        pc->buf = malloc((size_t)(halo > 0 ? halo : 1) * 4 * sizeof(double));
+        pc->sum3 = malloc((size_t)(rows > 0 ? rows : 1) * 3 * sizeof(double));
+        pc->p = slice_particles(whole->p, pc->first, g1);
+        if (!pc->buf || !pc->sum3 || !pc->p)
+            st = pd_fail(PD_ERR_NOMEM, "out of memory for a piece of the body");
+        if (st == PD_OK)
+            st = slice_bonds(whole->p, whole->b, pd_sim_intact(whole), pc->first, g1, &pc->b);
+    }
+    free(start);
+    free(K);
+    pd_scene sc = whole->sc;
+    sc.sets = NULL; /* the sets are the whole run's (its time series) */
+    pd_sim *sim = NULL;
+    if (st == PD_OK)
+        st = pd_sim_new_cut(pc->p, pc->b, &sc, pc, &sim);
+    if (st == PD_OK && grid && pd_grid_blocks(sim->grid, NULL, NULL, NULL) < pc->own_blk_hi)
+        st = pd_fail(PD_ERR_INVALID, "a piece of the body is not cut as the whole body is");
+    if (st != PD_OK) {
+        pd_sim_free(sim);
+        pd_piece_free(pc);
+        return st;
+    }
+    sim->piece_owned = 1;
+    copy_state(whole, sim);
+    if (whole->lost && sim->lost == NULL) {
+        pd_sim_free(sim);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for lost particles");
+    }
+    *out = sim;
+    return PD_OK;
+}
+
+void pd_sim_owned(const pd_sim *sim, int64_t *lo, int64_t *hi)
+{
+    const pd_piece *pc = sim->piece;
+    *lo = pc ? pc->first + pc->own_lo : 0;
+    *hi = pc ? pc->first + pc->own_hi : sim->n;
+}
+
+/* Rows [own_lo, own_hi) of every piece's array a (bytes a row) into the
+ * whole body's w on rank 0. */
+static void gather_rows(const pd_piece *pc, const void *a, size_t row, void *w, int64_t *bytes)
+{
+    for (int r = 0; r < pc->ranks; r++)
+        bytes[r] = pc->rows[r] * (int64_t)row;
+    pd_comm_gather_bytes((const char *)a + pc->own_lo * row, bytes, w);
+}
+
+pd_status pd_sim_gather(const pd_sim *sim, pd_sim *whole)
+{
+    const pd_piece *pc = sim->piece;
+    if (pc == NULL)
+        return PD_OK;
+    const int root = pc->rank == 0;
+    int64_t *bytes = malloc((size_t)pc->ranks * sizeof(int64_t));
+    if (bytes == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory gathering the run");
+    for (int d = 0; d < 3; d++) {
+        gather_rows(pc, sim->y[d], sizeof(double), root ? whole->y[d] : NULL, bytes);
+        gather_rows(pc, sim->v[d], sizeof(double), root ? whole->v[d] : NULL, bytes);
+        gather_rows(pc, sim->f[d], sizeof(double), root ? whole->f[d] : NULL, bytes);
+    }
+    if (sim->s0)
+        gather_rows(pc, sim->s0, sizeof(double), root ? whole->s0 : NULL, bytes);
+    /* lost particles, once some rank has one */
+    pd_status st = PD_OK;
+    if (pd_comm_or(sim->lost != NULL)) {
+        uint8_t *mine = sim->lost ? sim->lost : calloc((size_t)sim->n, 1);
+        if (root && whole->lost == NULL)
+            whole->lost = calloc((size_t)whole->n, 1);
+        if (mine && (!root || whole->lost)) {
+            gather_rows(pc, mine, 1, root ? whole->lost : NULL, bytes);
+            if (root) {
+                whole->nlost = 0;
+                for (int64_t i = 0; i < whole->n; i++)
+                    whole->nlost += whole->lost[i] != 0;
+            }
+        } else
+            st = pd_fail(PD_ERR_NOMEM, "out of memory gathering the run");
+        if (mine != sim->lost)
+            free(mine);
+    }
+    /* the bond states: the half bonds of the own rows, in the whole body's
+     * order (their families are whole), a byte each */
+    const pd_half_bonds *h = &sim->half;
+    const int64_t q0 = h->offset[pc->own_lo], q1 = h->offset[pc->own_hi];
+    uint8_t *state = malloc((size_t)(q1 > q0 ? q1 - q0 : 1));
+    int64_t *counts = malloc((size_t)pc->ranks * sizeof(int64_t));
+    double c = (double)(q1 - q0), *all = malloc((size_t)pc->ranks * sizeof(double));
+    uint8_t *every = NULL;
+    if (state && counts && all) {
+        for (int r = 0; r < pc->ranks; r++)
+            counts[r] = 1;
+        pd_comm_allgather(&c, counts, all);
+        int64_t total = 0;
+        for (int r = 0; r < pc->ranks; r++)
+            total += counts[r] = (int64_t)all[r];
+        for (int64_t q = q0; q < q1; q++)
+            state[q - q0] = (uint8_t)pd_bond_intact(h->intact, q);
+        if (root && total != whole->half.count)
+            st = pd_fail(PD_ERR_INVALID, "the pieces hold %lld bonds, the body %lld",
+                         (long long)total, (long long)whole->half.count);
+        every = root ? malloc((size_t)(total > 0 ? total : 1)) : NULL;
+        pd_comm_gather_bytes(state, counts, every);
+        if (root && every && st == PD_OK) {
+            uint64_t *bits = whole->half.intact;
+            for (int64_t q = 0; q < total; q++)
+                if (every[q])
+                    bits[q >> 6] |= UINT64_C(1) << (q & 63);
+                else
+                    bits[q >> 6] &= ~(UINT64_C(1) << (q & 63));
+            whole->half.epoch++;
+            whole->intact_stale = 1;
+            st = pd_grid_resync(whole); /* the stencil's masks from the bits */
+        }
+    } else
+        st = pd_fail(PD_ERR_NOMEM, "out of memory gathering the run");
+    free(every);
+    free(state);
+    free(counts);
+    free(all);
+    free(bytes);
+    if (root) { /* the run's sums: the same on every rank */
+        whole->step = sim->step;
+        whole->time = sim->time;
+        whole->power = sim->power;
+        whole->work = sim->work;
+        whole->released = sim->released;
+        whole->energy0 = sim->energy0;
+        whole->penalty0 = sim->penalty0;
+        whole->damped = sim->damped;
+        whole->damp_power = sim->damp_power;
+        whole->lost_energy = sim->lost_energy;
+        memcpy(whole->ind_f, sim->ind_f, sizeof whole->ind_f);
+        memcpy(whole->timers, sim->timers, sizeof whole->timers);
+    }
+    return st;
+}

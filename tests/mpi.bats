@@ -1,0 +1,129 @@
+#!/usr/bin/env bats
+# pd-run on MPI ranks (the MPI build, mpi/bin/pd-run; lib/run/piece.c): the
+# body is shared out among the ranks in whole blocks of its bond kernel, and
+# every frame is bit for bit the one rank's, on 1 to 4 ranks, with any
+# threads a rank, for the stencil and the bond list, the portable loops and
+# the AVX-512 ones, fracture and lost particles.  What the pieces do not yet
+# carry is refused in one line.  Skipped where the MPI build cannot be made
+# (no mpicc or no parallel HDF5); CI installs both (share/install-deps.sh).
+
+load test_helper
+
+MPI_RUN=$BATS_TEST_DIRNAME/../mpi/bin/pd-run
+SAME=$BATS_TEST_DIRNAME/samebits/h5same.py
+
+setup_file() {
+    # mpirun refuses root without these (containers, CI)
+    export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+}
+
+setup() {
+    if [ ! -x "$MPI_RUN" ]; then
+        if command -v mpicc >/dev/null && pkg-config --exists hdf5-openmpi; then
+            echo "mpicc and hdf5-openmpi are here but mpi/bin/pd-run is not built" >&2
+            return 1
+        fi
+        skip "no MPI build (mpicc and libhdf5-openmpi-dev)"
+    fi
+    export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+    cd "$BATS_TEST_TMPDIR"
+}
+
+# mpi N ARG...: the MPI pd-run on N ranks (more ranks than cores allowed,
+# unbound: this machine may have fewer cores than the test has ranks).
+mpi() {
+    local np=$1
+    shift
+    mpirun --oversubscribe --bind-to none -np "$np" "$MPI_RUN" "$@"
+}
+
+# A disk hit hard enough by the indenter to break 70,000 of its bonds and
+# throw fragments off (3771 particles on the lattice, 13 blocks of the
+# stencil, 8 of the bond list); `perturbed`: its sites moved up to 0.1
+# spacing (a body of bond lists).
+impact_body() {
+    pd-lattice --spacing 0.001 --cylinder y,0,0,0.02,-0.0025,0 --density 2200 \
+        ${1:+--perturb 1e-4} -o lat.h5 2>/dev/null
+    pd-bonds --horizon 0.0030001 lat.h5 -o body.h5 2>/dev/null
+    cat >impact.scene <<'EOF'
+model pmb
+c 1.6863e22
+failure 0.0005,0.25
+indenter sphere,0,0.0051,0,0.005,1e17,0,-400,0
+steps 400
+every 50
+EOF
+}
+
+# same_on_ranks RANKS THREADS ARG...: the run on one rank of the serial
+# build, then on each count of RANKS with THREADS a rank: every dataset and
+# attribute bit for bit the same.
+same_on_ranks() {
+    local ranks=$1 threads=$2
+    shift 2
+    pd-run --threads "$threads" -q "$@" -o one.h5
+    for np in $ranks; do
+        mpi "$np" --threads "$threads" -q "$@" -o "np$np.h5"
+        run -0 "$PY" "$SAME" one.h5 "np$np.h5"
+    done
+}
+
+@test "mpi: started without mpirun the MPI build is one rank, says so, and runs the serial bits" {
+    impact_body
+    run -0 "$MPI_RUN" --threads 1 --scene impact.scene body.h5 -o m.h5
+    assert_line --partial "pd-run: 1 MPI rank x 1 thread"
+    pd-run --threads 1 -q --scene impact.scene body.h5 -o one.h5
+    run -0 "$PY" "$SAME" one.h5 m.h5
+}
+
+@test "mpi: the stencil on 1 to 4 ranks, bit for bit the serial run's, fracture and all" {
+    impact_body
+    same_on_ranks "1 2 3 4" 1 --scene impact.scene body.h5
+    # the disk did break: the check saw fracture, not an elastic run
+    run -0 "$PY" -c "
+import h5py
+with h5py.File('np4.h5') as f:
+    last = f['frames'][sorted(f['frames'])[-1]]
+    assert last.attrs['broken_bonds'] > 50000, last.attrs['broken_bonds']"
+    run -0 mpi 2 --threads 1 --scene impact.scene body.h5 -o log.h5
+    assert_line --partial "pd-run: 2 MPI ranks x 1 thread"
+    assert_line --partial "lattice stencil"
+}
+
+@test "mpi: the bond list's AVX-512 rows and its portable loop, and two threads a rank" {
+    impact_body perturbed
+    same_on_ranks "2 3 4" 1 --scene impact.scene body.h5
+    PD_NO_AVX512=1 same_on_ranks "3" 2 --scene impact.scene body.h5
+    impact_body
+    same_on_ranks "2" 2 --scene impact.scene --bond-list body.h5
+}
+
+@test "mpi: lost particles, taken on whichever rank owns them, the same bits" {
+    impact_body
+    same_on_ranks "2 4" 1 --scene impact.scene --lost-margin 0.002 body.h5
+    # particles were lost, with their kinetic energy
+    run -0 "$PY" -c "
+import h5py
+with h5py.File('np4.h5') as f:
+    last = f['frames'][sorted(f['frames'])[-1]]
+    assert last.attrs['lost_particles'] > 50 and last.attrs['lost_energy'] > 0, dict(last.attrs)"
+}
+
+@test "mpi: what the pieces do not yet carry is one line and exit 1; --restart and stdin are usage errors" {
+    impact_body
+    run -1 mpi 2 --scene impact.scene --contact body.h5 -o c.h5
+    assert_output --partial "pd-run: error: on 2 MPI ranks pd-run does not yet carry contact; run it on one rank"
+    [ "$(grep -c 'pd-run: error' <<<"$output")" -eq 1 ]
+    [ ! -e c.h5 ]
+    run -1 mpi 2 --model lps --bulk-modulus 14.9e9 --shear-modulus 11e9 --steps 2 body.h5 -o c.h5
+    assert_output --partial "does not yet carry lps"
+    run -2 mpi 2 --scene impact.scene - -o c.h5 <body.h5
+    assert_output --partial "the model must be a file"
+    pd-run -q --threads 1 --scene impact.scene --steps 10 body.h5 -o r.h5
+    run -2 mpi 2 --restart r.h5 --steps 10
+    assert_output --partial "--restart is not yet carried"
+    # more ranks than the body has pairs of blocks
+    run -1 mpi 8 --scene impact.scene body.h5 -o c.h5
+    assert_output --partial "cut into 14 blocks and each of the 8 MPI ranks needs two: run it on at most 7 ranks"
+    [ "$(grep -c 'pd-run: error' <<<"$output")" -eq 1 ]
+}
