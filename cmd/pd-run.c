@@ -877,13 +877,13 @@ static pd_status timed_sample(pd_file *out, pd_sim *sim, double *t_out, pd_energ
 
 static void print_timing(const pd_sim *sim, double wall, double output)
 {
-    static const char *names[PD_T_COUNT] = {"bonds", "contact", "neighbour lists", "indenter",
-                                            "integration", "output", "failure"};
+    static const char *names[PD_T_COUNT] = {"bonds",  "contact", "neighbour lists", "indenter",
+                                            "integration", "output", "failure", "MPI ranks"};
     double t[PD_T_COUNT];
     memcpy(t, pd_sim_timers(sim), sizeof t);
     t[PD_T_OUTPUT] = output;
     fprintf(stderr, PROG ": timing (wall %.3f s)\n", wall);
-    for (int k = 0; k < PD_T_COUNT; k++)
+    for (int k = 0; k < PD_T_COUNT - (pd_comm_size() == 1); k++) /* one rank: no MPI line */
         fprintf(stderr, "  %-16s %10.3f s %6.1f%%\n", names[k], t[k],
                 wall > 0 ? 100.0 * t[k] / wall : 0.0);
 }
@@ -1335,10 +1335,21 @@ static int run_main(int argc, char **argv)
         return rc;
     }
     const int64_t nsteps = o.spec.sc.steps - first;
+    /* the largest halo of a rank, and the largest piece (collective) */
+    int64_t lo = 0, hi = 0;
+    if (h.piece)
+        pd_sim_owned(h.piece, &lo, &hi);
+    const int64_t halo = -pd_comm_min(h.piece ? -pd_sim_halo_bytes(h.piece) : 0),
+                  rows = -pd_comm_min(lo - hi);
     if (pd_comm_rank() > 0)
         o.quiet = 1;
     if (!o.quiet)
         log_scene(&o, &h, first, nsteps);
+    if (!o.quiet && h.piece)
+        fprintf(stderr,
+                PROG ": the body in %d pieces of at most %lld particles, each stepped with "
+                     "its ghosts; halo of at most %.3g MB a rank a step\n",
+                pd_comm_size(), (long long)rows, (double)halo / 1e6);
     double t_output = 0, t0 = pd_wtime();
     pd_status s = run_steps(&o, &h, first, &t_output);
     const double wall = pd_wtime() - t0 + h.t_setup;

@@ -634,6 +634,7 @@ typedef enum {
     PD_T_BONDS, PD_T_CONTACT, PD_T_NEIGHBOR, PD_T_INDENTER, PD_T_INTEGRATE,
     PD_T_OUTPUT,
     PD_T_FAILURE, /* failure's bookkeeping outside the fused bond kernel */
+    PD_T_RANKS,   /* on MPI ranks: the halo and the sums over the ranks */
     PD_T_COUNT
 } pd_timer;
 
@@ -682,6 +683,9 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **piece);
 pd_status pd_sim_gather(const pd_sim *piece, pd_sim *whole);
 /* The rows [*lo, *hi) of the whole body that this piece owns. */
 void pd_sim_owned(const pd_sim *piece, int64_t *lo, int64_t *hi);
+/* The bytes this piece sends its neighbours at each step (the ghosts'
+ * positions, and s0 with failure); 0 for a whole run. */
+int64_t pd_sim_halo_bytes(const pd_sim *piece);
 
 /* PMB micromodulus from the bulk modulus: c = 18 K / (pi delta^4) (seed 000
  * eq. 6, 3-D). */

@@ -90,12 +90,18 @@ with h5py.File('np4.h5') as f:
     assert_line --partial "lattice stencil"
 }
 
-@test "mpi: the bond list's AVX-512 rows and its portable loop, and two threads a rank" {
+@test "mpi: the bond list's AVX-512 rows and its portable loop, two threads a rank, material laws" {
     impact_body perturbed
     same_on_ranks "2 3 4" 1 --scene impact.scene body.h5
     PD_NO_AVX512=1 same_on_ranks "3" 2 --scene impact.scene body.h5
     impact_body
     same_on_ranks "2" 2 --scene impact.scene --bond-list body.h5
+    # material laws and an interface (their own c and s00 a bond: the list)
+    pd-lattice --spacing 0.001 --cylinder y,0,0,0.02,-0.0025,0 --density 2200 \
+        --material-region 2=box,0.005,1,-1,1,-1,1 -o latm.h5 2>/dev/null
+    pd-bonds --horizon 0.0030001 latm.h5 -o bodym.h5 2>/dev/null
+    same_on_ranks "2 3" 1 --scene impact.scene --material 1,K=2e10,s00=0.003 \
+        --interface 1,2,K=14.9e9,s00=0.0002 bodym.h5
 }
 
 @test "mpi: lost particles, taken on whichever rank owns them, the same bits" {

@@ -255,6 +255,12 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
     return PD_OK;
 }
 
+int64_t pd_sim_halo_bytes(const pd_sim *sim)
+{
+    const pd_piece *pc = sim->piece;
+    return pc ? (pc->send_down + pc->send_up) * (sim->s0 ? 4 : 3) * (int64_t)sizeof(double) : 0;
+}
+
 void pd_sim_owned(const pd_sim *sim, int64_t *lo, int64_t *hi)
 {
     const pd_piece *pc = sim->piece;

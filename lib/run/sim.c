@@ -253,9 +253,10 @@ pd_status pd_sim_compute_forces(pd_sim *sim)
     for (int k = 0; k < sim->neffects; k++) {
         if (sim->effects[k]->force == NULL)
             continue;
-        double t0 = pd_wtime();
+        double t0 = pd_wtime(), ranks = sim->timers[PD_T_RANKS];
         pd_status s = sim->effects[k]->force(sim, sim->state[k]);
-        sim->timers[sim->effects[k]->timer] += pd_wtime() - t0;
+        /* its sums over the ranks are the ranks' time */
+        sim->timers[sim->effects[k]->timer] += pd_wtime() - t0 - (sim->timers[PD_T_RANKS] - ranks);
         if (s != PD_OK)
             return s;
     }
@@ -614,8 +615,10 @@ pd_status pd_sim_step(pd_sim *sim)
     pd_status s = pd_sim_constrain(sim, PD_PHASE_DRIFT);
     int gone = away;
     if (sim->piece && s == PD_OK) { /* the ghosts' positions and s0 from their owners */
+        const double th = pd_wtime();
         s = pd_piece_halo(sim);
         gone = pd_comm_or(away);
+        sim->timers[PD_T_RANKS] += pd_wtime() - th;
     }
     if (s == PD_OK && gone) {
         double tl = pd_wtime(); /* breaking the lost particles' bonds */
@@ -631,8 +634,12 @@ pd_status pd_sim_step(pd_sim *sim)
     if (sim->piece) /* the ghosts' forces lack bonds: they stay at rest */
         pd_piece_ghosts_rest(sim);
     int bad = half_kick(sim);
-    if (sim->piece)
+    if (sim->piece) {
+        const double th = pd_wtime();
         bad = pd_comm_or(bad);
+        sim->timers[PD_T_RANKS] += pd_wtime() - th;
+        t0 += pd_wtime() - th;
+    }
     for (int k = 0; k < sim->neffects && s == PD_OK; k++)
         if (sim->effects[k]->kick)
             s = sim->effects[k]->kick(sim, sim->state[k], 1);
