@@ -1109,10 +1109,11 @@ static int64_t status_interval(const struct options *o, int64_t nsteps)
  * Returns 0, or the exit status after printing the error. */
 static int start(struct options *o, struct held *h, int64_t *first)
 {
-    const int restart = o->restart != NULL;
-    /* a restart updates the run (through a copy renamed over it) */
-    pd_status s = restart ? pd_file_update(o->restart, o->output, &h->in)
-                          : pd_file_open(o->input, &h->in);
+    const int restart = o->restart != NULL, root = pd_comm_rank() == 0;
+    /* a restart updates the run (through a copy renamed over it, rank 0's;
+     * the other ranks read the run as it was) */
+    pd_status s = restart && root ? pd_file_update(o->restart, o->output, &h->in)
+                                  : pd_file_open(restart ? o->restart : o->input, &h->in);
     if (s == PD_OK)
         s = pd_read_particles(h->in, &h->p);
     if (s == PD_OK)
@@ -1147,16 +1148,16 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_fail(PD_ERR_INVALID, "%s (--strict)", h->report.warning[0]);
     if (s == PD_OK && (h->text = pd_scene_text(sc)) == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory for the scene's text");
-    if (s == PD_OK && restart)
+    if (s == PD_OK && restart && root)
         h->out = h->in; /* the same file goes on */
-    else if (s == PD_OK && pd_comm_rank() == 0) /* rank 0 writes the run file */
+    else if (s == PD_OK && root) /* rank 0 writes the run file */
         s = pd_file_create(o->output, &h->out);
-    if (s == PD_OK && pd_comm_rank() == 0)
+    if (s == PD_OK && root)
         s = pd_run_file_start(h->out, restart, h->in, h->p, h->b, h->sets, sc,
                               pd_sim_effects(h->sim), h->cmdline ? h->cmdline : PROG,
                               h->text, *first);
     s = agreed(s);
-    if (!restart) {
+    if (!restart || !root) {
         pd_file_close(h->in);
         h->in = NULL;
     }
@@ -1314,11 +1315,10 @@ static int run_main(int argc, char **argv)
     h.cmdline = pd_join_argv(argc, argv);
     h.opts = &o;
     int rc = options(argc, argv, &o);
-    if (rc == 0 && pd_comm_size() > 1 && (o.restart || strcmp(o.input, "-") == 0))
-        rc = usage_error(o.restart ? "on several MPI ranks --restart is not yet carried; go on "
-                                     "from the run on one rank"
+    if (rc == 0 && pd_comm_size() > 1 && strcmp(o.input, "-") == 0)
+        rc = usage_error(o.restart ? "on several MPI ranks the run to go on from must be a file, not"
                                    : "on several MPI ranks the model must be a file, not",
-                         o.restart ? NULL : "'-'");
+                         "'-'");
     if (rc) {
         release(&h);
         return rc;

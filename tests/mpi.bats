@@ -115,7 +115,7 @@ with h5py.File('np4.h5') as f:
     assert last.attrs['lost_particles'] > 50 and last.attrs['lost_energy'] > 0, dict(last.attrs)"
 }
 
-@test "mpi: what the pieces do not yet carry is one line and exit 1; --restart and stdin are usage errors" {
+@test "mpi: what the pieces do not yet carry is one line and exit 1; a model on stdin is a usage error" {
     impact_body
     run -1 mpi 2 --scene impact.scene --contact body.h5 -o c.h5
     assert_output --partial "pd-run: error: on 2 MPI ranks pd-run does not yet carry contact; run it on one rank"
@@ -125,11 +125,28 @@ with h5py.File('np4.h5') as f:
     assert_output --partial "does not yet carry lps"
     run -2 mpi 2 --scene impact.scene - -o c.h5 <body.h5
     assert_output --partial "the model must be a file"
-    pd-run -q --threads 1 --scene impact.scene --steps 10 body.h5 -o r.h5
-    run -2 mpi 2 --restart r.h5 --steps 10
-    assert_output --partial "--restart is not yet carried"
     # more ranks than the body has pairs of blocks
     run -1 mpi 8 --scene impact.scene body.h5 -o c.h5
     assert_output --partial "cut into 14 blocks and each of the 8 MPI ranks needs two: run it on at most 7 ranks"
     [ "$(grep -c 'pd-run: error' <<<"$output")" -eq 1 ]
+}
+
+@test "mpi: --restart goes on from a run of N ranks on M ranks (M = 1 too), bit for bit" {
+    impact_body
+    sed -i 's/^steps 400/steps 200/' impact.scene
+    # 200 steps with fracture and lost particles on 2 ranks, then 200 more
+    mpi 2 --threads 1 -q --scene impact.scene --lost-margin 0.002 body.h5 -o r.h5
+    cp r.h5 r1.h5
+    cp r.h5 r3.h5
+    pd-run --threads 1 -q --restart r1.h5 --steps 200 -o one.h5
+    mpi 3 --threads 1 -q --restart r3.h5 --steps 200 -o np3.h5
+    run -0 "$PY" "$SAME" one.h5 np3.h5
+    # in place, on 4 ranks: the run file goes on
+    mpi 4 --threads 1 -q --restart r.h5 --steps 200
+    run -0 "$PY" "$SAME" one.h5 r.h5
+    run -0 "$PY" -c "
+import h5py
+with h5py.File('r.h5') as f:
+    steps = sorted(int(g.attrs['step']) for g in f['frames'].values())
+    assert steps[-1] == 400 and f['frames'][sorted(f['frames'])[-1]].attrs['lost_particles'] > 0, steps"
 }
