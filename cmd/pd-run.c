@@ -1353,6 +1353,8 @@ static int run_main(int argc, char **argv)
     double t_output = 0, t0 = pd_wtime();
     pd_status s = run_steps(&o, &h, first, &t_output);
     const double wall = pd_wtime() - t0 + h.t_setup;
+    /* contact partners from beyond a piece, the most of a rank (collective) */
+    const int64_t remote = h.piece ? -pd_comm_min(-pd_sim_contact_remote(h.piece)) : 0;
     s = finish(&h, s);
     if (s == PD_OK && !o.quiet && o.spec.sc.relax)
         fprintf(stderr, PROG ": %lld load steps, %lld iterations, in %.3f s (%.3g bond "
@@ -1365,6 +1367,10 @@ static int run_main(int argc, char **argv)
                 (long long)nsteps, wall,
                 wall > 0 ? (double)h.b->count * (double)nsteps / wall : 0.0,
                 (long long)pd_sim_contact_builds(h.sim));
+    if (s == PD_OK && !o.quiet && h.piece && pd_sim_contact_builds(h.sim) > 0)
+        fprintf(stderr, PROG ": contact across the ranks: at most %lld partners of a rank's list "
+                             "from beyond its piece\n",
+                (long long)remote);
     if (s == PD_OK && o.timing && !o.quiet)
         print_timing(h.sim, wall, t_output);
     release(&h);

@@ -203,6 +203,10 @@ pd_status pd_cells_build(pd_cells *c, int64_t n, double *const x[3], double cuto
 pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], double cutoff,
                                 const uint8_t *skip);
 void pd_cells_free(pd_cells *c);
+/* The grid alone (lo, size, dim; no particles) that pd_cells_build_except
+ * lays over n particles whose bounding box is [lo, hi] (lo > hi: none). */
+void pd_cells_geometry(pd_cells *c, const double lo[3], const double hi[3], int64_t n,
+                       double cutoff);
 /* Cell coordinates of a point (clamped into the grid). */
 void pd_cells_locate(const pd_cells *c, const double x[3], int64_t cell[3]);
 /* The cell of x and its neighbours inside the grid (up to 27), in z, y, x
@@ -986,6 +990,10 @@ int pd_series_columns(const pd_scene *sc, char (*names)[PD_SERIES_NAME]);
  * energies of the current state (pd_sim_energy). */
 pd_status pd_sim_series_row(const pd_sim *sim, const pd_energy *e, double *row);
 int64_t pd_sim_contact_builds(const pd_sim *sim);
+/* A piece on MPI ranks: the most contact partners one of its list builds
+ * took from beyond the piece (fragments that crossed to another rank's
+ * particles); 0 for a whole run. */
+int64_t pd_sim_contact_remote(const pd_sim *sim);
 const double *pd_sim_timers(const pd_sim *sim); /* seconds per pd_timer */
 /* What a run needs beyond a frame to go on bit for bit (pd-run --restart):
  * exact positions, the force densities of the last step, s0 (with failure)

@@ -62,23 +62,14 @@ pd_status pd_cells_build(pd_cells *c, int64_t n, double *const x[3], double cuto
     return pd_cells_build_except(c, n, x, cutoff, NULL);
 }
 
-pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], double cutoff,
-                                const uint8_t *skip)
+void pd_cells_geometry(pd_cells *c, const double box_lo[3], const double box_hi[3], int64_t n,
+                       double cutoff)
 {
-    c->start = NULL;
-    c->index = NULL;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int64_t i = 0; i < n; i++)
-        for (int d = 0; d < 3; d++)
-            if (isfinite(x[d][i]) && !(skip && skip[i])) { /* fmin, fmax inlined */
-                lo[d] = x[d][i] < lo[d] ? x[d][i] : lo[d];
-                hi[d] = x[d][i] > hi[d] ? x[d][i] : hi[d];
-            }
-    for (int d = 0; d < 3; d++)
-        if (!(lo[d] <= hi[d]))
-            lo[d] = hi[d] = 0;
-    if (!(cutoff > 0))
-        return pd_fail(PD_ERR_INVALID, "cell size must be positive");
+    double lo[3], hi[3];
+    for (int d = 0; d < 3; d++) {
+        lo[d] = box_lo[d] <= box_hi[d] ? box_lo[d] : 0;
+        hi[d] = box_lo[d] <= box_hi[d] ? box_hi[d] : 0;
+    }
     /* Keep the grid near the particle count: particles flying far away must
      * not make the grid (and the build) huge. */
     double size = cutoff;
@@ -92,12 +83,28 @@ pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], doub
         size *= 1.25;
     }
     c->size = size;
-    int64_t ncell = 1;
     for (int d = 0; d < 3; d++) {
         c->lo[d] = lo[d];
         c->dim[d] = (int64_t)floor((hi[d] - lo[d]) / size) + 1;
-        ncell *= c->dim[d];
     }
+}
+
+pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], double cutoff,
+                                const uint8_t *skip)
+{
+    c->start = NULL;
+    c->index = NULL;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = 0; i < n; i++)
+        for (int d = 0; d < 3; d++)
+            if (isfinite(x[d][i]) && !(skip && skip[i])) { /* fmin, fmax inlined */
+                lo[d] = x[d][i] < lo[d] ? x[d][i] : lo[d];
+                hi[d] = x[d][i] > hi[d] ? x[d][i] : hi[d];
+            }
+    if (!(cutoff > 0))
+        return pd_fail(PD_ERR_INVALID, "cell size must be positive");
+    pd_cells_geometry(c, lo, hi, n, cutoff);
+    const int64_t ncell = c->dim[0] * c->dim[1] * c->dim[2];
     c->start = calloc((size_t)ncell + 1, sizeof(int64_t));
     c->index = malloc((size_t)(n > 0 ? n : 1) * sizeof(int32_t));
     int64_t *cellof = malloc((size_t)(n > 0 ? n : 1) * sizeof(int64_t));

@@ -137,6 +137,32 @@ void pd_comm_bcast(void *buf, int64_t bytes)
         MPI_Bcast(buf, (int)bytes, MPI_BYTE, 0, MPI_COMM_WORLD);
 }
 
+void pd_comm_box(double lo[3], double hi[3])
+{
+    if (pd_comm_size() == 1)
+        return;
+    MPI_Allreduce(MPI_IN_PLACE, lo, 3, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(MPI_IN_PLACE, hi, 3, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+}
+
+void pd_comm_alltoall(const double *send, const int64_t *send_count, double *recv,
+                      const int64_t *recv_count)
+{
+    const int P = pd_comm_size();
+    if (P == 1) {
+        memmove(recv, send, (size_t)send_count[0] * sizeof(double));
+        return;
+    }
+    int *c = malloc((size_t)P * 4 * sizeof(int));
+    if (c == NULL)
+        MPI_Abort(MPI_COMM_WORLD, 1);
+    int_counts(send_count, P, c, c + P);
+    int_counts(recv_count, P, c + 2 * P, c + 3 * P);
+    MPI_Alltoallv(send, c, c + P, MPI_DOUBLE, recv, c + 2 * P, c + 3 * P, MPI_DOUBLE,
+                  MPI_COMM_WORLD);
+    free(c);
+}
+
 void pd_comm_sendrecv(const double *send, int64_t ns, int to, double *recv, int64_t nr,
                       int from)
 {
@@ -202,6 +228,19 @@ void pd_comm_bcast(void *buf, int64_t bytes)
 {
     (void)buf;
     (void)bytes;
+}
+
+void pd_comm_box(double lo[3], double hi[3])
+{
+    (void)lo;
+    (void)hi;
+}
+
+void pd_comm_alltoall(const double *send, const int64_t *send_count, double *recv,
+                      const int64_t *recv_count)
+{
+    (void)recv_count;
+    memmove(recv, send, (size_t)send_count[0] * sizeof(double));
 }
 
 void pd_comm_sendrecv(const double *send, int64_t ns, int to, double *recv, int64_t nr,

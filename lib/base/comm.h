@@ -14,6 +14,12 @@
 void pd_comm_allgather(const double *mine, const int64_t *counts, double *all);
 /* The same to rank 0 alone, of bytes (`all` is read on rank 0 only). */
 void pd_comm_gather_bytes(const void *mine, const int64_t *bytes, void *all);
+/* The smallest lo[d] and the largest hi[d] over the ranks, in place. */
+void pd_comm_box(double lo[3], double hi[3]);
+/* Each rank sends send_count[r] doubles to rank r (from `send`, in rank
+ * order) and receives recv_count[r] from it (into `recv`, in rank order). */
+void pd_comm_alltoall(const double *send, const int64_t *send_count, double *recv,
+                      const int64_t *recv_count);
 /* Rank 0's `bytes` at buf into every rank's. */
 void pd_comm_bcast(void *buf, int64_t bytes);
 /* Send `ns` doubles to rank `to` and receive `nr` from rank `from` (either

@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
 #include "effects/effect.h"
 #include "models/model.h"
 #include "stencil/grid.h"
@@ -29,11 +30,41 @@ typedef struct {
     double cutoff;     /* largest d_ij, m                      */
     double skin;       /* m                                    */
     int64_t *offset;   /* n+1                                  */
-    int32_t *partner;  /* candidates within cutoff + skin       */
+    int32_t *partner;  /* candidates within cutoff + skin (a piece of a
+                          body on MPI ranks: n + k for the k-th of its
+                          remote partners, whose positions are yr)    */
     double *d;         /* d_ij per candidate, m                 */
     int64_t cap;
     double *ybuild[3]; /* positions at the last build           */
+    /* a piece of a body on MPI ranks (lib/run/piece.c): the partners of
+     * its particles that are neither its own nor its ghosts, their
+     * positions received at each step, and its own particles that the
+     * other ranks' lists hold */
+    int remote;        /* 1: some rank has remote partners (all agree) */
+    int64_t nremote;   /* their positions and volumes are kept past the
+                          piece's n rows of sim->y and of its particles'
+                          volumes (room made at each build), so that the
+                          list's loops are the whole body's, bit for bit */
+    int64_t *send_row; /* local rows sent, by rank                   */
+    int64_t *remote_g; /* the remote partners' rows of the whole body */
+    int64_t *scount, *rcount; /* doubles sent to / received from each rank */
+    double *sbuf, *rbuf;
 } contact_list;
+
+static void remote_free(contact_list *cl)
+{
+    free(cl->remote_g);
+    cl->remote_g = NULL;
+    free(cl->send_row);
+    free(cl->scount);
+    free(cl->rcount);
+    free(cl->sbuf);
+    free(cl->rbuf);
+    cl->send_row = cl->scount = cl->rcount = NULL;
+    cl->sbuf = cl->rbuf = NULL;
+    cl->nremote = 0;
+    cl->remote = 0;
+}
 
 static void contact_free(void *state)
 {
@@ -45,6 +76,7 @@ static void contact_free(void *state)
     free(cl->d);
     for (int k = 0; k < 3; k++)
         free(cl->ybuild[k]);
+    remote_free(cl);
     free(cl);
 }
 
@@ -399,12 +431,503 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
     return s;
 }
 
+/* ---------------------------------------------------------------------
+ * A piece of a body on MPI ranks (lib/run/piece.c).  Its own particles get
+ * the whole body's lists, pair for pair and in the same order, so that
+ * their forces keep the one rank's bits.  The whole body's list is
+ * build_movers's (or build_all's: every particle a mover): a mover's pairs
+ * in the order of the cells of one grid laid over the whole body (a
+ * partner's cell z, y, x, then its row), a non-mover's from the movers in
+ * their rows' order.  So the ranks lay the same grid (the bounding box
+ * over all ranks, pd_cells_geometry), every rank learns every mover, and
+ * each finds the pairs of its own particles among the movers and its own
+ * and ghost particles; a pair of another rank's mover with a particle of
+ * this rank's that the other rank's piece does not hold is sent to it.  A
+ * partner that is neither a particle of the piece nor a ghost is remote:
+ * its owner sends its position at every step.  The rows exchanged are the
+ * two ends of the pairs, which every rank sees alike (a pair is in the
+ * lists of both its ends).
+ */
+
+typedef struct {
+    int64_t row;    /* the piece's own particle whose pair it is     */
+    int64_t key[3]; /* a mover's list: the partner's cell (z, y, x)  */
+    int64_t j;      /* the partner's row of the whole body          */
+    double d;       /* d_ij, m                                       */
+    double v;       /* the partner's volume, m^3                     */
+} pair_rec;
+
+static int cmp_pair(const void *a, const void *b)
+{
+    const pair_rec *x = a, *y = b;
+    if (x->row != y->row)
+        return x->row < y->row ? -1 : 1;
+    for (int k = 0; k < 3; k++)
+        if (x->key[k] != y->key[k])
+            return x->key[k] < y->key[k] ? -1 : 1;
+    return (x->j > y->j) - (x->j < y->j);
+}
+
+static int cmp_i64(const void *a, const void *b)
+{
+    const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
+static int cmp_i64_pair(const void *a, const void *b)
+{
+    const int64_t *x = a, *y = b;
+    return x[0] != y[0] ? (x[0] > y[0]) - (x[0] < y[0]) : (x[1] > y[1]) - (x[1] < y[1]);
+}
+
+/* The rank that owns row g of the whole body. */
+static int owner_of(const pd_piece *pc, int64_t g)
+{
+    int lo = 0, hi = pc->ranks - 1;
+    while (lo < hi) {
+        const int mid = (lo + hi + 1) / 2;
+        if (pc->own_at[mid] <= g)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    return lo;
+}
+
+static int in_piece(const pd_piece *pc, int r, int64_t g)
+{
+    return g >= pc->piece_at[2 * r] && g < pc->piece_at[2 * r + 1];
+}
+
+/* A point of the search: a particle of the piece, or a mover of any rank. */
+typedef struct {
+    int64_t g;     /* row of the whole body                    */
+    int64_t local; /* row of the piece, or -1                  */
+    double x[3], r, v;
+    int mover;
+} search_point;
+
+/* Does the pair of a (at ya, xa, ra, its cell ka) and point q pass
+ * candidates()'s tests (within reach, in the adjacent cells of the whole
+ * body's grid, not pruned, not a kernel pair)?  Its d_ij into *d. */
+static int pair_test(const pd_sim *sim, const pd_cells *G, const double ya[3], const double xa[3],
+                     double ra, const int64_t ka[3], int64_t la, const double yq[3],
+                     const search_point *q, double reach2, double prune2, int prune, double *d)
+{
+    const double dx = ya[0] - yq[0], dy = ya[1] - yq[1], dz = ya[2] - yq[2];
+    if (dx * dx + dy * dy + dz * dz > reach2)
+        return 0;
+    int64_t kq[3];
+    pd_cells_locate(G, yq, kq);
+    for (int a = 0; a < 3; a++)
+        if (kq[a] < ka[a] - 1 || kq[a] > ka[a] + 1)
+            return 0;
+    if (prune) {
+        const double vx = (ya[0] - xa[0]) - (yq[0] - q->x[0]), vy = (ya[1] - xa[1]) - (yq[1] - q->x[1]),
+                     vz = (ya[2] - xa[2]) - (yq[2] - q->x[2]);
+        if (vx * vx + vy * vy + vz * vz < prune2)
+            return 0;
+    }
+    if (la >= 0 && q->local >= 0) { /* both in the piece: the kernel's pair? */
+        const int64_t i = la, j = q->local;
+        if (pd_grid_contact(sim->grid) && pd_grid_pair(sim->grid, i, j))
+            return 0;
+        if (sim->half.contact && pd_half_find(&sim->half, j < i ? j : i, j < i ? i : j) >= 0)
+            return 0;
+    }
+    const double ex = xa[0] - q->x[0], ey = xa[1] - q->x[1], ez = xa[2] - q->x[2];
+    const double r0 = sqrt(ex * ex + ey * ey + ez * ez);
+    *d = fmin(PD_CONTACT_REF_FRAC * r0, PD_CONTACT_RADIUS_FAC * (ra + q->r));
+    return 1;
+}
+
+/* Append to a growing array. */
+static int grow(void **a, int64_t *cap, int64_t need, size_t size)
+{
+    if (need <= *cap)
+        return 1;
+    int64_t c = 2 * need + 64;
+    void *na = realloc(*a, (size_t)c * size);
+    if (na == NULL)
+        return 0;
+    *a = na;
+    *cap = c;
+    return 1;
+}
+
+static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
+{
+    const pd_piece *pc = sim->piece;
+    const int P = pc->ranks, me = pc->rank;
+    const int64_t n = sim->n, first = pc->first;
+    double *const *y = sim->y, *const *x = sim->p->x;
+    const uint8_t *lost = sim->lost;
+    /* the whole body's grid */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = pc->own_lo; i < pc->own_hi; i++)
+        for (int d = 0; d < 3; d++)
+            if (isfinite(y[d][i]) && !(lost && lost[i])) {
+                lo[d] = y[d][i] < lo[d] ? y[d][i] : lo[d];
+                hi[d] = y[d][i] > hi[d] ? y[d][i] : hi[d];
+            }
+    pd_comm_box(lo, hi);
+    pd_cells G;
+    pd_cells_geometry(&G, lo, hi, pc->n_whole, reach);
+    /* the movers (build_movers's; build_all's: everyone), of every rank */
+    const int kernel = pd_grid_contact(sim->grid) || sim->half.contact;
+    const double gap = sim->grid ? pd_grid_gap(sim->grid) : sim->half.gap;
+    const double umin = kernel ? 0.5 * (gap - reach) : 0.0;
+    const double umin2 = umin > 0 ? umin * umin : 0.0;
+    const int prune = kernel && gap > reach;
+    const double prune2 = prune ? (gap - reach) * (gap - reach) * (1.0 - 1e-9) : 0.0;
+    uint8_t *mv = malloc((size_t)(n > 0 ? n : 1));
+    int64_t *counts = malloc((size_t)P * 3 * sizeof(int64_t)), *c2 = counts + P, *c3 = counts + 2 * P;
+    if (mv == NULL || counts == NULL) {
+        free(mv);
+        free(counts);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+    }
+    int64_t nmine = 0;
+    for (int64_t i = 0; i < n; i++) {
+        const double ux = y[0][i] - x[0][i], uy = y[1][i] - x[1][i], uz = y[2][i] - x[2][i];
+        mv[i] = !(ux * ux + uy * uy + uz * uz < umin2) && !(lost && lost[i]);
+        nmine += mv[i] && i >= pc->own_lo && i < pc->own_hi;
+    }
+    enum { MW = 9 }; /* a mover: row, y, x, radius, volume */
+    double *mine = malloc((size_t)(nmine > 0 ? nmine : 1) * MW * sizeof(double));
+    double total_d = (double)nmine * MW, *all_c = malloc((size_t)P * sizeof(double));
+    pd_status st = mine && all_c ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for the movers");
+    int64_t m = 0;
+    double *M = NULL;
+    if (st == PD_OK) {
+        for (int64_t i = pc->own_lo, k = 0; i < pc->own_hi; i++)
+            if (mv[i]) {
+                double *q = mine + MW * k++;
+                q[0] = (double)(first + i);
+                for (int d = 0; d < 3; d++) {
+                    q[1 + d] = y[d][i];
+                    q[4 + d] = x[d][i];
+                }
+                q[7] = sim->p->radius[i];
+                q[8] = sim->p->volume[i];
+            }
+        for (int r = 0; r < P; r++)
+            counts[r] = 1;
+        pd_comm_allgather(&total_d, counts, all_c);
+        for (int r = 0; r < P; r++)
+            m += (counts[r] = (int64_t)all_c[r]) / MW;
+        if ((M = malloc((size_t)(m > 0 ? m : 1) * MW * sizeof(double))) == NULL)
+            st = pd_fail(PD_ERR_NOMEM, "out of memory for the movers");
+        else
+            pd_comm_allgather(mine, counts, M);
+    }
+    free(mine);
+    free(all_c);
+    /* the points: the piece's particles that are neither movers nor lost,
+     * and every mover */
+    const int64_t np = n + m;
+    search_point *pt = st == PD_OK ? malloc((size_t)(np > 0 ? np : 1) * sizeof *pt) : NULL;
+    double *py[3] = {NULL, NULL, NULL};
+    uint8_t *skip = st == PD_OK ? malloc((size_t)(np > 0 ? np : 1)) : NULL;
+    for (int d = 0; d < 3 && st == PD_OK; d++)
+        py[d] = malloc((size_t)(np > 0 ? np : 1) * sizeof(double));
+    if (st == PD_OK && (!pt || !skip || !py[0] || !py[1] || !py[2]))
+        st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+    pd_cells C;
+    memset(&C, 0, sizeof C);
+    if (st == PD_OK) {
+        for (int64_t i = 0; i < n; i++) {
+            pt[i] = (search_point){.g = first + i, .local = i, .r = sim->p->radius[i],
+                                   .v = sim->p->volume[i], .mover = 0};
+            for (int d = 0; d < 3; d++) {
+                pt[i].x[d] = x[d][i];
+                py[d][i] = y[d][i];
+            }
+            skip[i] = mv[i] || (lost && lost[i]);
+        }
+        for (int64_t k = 0; k < m; k++) {
+            const double *q = M + MW * k;
+            const int64_t g = (int64_t)q[0];
+            search_point *s = &pt[n + k];
+            *s = (search_point){.g = g, .local = g >= first && g < first + n ? g - first : -1,
+                                .r = q[7], .v = q[8], .mover = 1};
+            for (int d = 0; d < 3; d++) {
+                s->x[d] = q[4 + d];
+                py[d][n + k] = q[1 + d];
+            }
+            skip[n + k] = 0;
+        }
+        st = pd_cells_build_except(&C, np, py, reach, skip);
+    }
+    /* the pairs of the own particles, and those sent to the movers' owners */
+    pair_rec *rec = NULL;
+    enum { OW = 7 };    /* to each rank: its mover, our particle, its position, d, volume */
+    double *out = NULL;
+    int64_t nrec = 0, caprec = 0, nout = 0, capout = 0;
+    int64_t *dest = NULL, capdest = 0;
+    const double reach2 = reach * reach;
+    for (int64_t i = pc->own_lo; i < pc->own_hi && st == PD_OK; i++) {
+        if (lost && lost[i])
+            continue;
+        const double yi[3] = {y[0][i], y[1][i], y[2][i]}, xi[3] = {x[0][i], x[1][i], x[2][i]};
+        int64_t ki[3];
+        pd_cells_locate(&G, yi, ki);
+        int64_t rl[9], rh[9];
+        const int nr = pd_cells_adjacent_rows(&C, yi, rl, rh);
+        for (int q = 0; q < nr && st == PD_OK; q++)
+            for (int64_t e = rl[q]; e < rh[q]; e++) {
+                const int64_t k = C.index[e];
+                const search_point *s = &pt[k];
+                if (s->g == first + i || (!mv[i] && !s->mover))
+                    continue;
+                const double yq[3] = {py[0][k], py[1][k], py[2][k]};
+                double d;
+                if (!pair_test(sim, &G, yi, xi, sim->p->radius[i], ki, i, yq, s, reach2, prune2,
+                               prune, &d))
+                    continue;
+                if (!grow((void **)&rec, &caprec, nrec + 1, sizeof *rec)) {
+                    st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
+                    break;
+                }
+                pair_rec *r = &rec[nrec++];
+                r->row = i;
+                r->j = s->g;
+                r->d = d;
+                r->v = s->v;
+                if (mv[i])
+                    pd_cells_locate(&G, yq, r->key);
+                else
+                    r->key[0] = r->key[1] = r->key[2] = 0;
+                /* a mover of a rank whose piece lacks this non-mover */
+                const int t = s->mover && !mv[i] ? owner_of(pc, s->g) : me;
+                if (t != me && !in_piece(pc, t, first + i)) {
+                    if (!grow((void **)&out, &capout, OW * (nout + 1), sizeof(double)) ||
+                        !grow((void **)&dest, &capdest, nout + 1, sizeof(int64_t))) {
+                        st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
+                        break;
+                    }
+                    double *o = out + OW * nout;
+                    o[0] = (double)s->g;
+                    o[1] = (double)(first + i);
+                    o[2] = yi[0], o[3] = yi[1], o[4] = yi[2], o[5] = d;
+                    o[6] = sim->p->volume[i];
+                    dest[nout++] = t;
+                }
+            }
+    }
+    pd_cells_free(&C);
+    /* the pairs sent (in rank order: a counting sort by destination) */
+    st = pd_comm_or(st != PD_OK) && st == PD_OK ? pd_fail(PD_ERR_IO, "a rank failed in the contact search") : st;
+    double *sorted = NULL, *got = NULL;
+    if (st == PD_OK) {
+        for (int r = 0; r < P; r++)
+            counts[r] = 0;
+        for (int64_t e = 0; e < nout; e++)
+            counts[dest[e]] += OW;
+        int64_t *at = c3; /* cursors */
+        for (int64_t r = 0, sum = 0; r < P; sum += counts[r], r++)
+            at[r] = sum;
+        sorted = malloc((size_t)(OW * nout > 0 ? OW * nout : 1) * sizeof(double));
+        if (sorted)
+            for (int64_t e = 0; e < nout; e++) {
+                memcpy(sorted + at[dest[e]], out + OW * e, OW * sizeof(double));
+                at[dest[e]] += OW;
+            }
+        /* how many each rank sends here */
+        double *cd = malloc((size_t)P * sizeof(double)), *rd = malloc((size_t)P * sizeof(double));
+        int64_t *ones = malloc((size_t)P * sizeof(int64_t));
+        int64_t ngot = 0;
+        if (cd && rd && ones && sorted) {
+            for (int r = 0; r < P; r++) {
+                cd[r] = (double)counts[r];
+                ones[r] = 1;
+            }
+            pd_comm_alltoall(cd, ones, rd, ones);
+            for (int r = 0; r < P; r++)
+                ngot += c2[r] = (int64_t)rd[r];
+            got = malloc((size_t)(ngot > 0 ? ngot : 1) * sizeof(double));
+        }
+        if (got)
+            pd_comm_alltoall(sorted, counts, got, c2);
+        else
+            st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
+        free(cd);
+        free(rd);
+        free(ones);
+        for (int64_t e = 0; st == PD_OK && e < ngot / OW; e++) { /* a remote non-mover's pair */
+            const double *o = got + OW * e;
+            if (!grow((void **)&rec, &caprec, nrec + 1, sizeof *rec)) {
+                st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
+                break;
+            }
+            pair_rec *r = &rec[nrec++];
+            r->row = (int64_t)o[0] - first;
+            r->j = (int64_t)o[1];
+            r->d = o[5];
+            r->v = o[6];
+            pd_cells_locate(&G, o + 2, r->key);
+        }
+    }
+    free(sorted);
+    free(got);
+    free(out);
+    free(dest);
+    free(M);
+    free(pt);
+    free(skip);
+    for (int d = 0; d < 3; d++)
+        free(py[d]);
+    free(mv);
+    /* the lists, and the remote partners */
+    remote_free(cl);
+    int64_t *remote = NULL, *send = NULL, nsend = 0, capsend = 0;
+    if (st == PD_OK) {
+        qsort(rec, (size_t)nrec, sizeof *rec, cmp_pair);
+        remote = malloc((size_t)(nrec > 0 ? nrec : 1) * sizeof(int64_t));
+        if (remote == NULL)
+            st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
+    }
+    int64_t nr = 0;
+    for (int64_t e = 0; st == PD_OK && e < nrec; e++) {
+        const int64_t g = rec[e].j;
+        if (!(g >= first && g < first + n))
+            remote[nr++] = g;
+        const int t = owner_of(pc, g);
+        if (t != me && !in_piece(pc, t, first + rec[e].row)) { /* it needs ours */
+            if (!grow((void **)&send, &capsend, 2 * (nsend + 1), sizeof(int64_t))) {
+                st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
+                break;
+            }
+            send[2 * nsend] = t;
+            send[2 * nsend + 1] = rec[e].row;
+            nsend++;
+        }
+    }
+    if (st == PD_OK) {
+        qsort(remote, (size_t)nr, sizeof(int64_t), cmp_i64);
+        int64_t u = 0;
+        for (int64_t e = 0; e < nr; e++)
+            if (u == 0 || remote[e] != remote[u - 1])
+                remote[u++] = remote[e];
+        nr = u;
+        qsort(send, (size_t)nsend, 2 * sizeof(int64_t), cmp_i64_pair); /* by rank, then row */
+        int64_t v = 0;
+        for (int64_t e = 0; e < nsend; e++)
+            if (v == 0 || send[2 * e] != send[2 * v - 2] || send[2 * e + 1] != send[2 * v - 1]) {
+                send[2 * v] = send[2 * e];
+                send[2 * v + 1] = send[2 * e + 1];
+                v++;
+            }
+        nsend = v;
+        cl->nremote = nr;
+        cl->scount = calloc((size_t)P, sizeof(int64_t));
+        cl->rcount = calloc((size_t)P, sizeof(int64_t));
+        cl->send_row = malloc((size_t)(nsend > 0 ? nsend : 1) * sizeof(int64_t));
+        cl->sbuf = malloc((size_t)(3 * nsend > 0 ? 3 * nsend : 1) * sizeof(double));
+        cl->rbuf = malloc((size_t)(3 * nr > 0 ? 3 * nr : 1) * sizeof(double));
+        int room = 1; /* the remote partners past the piece's own rows */
+        for (int d = 0; d < 3; d++) {
+            double *ny = realloc(sim->y[d], (size_t)(n + nr > 0 ? n + nr : 1) * sizeof(double));
+            room &= ny != NULL;
+            if (ny)
+                sim->y[d] = ny;
+        }
+        double *nv = realloc(pc->p->volume, (size_t)(n + nr > 0 ? n + nr : 1) * sizeof(double));
+        if (nv)
+            pc->p->volume = nv;
+        if (!cl->scount || !cl->rcount || !cl->send_row || !cl->sbuf || !cl->rbuf || !room || !nv)
+            st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
+        for (int64_t e = 0; st == PD_OK && e < nsend; e++) {
+            cl->send_row[e] = send[2 * e + 1];
+            cl->scount[send[2 * e]] += 3;
+        }
+        for (int64_t e = 0; st == PD_OK && e < nr; e++)
+            cl->rcount[owner_of(pc, remote[e])] += 3;
+    }
+    /* the lists of the piece's rows: its own particles' (the ghosts' empty) */
+    memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
+    if (st == PD_OK)
+        st = list_room(cl, nrec);
+    if (st == PD_OK) {
+        for (int64_t e = 0; e < nrec; e++)
+            cl->offset[rec[e].row + 1]++;
+        for (int64_t i = 0; i < n; i++)
+            cl->offset[i + 1] += cl->offset[i];
+        for (int64_t e = 0; e < nrec; e++) {
+            const int64_t g = rec[e].j;
+            int64_t at = g - first;
+            if (!(g >= first && g < first + n)) { /* its slot among the remote */
+                int64_t a = 0, b = nr;
+                while (a < b) {
+                    const int64_t mid = (a + b) / 2;
+                    if (remote[mid] < g)
+                        a = mid + 1;
+                    else
+                        b = mid;
+                }
+                at = n + a;
+                pc->p->volume[at] = rec[e].v;
+            }
+            cl->partner[e] = (int32_t)at;
+            cl->d[e] = rec[e].d;
+        }
+        /* the rows each rank sends here are those it counted (both ends of
+         * a pair see it alike): checked, for a list built wrong is silent */
+        double *cd = malloc((size_t)P * sizeof(double)), *rd = malloc((size_t)P * sizeof(double));
+        int64_t *ones = malloc((size_t)P * sizeof(int64_t));
+        if (cd && rd && ones) {
+            for (int r = 0; r < P; r++) {
+                cd[r] = (double)cl->scount[r];
+                ones[r] = 1;
+            }
+            pd_comm_alltoall(cd, ones, rd, ones);
+            for (int r = 0; r < P && st == PD_OK; r++)
+                if ((int64_t)rd[r] != cl->rcount[r])
+                    st = pd_fail(PD_ERR_INVALID, "the contact pairs of ranks %d and %d disagree", r, me);
+        } else
+            st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
+        free(cd);
+        free(rd);
+        free(ones);
+    }
+    if (st != PD_OK)
+        memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
+    cl->remote = pd_comm_or(st == PD_OK && (nr > 0 || nsend > 0));
+    cl->remote_g = remote; /* kept: pd_contact_gather names them */
+    sim->contact_remote = nr > sim->contact_remote ? nr : sim->contact_remote;
+    remote = NULL;
+    free(rec);
+    free(remote);
+    free(send);
+    free(counts);
+    return st;
+}
+
+/* The remote partners' positions, from their owners (every step). */
+static void remote_positions(pd_sim *sim, contact_list *cl)
+{
+    if (!cl->remote)
+        return;
+    const double t0 = pd_wtime();
+    int64_t k = 0;
+    for (int r = 0; r < sim->piece->ranks; r++)
+        for (int64_t e = 0; e < cl->scount[r] / 3; e++, k++)
+            for (int d = 0; d < 3; d++)
+                cl->sbuf[3 * k + d] = sim->y[d][cl->send_row[k]];
+    pd_comm_alltoall(cl->sbuf, cl->scount, cl->rbuf, cl->rcount);
+    for (int64_t e = 0; e < cl->nremote; e++)
+        for (int d = 0; d < 3; d++)
+            sim->y[d][sim->n + e] = cl->rbuf[3 * e + d];
+    sim->timers[PD_T_RANKS] += pd_wtime() - t0;
+}
+
 static pd_status contact_build(pd_sim *sim, contact_list *cl)
 {
     double t0 = pd_wtime();
     const double reach = cl->cutoff + cl->skin;
-    pd_status s = pd_grid_contact(sim->grid) || sim->half.contact ? build_movers(sim, cl, reach)
-                                                                  : build_all(sim, cl, reach);
+    pd_status s = sim->piece                                        ? build_piece(sim, cl, reach)
+                  : pd_grid_contact(sim->grid) || sim->half.contact ? build_movers(sim, cl, reach)
+                                                                    : build_all(sim, cl, reach);
     if (s != PD_OK)
         return s;
     const int64_t n = sim->n;
@@ -424,12 +947,19 @@ static int needs_rebuild(const pd_sim *sim, const contact_list *cl)
         return 1;
     double lim2 = 0.25 * cl->skin * cl->skin;
     int moved = 0;
+    /* a piece: its own particles, and then those of every rank */
+    const int64_t lo = sim->piece ? sim->piece->own_lo : 0, hi = sim->piece ? sim->piece->own_hi : sim->n;
 #pragma omp parallel for schedule(static) reduction(| : moved)
-    for (int64_t i = 0; i < sim->n; i++) {
+    for (int64_t i = lo; i < hi; i++) {
         double dx = sim->y[0][i] - cl->ybuild[0][i], dy = sim->y[1][i] - cl->ybuild[1][i],
                dz = sim->y[2][i] - cl->ybuild[2][i];
         double d2 = dx * dx + dy * dy + dz * dz;
         moved |= !(d2 <= lim2);
+    }
+    if (sim->piece) {
+        const double t0 = pd_wtime();
+        moved = pd_comm_or(moved);
+        ((pd_sim *)sim)->timers[PD_T_RANKS] += pd_wtime() - t0; /* a clock */
     }
     return moved;
 }
@@ -445,6 +975,8 @@ static pd_status contact_force(pd_sim *sim, void *state)
         /* booked as neighbour lists by contact_build, not as contact */
         sim->timers[PD_T_CONTACT] -= pd_wtime() - t0;
     }
+    if (sim->piece) /* the remote partners where they are now */
+        remote_positions(sim, cl);
     if (cl->offset[sim->n] == 0) /* no pair (the stencil has them all) */
         return PD_OK;
     const double k = PD_CONTACT_SCALE * sim->sc.c / sim->b->horizon;
@@ -494,12 +1026,20 @@ static pd_status contact_restore(pd_sim *sim, void *state, const pd_restart *r)
     if (r->contact_position[0] == NULL)
         return pd_fail(PD_ERR_FORMAT, "the restart data have no contact list positions");
     contact_list *cl = state;
-    double *y[3] = {sim->y[0], sim->y[1], sim->y[2]};
-    for (int d = 0; d < 3; d++)
-        sim->y[d] = r->contact_position[d];
+    /* the build's positions in the run's own arrays (a piece's build may
+     * make room in them), the run's back after it */
+    const size_t bytes = (size_t)sim->n * sizeof(double);
+    double *now = malloc(3 * (bytes > 0 ? bytes : 1));
+    if (now == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact list");
+    for (int d = 0; d < 3; d++) {
+        memcpy(now + d * sim->n, sim->y[d], bytes);
+        memcpy(sim->y[d], r->contact_position[d], bytes);
+    }
     pd_status s = contact_build(sim, cl);
     for (int d = 0; d < 3; d++)
-        sim->y[d] = y[d];
+        memcpy(sim->y[d], now + d * sim->n, bytes);
+    free(now);
     sim->contact_builds = r->contact_builds;
     return s;
 }
@@ -543,4 +1083,97 @@ const pd_effect pd_effect_contact = {
 int64_t pd_sim_contact_builds(const pd_sim *sim)
 {
     return sim->contact_builds;
+}
+
+int64_t pd_sim_contact_remote(const pd_sim *sim)
+{
+    return sim->contact_remote;
+}
+
+/* The contact state of a run (NULL: it has no contact). */
+static contact_list *list_of(const pd_sim *sim)
+{
+    for (int k = 0; k < sim->neffects; k++)
+        if (sim->effects[k] == &pd_effect_contact)
+            return sim->state[k];
+    return NULL;
+}
+
+pd_status pd_contact_gather(const pd_sim *piece, pd_sim *whole)
+{
+    const pd_piece *pc = piece->piece;
+    const contact_list *cl = list_of(piece);
+    if (pc == NULL || cl == NULL)
+        return PD_OK;
+    const int P = pc->ranks, root = pc->rank == 0;
+    const int64_t n = piece->n, lo = pc->own_lo, hi = pc->own_hi, first = pc->first;
+    const int64_t q0 = cl->offset[lo], q1 = cl->offset[hi];
+    /* per own row its count, then its partners (rows of the whole body)
+     * and their d, as doubles */
+    double *mine = malloc((size_t)((hi - lo) + 2 * (q1 - q0) + 1) * sizeof(double));
+    int64_t *bytes = malloc((size_t)P * sizeof(int64_t)), *ones = calloc((size_t)P, sizeof(int64_t));
+    double *sizes = malloc((size_t)P * sizeof(double));
+    if (!mine || !bytes || !ones || !sizes) {
+        free(mine);
+        free(bytes);
+        free(ones);
+        free(sizes);
+        return pd_fail(PD_ERR_NOMEM, "out of memory gathering the contact list");
+    }
+    double *m = mine;
+    for (int64_t i = lo; i < hi; i++)
+        *m++ = (double)(cl->offset[i + 1] - cl->offset[i]);
+    for (int64_t q = q0; q < q1; q++) {
+        const int32_t j = cl->partner[q];
+        *m++ = (double)(j < n ? first + j : cl->remote_g[j - n]);
+        *m++ = cl->d[q];
+    }
+    const double size = (double)(m - mine);
+    for (int r = 0; r < P; r++)
+        ones[r] = 1;
+    pd_comm_allgather(&size, ones, sizes);
+    int64_t total = 0;
+    for (int r = 0; r < P; r++)
+        total += bytes[r] = (int64_t)sizes[r] * (int64_t)sizeof(double);
+    double *all = root ? malloc((size_t)(total > 0 ? total : 1)) : NULL;
+    pd_comm_gather_bytes(mine, bytes, all);
+    /* and the positions of the last build */
+    contact_list *wl = root ? list_of(whole) : NULL;
+    for (int d = 0; d < 3; d++) {
+        for (int r = 0; r < P; r++)
+            bytes[r] = pc->rows[r] * (int64_t)sizeof(double);
+        pd_comm_gather_bytes(cl->ybuild[d] + lo, bytes, wl ? wl->ybuild[d] : NULL);
+    }
+    pd_status st = PD_OK;
+    if (root && (all == NULL || wl == NULL))
+        st = pd_fail(PD_ERR_NOMEM, "out of memory gathering the contact list");
+    if (root && st == PD_OK) { /* the ranks' rows in order: the whole body's */
+        const double *a = all;
+        int64_t row = 0, pairs = 0;
+        wl->offset[0] = 0;
+        for (int r = 0; r < P; r++) {
+            const int64_t rows = pc->rows[r];
+            const double *cnt = a, *pr = a + rows;
+            int64_t k = 0;
+            for (int64_t i = 0; i < rows; i++)
+                k += (int64_t)cnt[i];
+            if ((st = list_room(wl, pairs + k)) != PD_OK)
+                break;
+            for (int64_t i = 0; i < rows; i++, row++) {
+                wl->offset[row + 1] = wl->offset[row] + (int64_t)cnt[i];
+                for (int64_t e = 0; e < (int64_t)cnt[i]; e++, pr += 2, pairs++) {
+                    wl->partner[pairs] = (int32_t)pr[0];
+                    wl->d[pairs] = pr[1];
+                }
+            }
+            a = pr;
+        }
+        whole->contact_builds = piece->contact_builds;
+    }
+    free(all);
+    free(mine);
+    free(bytes);
+    free(ones);
+    free(sizes);
+    return st;
 }

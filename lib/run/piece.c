@@ -101,7 +101,7 @@ static const char *not_carried(const pd_sim *whole)
     if (whole->nofail)
         return "--no-failure";
     for (int k = 1; k < whole->neffects; k++)
-        if (whole->effects[k] != &pd_effect_indenter)
+        if (whole->effects[k] != &pd_effect_indenter && whole->effects[k] != &pd_effect_contact)
             return whole->effects[k]->name;
     return NULL;
 }
@@ -148,7 +148,28 @@ static void copy_state(const pd_sim *whole, pd_sim *sim)
     memcpy(sim->ind_f, whole->ind_f, sizeof sim->ind_f);
     memcpy(sim->box_lo, whole->box_lo, sizeof sim->box_lo);
     memcpy(sim->box_hi, whole->box_hi, sizeof sim->box_hi);
+    sim->half.gap = whole->half.gap; /* the whole body's (the bond list's rows' contact) */
+    sim->half.contact_cap = whole->half.contact_cap;
     pd_piece_ghosts_rest(sim);
+}
+
+/* A run gone on from a restart has a contact list built from the positions
+ * of its last build: the piece builds its own from them (collective). */
+static pd_status copy_contact(const pd_sim *whole, pd_sim *sim)
+{
+    pd_restart r, mine;
+    memset(&r, 0, sizeof r);
+    pd_sim_accumulated(whole, &r);
+    if (r.contact_builds <= 0 || r.contact_position[0] == NULL)
+        return PD_OK;
+    memset(&mine, 0, sizeof mine);
+    mine.contact_builds = r.contact_builds;
+    for (int d = 0; d < 3; d++)
+        mine.contact_position[d] = r.contact_position[d] + sim->piece->first;
+    for (int k = 0; k < sim->neffects; k++)
+        if (sim->effects[k] == &pd_effect_contact)
+            return sim->effects[k]->restore(sim, sim->state[k], &mine);
+    return PD_OK;
 }
 
 pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
@@ -168,9 +189,13 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
     pd_piece *pc = calloc(1, sizeof *pc);
     int64_t *start = malloc((size_t)(nb + 1) * sizeof(int64_t));
     int64_t *K = malloc((size_t)(P + 1) * sizeof(int64_t));
-    if (pc)
-        pc->rows = malloc((size_t)P * sizeof(int64_t)), pc->blocks = malloc((size_t)P * sizeof(int64_t));
-    if (!pc || !start || !K || !pc->rows || !pc->blocks) {
+    if (pc) {
+        pc->rows = malloc((size_t)P * sizeof(int64_t));
+        pc->blocks = malloc((size_t)P * sizeof(int64_t));
+        pc->own_at = malloc((size_t)(P + 1) * sizeof(int64_t));
+        pc->piece_at = malloc((size_t)P * 2 * sizeof(int64_t));
+    }
+    if (!pc || !start || !K || !pc->rows || !pc->blocks || !pc->own_at || !pc->piece_at) {
         free(start);
         free(K);
         pd_piece_free(pc);
@@ -207,7 +232,11 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
         for (int r = 0; r < P; r++) {
             pc->rows[r] = start[K[r + 1]] - start[K[r]];
             pc->blocks[r] = K[r + 1] - K[r];
+            pc->own_at[r] = start[K[r]];
+            pc->piece_at[2 * r] = start[piece_first_block(K, r)];
+            pc->piece_at[2 * r + 1] = start[K[r + 1] + 1 < nb ? K[r + 1] + 1 : nb];
         }
+        pc->own_at[P] = n;
         const int64_t L = piece_first_block(K, me), U = K[me + 1] + 1 < nb ? K[me + 1] + 1 : nb;
         pc->rank = me;
         pc->ranks = P;
@@ -247,6 +276,11 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
     }
     sim->piece_owned = 1;
     copy_state(whole, sim);
+    st = copy_contact(whole, sim);
+    if (st != PD_OK) {
+        pd_sim_free(sim);
+        return st;
+    }
     if (whole->lost && sim->lost == NULL) {
         pd_sim_free(sim);
         return pd_fail(PD_ERR_NOMEM, "out of memory for lost particles");
@@ -351,6 +385,8 @@ pd_status pd_sim_gather(const pd_sim *sim, pd_sim *whole)
     free(counts);
     free(all);
     free(bytes);
+    pd_status cs = pd_contact_gather(sim, whole);
+    st = st == PD_OK ? cs : st;
     if (root) { /* the run's sums: the same on every rank */
         whole->step = sim->step;
         whole->time = sim->time;

@@ -14,6 +14,8 @@ void pd_piece_free(pd_piece *pc)
     if (pc == NULL)
         return;
     free(pc->rows);
+    free(pc->own_at);
+    free(pc->piece_at);
     free(pc->blocks);
     free(pc->buf);
     free(pc->sum3);

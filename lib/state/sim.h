@@ -99,6 +99,10 @@ typedef struct pd_piece {
     int64_t blk0;           /* the whole body's block of local block 0 (even) */
     int64_t own_blk_lo, own_blk_hi; /* local blocks owned                   */
     int64_t *rows;          /* ranks: rows each rank owns                    */
+    int64_t *own_at;        /* ranks + 1: the whole body's first row each
+                               rank owns, and n_whole                        */
+    int64_t *piece_at;      /* 2 ranks: the whole body's rows [piece_at[2r],
+                               piece_at[2r + 1]) of rank r's piece           */
     int64_t *blocks;        /* ranks: blocks each rank owns                  */
     int64_t send_down;      /* rows [own_lo, own_lo + send_down) are the
                                ghosts of the rank below                      */
@@ -185,6 +189,8 @@ struct pd_sim {
                            /scene@effects)                               */
     double timers[PD_T_COUNT]; /* wall time per pd_timer, s               */
     int64_t contact_builds;    /* contact list builds so far             */
+    int64_t contact_remote;    /* a piece: the most contact partners one
+                                  of its lists took from beyond it        */
     int constrained;    /* 1: some effect has a constrain hook           */
     int f_zeroed;       /* 1: the drift pass has zeroed f for the next
                            forces                                        */
