@@ -451,7 +451,7 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
 
 typedef struct {
     int64_t row;    /* the piece's own particle whose pair it is     */
-    int64_t key[3]; /* a mover's list: the partner's cell (z, y, x)  */
+    int64_t key[3]; /* a mover's list: the partner's cell z, y, x    */
     int64_t j;      /* the partner's row of the whole body          */
     double d;       /* d_ij, m                                       */
     double v;       /* the partner's volume, m^3                     */
@@ -478,6 +478,17 @@ static int cmp_i64_pair(const void *a, const void *b)
 {
     const int64_t *x = a, *y = b;
     return x[0] != y[0] ? (x[0] > y[0]) - (x[0] < y[0]) : (x[1] > y[1]) - (x[1] < y[1]);
+}
+
+/* The order of a partner in a mover's list: its cell's z, y, x (as
+ * pd_cells_adjacent_rows walks the cells: rows of x in y, then z). */
+static void cell_key(const pd_cells *G, const double y[3], int64_t key[3])
+{
+    int64_t k[3];
+    pd_cells_locate(G, y, k);
+    key[0] = k[2];
+    key[1] = k[1];
+    key[2] = k[0];
 }
 
 /* The rank that owns row g of the whole body. */
@@ -695,7 +706,7 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
                 r->d = d;
                 r->v = s->v;
                 if (mv[i])
-                    pd_cells_locate(&G, yq, r->key);
+                    cell_key(&G, yq, r->key);
                 else
                     r->key[0] = r->key[1] = r->key[2] = 0;
                 /* a mover of a rank whose piece lacks this non-mover */
@@ -765,7 +776,7 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
             r->j = (int64_t)o[1];
             r->d = o[5];
             r->v = o[6];
-            pd_cells_locate(&G, o + 2, r->key);
+            cell_key(&G, o + 2, r->key);
         }
     }
     free(sorted);

@@ -109,6 +109,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
 #include "models/model.h"
 #include "stencil/grid.h"
 
@@ -321,6 +322,10 @@ static pd_status lps_init(pd_sim *sim, void **state)
     if (es != PD_OK) {
         lps_free(st);
         return es;
+    }
+    if (sim->piece) { /* a piece's ghosts lack bonds: their m (and psi_0) from their owners */
+        double *a[2] = {st->m, st->psi0};
+        pd_piece_exchange(sim, a, st->psi0 ? 2 : 1);
     }
     *state = st;
     return PD_OK;
@@ -736,7 +741,9 @@ static double break_marked(pd_sim *sim, lps_state *st)
             st->released[i] -= energy_row(sim, st, bits, i);
             st->touched[i] = 0;
         }
-    return pd_sum_fixed(st->released, sim->n);
+    double sum; /* a piece: over its own rows, then the ranks (collective) */
+    pd_sim_sum(sim, (const double *const *)&st->released, 1, &sum);
+    return sum;
 }
 
 /* A bond i-j (i < j) the lattice stencil broke: marked as force_row
@@ -758,17 +765,56 @@ static void mark_break(void *ctx, int64_t i, int64_t j)
     c->count++;
 }
 
+/* lps_kernel's passes for a piece of a body on MPI ranks: the same, with
+ * the ghosts' theta (and EPS's ratio) from their owners between them.
+ * Returns whether a bond of some rank's broke. */
+static int piece_kernel(pd_sim *sim, lps_state *st, const uint64_t *bits, pd_bond_mode failure)
+{
+    int broke = 0;
+#pragma omp parallel num_threads(st->nthreads)
+    {
+        double *buf = st->scratch + (size_t)omp_get_thread_num() * LPS_ROWS * (size_t)st->family;
+#pragma omp for schedule(static)
+        for (int64_t i = 0; i < sim->n; i++)
+            st->theta[i] = theta_fast(sim, st, bits, i, buf);
+    }
+    pd_piece_exchange(sim, &st->theta, 1);
+    if (st->model == PD_MODEL_EPS) {
+#pragma omp parallel for schedule(dynamic, 256)
+        for (int64_t i = 0; i < sim->n; i++)
+            eps_yield_row(sim, st, i);
+        pd_piece_exchange(sim, &st->ratio, 1);
+    }
+#pragma omp parallel num_threads(st->nthreads) reduction(| : broke)
+    {
+        double *buf = st->scratch + (size_t)omp_get_thread_num() * LPS_ROWS * (size_t)st->family;
+#pragma omp for schedule(dynamic, 256)
+        for (int64_t i = 0; i < sim->n; i++) {
+            if (st->model == PD_MODEL_LPS)
+                force_fast(sim, st, i, failure, buf);
+            else
+                force_row(sim, st, i, failure);
+            broke |= failure && st->touched[i];
+        }
+    }
+    return pd_comm_or(broke);
+}
+
 static pd_status lps_kernel(pd_sim *sim, lps_state *st, pd_bond_mode failure)
 {
     const uint64_t *bits = pd_sim_intact(sim); /* sim->intact, up to date */
     if (sim->grid && st->model == PD_MODEL_LPS) { /* the lattice stencil (lib/stencil/grid.c) */
         stencil_marks c = {sim, st, 0};
         pd_status s = pd_grid_lps(sim, st->m, st->theta, failure, mark_break, &c);
-        if (s == PD_OK && c.count > 0)
+        const int broke = sim->piece ? pd_comm_or(c.count > 0) : c.count > 0;
+        if (s == PD_OK && broke)
             sim->released += break_marked(sim, st);
         return s;
     }
     int broke = 0;
+    if (sim->piece)
+        broke = piece_kernel(sim, st, bits, failure);
+    else
 #pragma omp parallel num_threads(st->nthreads)
     {
         double *buf = st->scratch + (size_t)omp_get_thread_num() * LPS_ROWS * (size_t)st->family;
@@ -1074,3 +1120,66 @@ const pd_model pd_model_eps = {
     .stencil = no_stencil, .dissipative = 1, .history_width = 1, .needs = eps_needs, .takes = lps_takes,
     .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .params = eps_params,
     .describe = eps_describe};
+
+pd_status pd_lps_gather(const pd_sim *piece, pd_sim *whole)
+{
+    const pd_piece *pc = piece->piece;
+    int w = 0;
+    const double *h = pc ? pd_sim_bond_history(piece, &w) : NULL;
+    if (pc == NULL || !pd_comm_or(h != NULL))
+        return PD_OK;
+    /* the own rows' directed bonds, in the whole body's order (their
+     * families are whole), w values each */
+    const int P = pc->ranks, root = pc->rank == 0;
+    const int64_t k0 = piece->b->offset[pc->own_lo], k1 = piece->b->offset[pc->own_hi];
+    const double mine = h ? (double)((k1 - k0) * w) : 0.0;
+    double *counts = malloc((size_t)P * sizeof(double));
+    int64_t *ones = calloc((size_t)P, sizeof(int64_t)), *bytes = malloc((size_t)P * sizeof(int64_t));
+    if (!counts || !ones || !bytes) {
+        free(counts);
+        free(ones);
+        free(bytes);
+        return pd_fail(PD_ERR_NOMEM, "out of memory gathering the bond history");
+    }
+    for (int r = 0; r < P; r++)
+        ones[r] = 1;
+    pd_comm_allgather(&mine, ones, counts);
+    int64_t total = 0;
+    for (int r = 0; r < P; r++)
+        total += bytes[r] = (int64_t)counts[r] * (int64_t)sizeof(double);
+    int ww = 0;
+    double *hw = root ? pd_sim_bond_history(whole, &ww) : NULL;
+    pd_status st = PD_OK;
+    if (root && (hw == NULL || ww != w || total != whole->b->count * w * (int64_t)sizeof(double)))
+        st = pd_fail(PD_ERR_INVALID, "the pieces' bond history is not the body's");
+    double *scratch = root && st != PD_OK ? malloc((size_t)(total > 0 ? total : 1)) : NULL;
+    pd_comm_gather_bytes(h ? h + k0 * w : NULL, bytes, root ? (st == PD_OK ? hw : scratch) : NULL);
+    free(scratch);
+    free(counts);
+    free(ones);
+    free(bytes);
+    return st;
+}
+
+void pd_lps_copy_history(const pd_sim *whole, pd_sim *piece)
+{
+    int w = 0, ww = 0;
+    double *h = pd_sim_bond_history(piece, &w);
+    const double *hw = pd_sim_bond_history(whole, &ww);
+    if (h == NULL || hw == NULL || w != ww)
+        return;
+    const pd_bonds *b = piece->b, *bw = whole->b;
+    const int64_t first = piece->piece->first;
+    for (int64_t i = 0; i < piece->n; i++) {
+        /* a piece's family is the whole one's, in order, less the partners
+         * beyond the piece */
+        int64_t kw = bw->offset[first + i];
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            const int32_t j = (int32_t)(b->neighbor[k] + first);
+            while (kw < bw->offset[first + i + 1] && bw->neighbor[kw] != j)
+                kw++;
+            if (kw < bw->offset[first + i + 1])
+                memcpy(h + k * w, hw + kw * w, (size_t)w * sizeof(double));
+        }
+    }
+}

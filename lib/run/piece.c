@@ -94,8 +94,6 @@ static pd_status slice_bonds(const pd_particles *p, const pd_bonds *b, const uin
 /* What a piece does not yet carry: its name, or NULL. */
 static const char *not_carried(const pd_sim *whole)
 {
-    if (whole->model != &pd_model_pmb)
-        return whole->model->name;
     if (whole->sc.relax)
         return "--relax";
     if (whole->nofail)
@@ -276,6 +274,7 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
     }
     sim->piece_owned = 1;
     copy_state(whole, sim);
+    pd_lps_copy_history(whole, sim);
     st = copy_contact(whole, sim);
     if (st != PD_OK) {
         pd_sim_free(sim);
@@ -386,6 +385,8 @@ pd_status pd_sim_gather(const pd_sim *sim, pd_sim *whole)
     free(all);
     free(bytes);
     pd_status cs = pd_contact_gather(sim, whole);
+    st = st == PD_OK ? cs : st;
+    cs = pd_lps_gather(sim, whole);
     st = st == PD_OK ? cs : st;
     if (root) { /* the run's sums: the same on every rank */
         whole->step = sim->step;

@@ -35,41 +35,40 @@ void pd_piece_ghosts_rest(pd_sim *sim)
     }
 }
 
-/* Rows [lo, lo + rows) of y (and s0) into buf, m doubles a row, or back. */
-static void pack(pd_sim *sim, double *buf, int64_t lo, int64_t rows, int m, int in)
+/* Rows [lo, lo + rows) of the m arrays a into buf, m doubles a row, or
+ * back. */
+static void pack(double *const *a, int m, double *buf, int64_t lo, int64_t rows, int in)
 {
-    for (int64_t r = 0; r < rows; r++) {
-        double *q = buf + m * r;
-        for (int d = 0; d < 3; d++)
+    for (int64_t r = 0; r < rows; r++)
+        for (int c = 0; c < m; c++)
             if (in)
-                sim->y[d][lo + r] = q[d];
+                a[c][lo + r] = buf[m * r + c];
             else
-                q[d] = sim->y[d][lo + r];
-        if (m == 4) {
-            if (in)
-                sim->s0[lo + r] = q[3];
-            else
-                q[3] = sim->s0[lo + r];
-        }
-    }
+                buf[m * r + c] = a[c][lo + r];
 }
 
-pd_status pd_piece_halo(pd_sim *sim)
+void pd_piece_exchange(pd_sim *sim, double *const *a, int m)
 {
     const pd_piece *pc = sim->piece;
-    const int m = sim->s0 ? 4 : 3, down = pc->rank - 1, up = pc->rank + 1 < pc->ranks ? pc->rank + 1 : -1;
+    const int down = pc->rank - 1, up = pc->rank + 1 < pc->ranks ? pc->rank + 1 : -1;
     const int64_t above = sim->n - pc->own_hi;
     double *send = pc->buf, *recv;
     /* to the rank below its ghosts above, from the rank above ours */
     recv = send + m * pc->send_down;
-    pack(sim, send, pc->own_lo, pc->send_down, m, 0);
+    pack(a, m, send, pc->own_lo, pc->send_down, 0);
     pd_comm_sendrecv(send, m * pc->send_down, down, recv, m * above, up);
-    pack(sim, recv, pc->own_hi, above, m, 1);
+    pack(a, m, recv, pc->own_hi, above, 1);
     /* to the rank above its ghosts below, from the rank below ours */
     recv = send + m * pc->send_up;
-    pack(sim, send, pc->own_hi - pc->send_up, pc->send_up, m, 0);
+    pack(a, m, send, pc->own_hi - pc->send_up, pc->send_up, 0);
     pd_comm_sendrecv(send, m * pc->send_up, up, recv, m * pc->own_lo, down);
-    pack(sim, recv, 0, pc->own_lo, m, 1);
+    pack(a, m, recv, 0, pc->own_lo, 1);
+}
+
+pd_status pd_piece_halo(pd_sim *sim)
+{
+    double *a[4] = {sim->y[0], sim->y[1], sim->y[2], sim->s0};
+    pd_piece_exchange(sim, a, sim->s0 ? 4 : 3);
     return PD_OK;
 }
 

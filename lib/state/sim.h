@@ -245,6 +245,9 @@ void pd_sim_sum(const pd_sim *sim, const double *const *x, int m, double *sums);
  * values of each rank's (its own rows', in row order) added to *sum in
  * rank order, as one rank adds them in row order. */
 pd_status pd_piece_halo(pd_sim *sim);
+/* The ghosts' rows of m (at most 4) per-row arrays from their owners
+ * (collective; a model's per-particle values mid-step: LPS's theta). */
+void pd_piece_exchange(pd_sim *sim, double *const *a, int m);
 void pd_piece_ghosts_rest(pd_sim *sim);
 pd_status pd_piece_add_in_order(const pd_sim *sim, const double *v, int64_t n, double *sum);
 void pd_piece_free(pd_piece *pc);

@@ -161,8 +161,12 @@ pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode 
     }
     double *ta = G->theta_m, *tb = G->inv_m;
 #pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < n; i++) {
+    for (int64_t i = 0; i < n; i++)
         theta[i] = m[i] != 0.0 ? (PD_LPS_DILATATION / m[i]) * theta[i] : 0.0;
+    if (sim->piece) /* the ghosts' theta from their owners (theirs lack bonds) */
+        pd_piece_exchange(sim, &theta, 1);
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++) {
         ta[i] = m[i] != 0.0 ? theta[i] / m[i] : 0.0;
         tb[i] = m[i] != 0.0 ? 1.0 / m[i] : 0.0;
         if (failure)
