@@ -94,6 +94,13 @@
 #       against LAMMPS on the same particles (tests/lammps/pd2lmp.py writes
 #       its data file, positions bit for bit, and the scene's input script,
 #       without its dump and with the thermo interval of (a));
+#   (o) MPI ranks ("mpi"; with the MPI build, mpi/bin/pd-run): the full
+#       scene of (a) on BENCH_THREADS ranks of 1 thread (mpirun) against
+#       (a)'s 1 rank of BENCH_THREADS threads, alternately, twice each: the
+#       better loop times and their ratio, the halo a rank sends per step
+#       (the log's), the share of the loop the ranks' exchanges took
+#       (--timing's "MPI ranks"), and whether the two runs' files are the
+#       same bit for bit (but the thread count);
 # Wall time and peak RSS come from /usr/bin/time -f '%e %M' around pd-run,
 # around mpirun (wall) and around each LAMMPS rank (peak RSS, summed).
 #
@@ -102,7 +109,7 @@
 # the 1.6M disk needs about 6 GB of memory and 3 GB in BENCH_DIR, and
 # minutes to build), BENCH_SKIP (words among lammps, lps, effects,
 # roofline, scaling, threads, kernels, files, sweep, plate, frames,
-# shattered, mesh, perturbed: the parts left out), BENCH_PERTURB (5e-5),
+# shattered, mesh, perturbed, mpi: the parts left out), BENCH_PERTURB (5e-5),
 # BENCH_SWEEP_STEPS (100), BENCH_DIR (cache of the
 # models and the runs, default $TMPDIR/pd-bench), PD_BIN (default: bin/ of
 # this tree), LMP (lmp), MPIRUN (mpirun), CC (cc, for share/stream.c).
@@ -143,8 +150,8 @@ case $THREADS in '' | *[!0-9]*) die "BENCH_THREADS must be a positive integer, n
 [ "$THREADS" -gt 0 ] || die "BENCH_THREADS must be a positive integer"
 for w in $SKIP; do
     case $w in
-    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep | plate | frames | shattered | mesh | perturbed) ;;
-    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames, shattered, mesh, perturbed)" ;;
+    lammps | lps | effects | roofline | scaling | threads | kernels | files | sweep | plate | frames | shattered | mesh | perturbed | mpi) ;;
+    *) die "BENCH_SKIP: unknown part '$w' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames, shattered, mesh, perturbed, mpi)" ;;
     esac
 done
 # skip PART: is PART left out?
@@ -476,6 +483,29 @@ EOF
     rm -f t1.h5
 fi
 
+# --- (o) MPI ranks: THREADS ranks of 1 thread against 1 rank of THREADS --------
+MPI_PD=${PD_MPI_BIN:-$ROOT/mpi/bin/pd-run}
+if ! skip mpi && [ -x "$MPI_PD" ]; then
+    # mpi_bench NAME: the full scene on THREADS ranks of 1 thread
+    mpi_bench() {
+        echo "$prog: $MPIRUN -np $THREADS pd-run (MPI) $1 ($STEPS steps)" >&2
+        OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "$TIME" -f '%e %M' -o "$1.time" \
+            "$MPIRUN" --bind-to none -np "$THREADS" "$MPI_PD" --scene "$SCENE" --status "$THERMO" \
+            --threads 1 --steps "$STEPS" --every 0 --timing model.h5 -o "$1.h5" 2>"$1.log" || {
+            cat "$1.log" >&2
+            die "mpirun pd-run ($1) failed"
+        }
+        [ -n "$(pd_loop "$1.log")" ] || die "no timing line in $DIR/$1.log"
+    }
+    keep=1 pd_bench m1 model.h5 "$STEPS" --scene "$SCENE" --status "$THERMO"
+    keep=''
+    mpi_bench mr
+    pd_bench m1b model.h5 "$STEPS" --scene "$SCENE" --status "$THERMO"
+    mpi_bench mrb
+    "$PY" "$ROOT/tests/samebits/h5same.py" m1.h5 mr.h5 >mpi-same.out 2>&1 || true
+    rm -f m1.h5 mr.h5 mrb.h5
+fi
+
 # --- (g) kernels: the bond list against the lattice stencil -----------------------
 if ! skip kernels; then
     keep=1 pd_bench list model.h5 "$STEPS" --scene "$SCENE" --status "$THERMO" --bond-list
@@ -793,6 +823,33 @@ EOF
             1000 * a / n, th, 1000 * b / n, a / b
         printf "  (the best of two runs of each, 1 and %d threads alternately)\n", th }'
     echo "  outputs of 1 and $THREADS threads: $(cat same.out)"
+fi
+
+if ! skip mpi && [ -x "$MPI_PD" ]; then
+    echo
+    best() { # best NAME NAME2: the better loop time of two runs
+        read -r a _ <<EOF
+$(pd_loop "$1.log")
+EOF
+        read -r b _ <<EOF
+$(pd_loop "$2.log")
+EOF
+        awk -v a="$a" -v b="$b" 'BEGIN { print (b < a ? b : a) }'
+    }
+    tr=$(best mr mrb)
+    halo=$(sed -n 's/.*halo of at most \([0-9.eE+-]*\) MB a rank a step.*/\1/p' mr.log)
+    awk -v a="$(best m1 m1b)" -v b="$tr" -v th="$THREADS" -v n="$STEPS" -v h="$halo" \
+        -v c="$(pd_row mr.log 'MPI ranks')" 'BEGIN {
+        printf "MPI ranks: 1 rank x %d threads %.2f ms/step, %d ranks x 1 thread %.2f ms/step: %.2fx the time\n",
+            th, 1000 * a / n, th, 1000 * b / n, b / a
+        printf "  halo %s MB a rank a step; the ranks'"'"' exchanges %.1f%% of the loop (--timing, MPI ranks)\n",
+            h, 100 * c / b
+        printf "  (the better of two runs of each, alternately; target: within 10%%)\n" }'
+    if [ -s mpi-same.out ]; then
+        echo "  outputs of 1 rank and $THREADS ranks: differ in $(grep -v ' threads:' mpi-same.out | wc -l) items but the thread count"
+    else
+        echo "  outputs of 1 rank and $THREADS ranks: identical, bit for bit"
+    fi
 fi
 
 if ! skip kernels; then

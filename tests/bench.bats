@@ -43,7 +43,7 @@ setup() {
 @test "bench.sh: bad BENCH_SKIP, BENCH_SIZES, BENCH_STEPS and BENCH_THREADS are one-line errors" {
     BENCH_SKIP=lammps,foo run sh "$BENCH"
     assert_failure 1
-    assert_output "bench.sh: error: BENCH_SKIP: unknown part 'foo' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames, shattered, mesh, perturbed)"
+    assert_output "bench.sh: error: BENCH_SKIP: unknown part 'foo' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames, shattered, mesh, perturbed, mpi)"
     BENCH_SIZES="25k 1.6Q" run sh "$BENCH"
     assert_failure 1
     assert_output "bench.sh: error: BENCH_SIZES: '1.6Q' is not a particle count (25k, 1.6M, 40000)"

@@ -216,3 +216,15 @@ with h5py.File('r.h5') as f:
         run -0 "$PY" "$SAME" one.h5 np3.h5
     done
 }
+
+@test "mpi: the projectile, pushed back by the particles of every rank, the same bits (restart too)" {
+    impact_body
+    sed -i '/^indenter/d; s/^steps 400/steps 200/' impact.scene
+    local proj=--projectile=sphere,0,0.0051,0,0.005,0.01,0,-300,0
+    same_on_ranks "2 3" 1 --scene impact.scene "$proj" body.h5
+    mv np2.h5 r.h5
+    cp one.h5 r1.h5
+    pd-run --threads 1 -q --restart r1.h5 --steps 100 -o a.h5
+    mpi 3 --threads 1 -q --restart r.h5 --steps 100 -o b.h5
+    run -0 "$PY" "$SAME" a.h5 b.h5
+}

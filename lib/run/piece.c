@@ -99,7 +99,8 @@ static const char *not_carried(const pd_sim *whole)
     if (whole->nofail)
         return "--no-failure";
     for (int k = 1; k < whole->neffects; k++)
-        if (whole->effects[k] != &pd_effect_indenter && whole->effects[k] != &pd_effect_contact)
+        if (whole->effects[k] != &pd_effect_indenter && whole->effects[k] != &pd_effect_contact &&
+            whole->effects[k] != &pd_effect_projectile)
             return whole->effects[k]->name;
     return NULL;
 }
@@ -144,6 +145,9 @@ static void copy_state(const pd_sim *whole, pd_sim *sim)
     sim->damp_power = whole->damp_power;
     sim->lost_energy = whole->lost_energy;
     memcpy(sim->ind_f, whole->ind_f, sizeof sim->ind_f);
+    memcpy(sim->proj_x, whole->proj_x, sizeof sim->proj_x); /* every rank moves it alike */
+    memcpy(sim->proj_v, whole->proj_v, sizeof sim->proj_v);
+    memcpy(sim->proj_f, whole->proj_f, sizeof sim->proj_f);
     memcpy(sim->box_lo, whole->box_lo, sizeof sim->box_lo);
     memcpy(sim->box_hi, whole->box_hi, sizeof sim->box_hi);
     sim->half.gap = whole->half.gap; /* the whole body's (the bond list's rows' contact) */
@@ -400,6 +404,9 @@ pd_status pd_sim_gather(const pd_sim *sim, pd_sim *whole)
         whole->damp_power = sim->damp_power;
         whole->lost_energy = sim->lost_energy;
         memcpy(whole->ind_f, sim->ind_f, sizeof whole->ind_f);
+        memcpy(whole->proj_x, sim->proj_x, sizeof whole->proj_x);
+        memcpy(whole->proj_v, sim->proj_v, sizeof whole->proj_v);
+        memcpy(whole->proj_f, sim->proj_f, sizeof whole->proj_f);
         memcpy(whole->timers, sim->timers, sizeof whole->timers);
     }
     return st;
