@@ -1142,6 +1142,14 @@ static int start(struct options *o, struct held *h, int64_t *first)
     if (s == PD_OK && pd_comm_size() > 1) /* this rank's piece of the body */
         s = pd_sim_piece(h->sim, &h->piece);
     s = agreed(s);
+    if (s == PD_OK && h->piece && !root) { /* the whole body is rank 0's alone */
+        pd_sim_free(h->sim);
+        pd_bonds_free(h->b);
+        pd_particles_free(h->p);
+        h->sim = NULL;
+        h->b = NULL;
+        h->p = NULL;
+    }
     if (s == PD_OK && !restart) /* step 0's forces, and the check of its energy */
         s = start_energy(h);
     if (s == PD_OK && o->strict && h->report.nwarnings > 0)
@@ -1189,7 +1197,7 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
     else if (!o->restart && root) /* the series' row of step 0 */
         s = timed_sample(h->out, sim, t_output, NULL);
     s = agreed(s);
-    int64_t lost = pd_sim_lost(sim);
+    int64_t lost = sim ? pd_sim_lost(sim) : 0; /* rank 0's whole run */
     for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
         const int status = ((n - first) % status_every == 0 || n == sc->steps) && !o->quiet;
         const int row = root && pd_run_file_sample_due(h->out, n); /* rank 0's file */
@@ -1206,6 +1214,10 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
             break;
         if (!output && h->piece)
             continue;
+        if (!root) { /* rank 0 writes, and says how the others go on */
+            s = agreed(PD_OK);
+            continue;
+        }
         h->iterations += sc->relax ? relaxed.iterations : 0;
         if (sc->relax && status)
             fprintf(stderr,
@@ -1226,10 +1238,6 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
          * energies instead of another pass over the bonds */
         pd_energy e;
         int known = 0;
-        if (!root) { /* rank 0 writes, and says how the others go on */
-            s = agreed(PD_OK);
-            continue;
-        }
         if (pd_frame_at(sc, n)) { /* with the series' row of the step */
             s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, &e);
             known = s == PD_OK;
