@@ -228,3 +228,54 @@ with h5py.File('r.h5') as f:
     mpi 3 --threads 1 -q --restart r.h5 --steps 100 -o b.h5
     run -0 "$PY" "$SAME" a.h5 b.h5
 }
+
+# rank_pid R: the pid of MPI rank R of this test's pd-run job (Open MPI puts
+# each rank's number into its environment; PD_TEST_JOB, this test's own
+# folder, tells this job from any other on the machine)
+rank_pid() {
+    local p env
+    for p in $(pgrep -f "$MPI_RUN"); do
+        env=$(tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null) || continue
+        if grep -qx "OMPI_COMM_WORLD_RANK=$1" <<<"$env" &&
+            grep -qxF "PD_TEST_JOB=$BATS_TEST_TMPDIR" <<<"$env"; then
+            echo "$p"
+            return 0
+        fi
+    done
+    return 1
+}
+
+@test "mpi: a rank killed mid-run (SIGKILL) leaves a run file of whole frames that every reader takes" {
+    impact_body
+    sed -i "s/^steps 400/steps 40000/; s/^every 50/every 20/" impact.scene
+    PD_TEST_JOB=$BATS_TEST_TMPDIR mpirun --oversubscribe --bind-to none -x PD_TEST_JOB \
+        ${ASAN_OPTIONS:+-x ASAN_OPTIONS} -np 2 "$MPI_RUN" --threads 1 -q --scene impact.scene \
+        body.h5 -o k.h5 &
+    local job=$! pid=''
+    # the run file published (pd-run lays out its frames first), then a
+    # few seconds of steps and frames (the file is locked while it is
+    # written: nothing reads it before the kill)
+    for _ in $(seq 1200); do
+        [ -e k.h5 ] && pid=$(rank_pid 1) && break
+        sleep 0.1
+    done
+    [ -n "$pid" ] || { kill -9 "$job" 2>/dev/null; false; }
+    sleep 3
+    kill -9 "$pid"
+    run wait "$job"
+    [ "$status" -ne 0 ] # the job ended with its rank
+    for _ in $(seq 300); do # and mpirun takes the other rank down
+        rank_pid 0 >/dev/null || break
+        sleep 0.1
+    done
+    ! rank_pid 0
+    rm -f .k.h5.tmp.*
+    run -0 pd-damage -n k.h5
+    run -0 pd-dump2vtk -q --xdmf k.h5 -o k.xdmf
+    run -0 "$PY" -c "
+import h5py
+with h5py.File('k.h5') as f:
+    frames = [g for g in f['frames'].values() if g.attrs['complete'] == 1]
+    steps = sorted(int(g.attrs['step']) for g in frames)
+    assert len(steps) >= 3 and steps == list(range(0, 20 * len(steps), 20)), steps"
+}

@@ -793,7 +793,8 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
     remote_free(cl);
     int64_t *remote = NULL, *send = NULL, nsend = 0, capsend = 0;
     if (st == PD_OK) {
-        qsort(rec, (size_t)nrec, sizeof *rec, cmp_pair);
+        if (nrec > 0) /* (qsort of nothing: no array at all) */
+            qsort(rec, (size_t)nrec, sizeof *rec, cmp_pair);
         remote = malloc((size_t)(nrec > 0 ? nrec : 1) * sizeof(int64_t));
         if (remote == NULL)
             st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
@@ -821,7 +822,8 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
             if (u == 0 || remote[e] != remote[u - 1])
                 remote[u++] = remote[e];
         nr = u;
-        qsort(send, (size_t)nsend, 2 * sizeof(int64_t), cmp_i64_pair); /* by rank, then row */
+        if (nsend > 0) /* by rank, then row */
+            qsort(send, (size_t)nsend, 2 * sizeof(int64_t), cmp_i64_pair);
         int64_t v = 0;
         for (int64_t e = 0; e < nsend; e++)
             if (v == 0 || send[2 * e] != send[2 * v - 2] || send[2 * e + 1] != send[2 * v - 1]) {
