@@ -20,11 +20,31 @@ static void centre(const pd_sim *sim, double c[3])
     pd_indenter_centre(s->ind_center, s->ind_velocity, sim->step, s->dt, c);
 }
 
+/* The sphere's force density on particle i (not lost), added to sim->f and
+ * into f; 0 when the sphere does not touch it. */
+static inline int push_row(pd_sim *sim, const double c[3], double R, double K, int64_t i,
+                           double f[3])
+{
+    double *const *y = sim->y;
+    const double dx = y[0][i] - c[0], dy = y[1][i] - c[1], dz = y[2][i] - c[2];
+    const double r2 = dx * dx + dy * dy + dz * dz;
+    if (r2 >= R * R || (sim->lost && sim->lost[i]))
+        return 0;
+    const double r = sqrt(r2);
+    const double dr = r - R;
+    if (dr >= 0.0 || r <= 0.0)
+        return 0;
+    const double fmag = K * dr * dr;
+    f[0] = dx * fmag / r, f[1] = dy * fmag / r, f[2] = dz * fmag / r;
+    sim->f[0][i] += f[0];
+    sim->f[1][i] += f[1];
+    sim->f[2][i] += f[2];
+    return 1;
+}
+
 void pd_sphere_push(pd_sim *sim, const double c[3], double R, double K, double F[3])
 {
     const double *V = sim->p->volume;
-    const uint8_t *lost = sim->lost;
-    double *const *y = sim->y;
     const int64_t n = sim->n, nchunks = (n + PD_SUM_CHUNK - 1) / PD_SUM_CHUNK;
     F[0] = F[1] = F[2] = 0;
     if (sim->piece) { /* a piece of the body: its own rows' V_i f_i, summed over the ranks */
@@ -32,25 +52,11 @@ void pd_sphere_push(pd_sim *sim, const double c[3], double R, double K, double F
         const int64_t own_lo = sim->piece->own_lo, own_hi = sim->piece->own_hi;
 #pragma omp parallel for schedule(static)
         for (int64_t i = 0; i < n; i++) {
+            double f[3];
             w[0][i] = w[1][i] = w[2][i] = 0;
-            const double dx = y[0][i] - c[0], dy = y[1][i] - c[1], dz = y[2][i] - c[2];
-            const double r2 = dx * dx + dy * dy + dz * dz;
-            if (r2 >= R * R || (lost && lost[i]))
-                continue;
-            const double r = sqrt(r2);
-            const double dr = r - R;
-            if (dr >= 0.0 || r <= 0.0)
-                continue;
-            const double fmag = K * dr * dr;
-            const double f0 = dx * fmag / r, f1 = dy * fmag / r, f2 = dz * fmag / r;
-            sim->f[0][i] += f0;
-            sim->f[1][i] += f1;
-            sim->f[2][i] += f2;
-            if (i >= own_lo && i < own_hi) {
-                w[0][i] = V[i] * f0;
-                w[1][i] = V[i] * f1;
-                w[2][i] = V[i] * f2;
-            }
+            if (push_row(sim, c, R, K, i, f) && i >= own_lo && i < own_hi)
+                for (int d = 0; d < 3; d++)
+                    w[d][i] = V[i] * f[d];
         }
         pd_sim_sum(sim, (const double *const *)w, 3, F);
         return;
@@ -64,22 +70,12 @@ void pd_sphere_push(pd_sim *sim, const double c[3], double R, double K, double F
             const int64_t hi = lo + PD_SUM_CHUNK < n ? lo + PD_SUM_CHUNK : n;
             double sx = 0, sy = 0, sz = 0;
             for (int64_t i = lo; i < hi; i++) {
-                const double dx = y[0][i] - c[0], dy = y[1][i] - c[1], dz = y[2][i] - c[2];
-                const double r2 = dx * dx + dy * dy + dz * dz;
-                if (r2 >= R * R || (lost && lost[i]))
+                double f[3];
+                if (!push_row(sim, c, R, K, i, f))
                     continue;
-                const double r = sqrt(r2);
-                const double dr = r - R;
-                if (dr >= 0.0 || r <= 0.0)
-                    continue;
-                const double fmag = K * dr * dr;
-                const double f0 = dx * fmag / r, f1 = dy * fmag / r, f2 = dz * fmag / r;
-                sim->f[0][i] += f0;
-                sim->f[1][i] += f1;
-                sim->f[2][i] += f2;
-                sx += V[i] * f0;
-                sy += V[i] * f1;
-                sz += V[i] * f2;
+                sx += V[i] * f[0];
+                sy += V[i] * f[1];
+                sz += V[i] * f[2];
             }
             part[ch][0] = sx;
             part[ch][1] = sy;

@@ -765,6 +765,17 @@ static void mark_break(void *ctx, int64_t i, int64_t j)
     c->count++;
 }
 
+/* The force on row i (lps_kernel's third pass); 1 when a bond of it broke. */
+static inline int force_one(pd_sim *sim, lps_state *st, int64_t i, pd_bond_mode failure,
+                            double *buf)
+{
+    if (st->model == PD_MODEL_LPS)
+        force_fast(sim, st, i, failure, buf);
+    else
+        force_row(sim, st, i, failure);
+    return failure && st->touched[i];
+}
+
 /* lps_kernel's passes for a piece of a body on MPI ranks: the same, with
  * the ghosts' theta (and EPS's ratio) from their owners between them.
  * Returns whether a bond of some rank's broke. */
@@ -789,13 +800,8 @@ static int piece_kernel(pd_sim *sim, lps_state *st, const uint64_t *bits, pd_bon
     {
         double *buf = st->scratch + (size_t)omp_get_thread_num() * LPS_ROWS * (size_t)st->family;
 #pragma omp for schedule(dynamic, 256)
-        for (int64_t i = 0; i < sim->n; i++) {
-            if (st->model == PD_MODEL_LPS)
-                force_fast(sim, st, i, failure, buf);
-            else
-                force_row(sim, st, i, failure);
-            broke |= failure && st->touched[i];
-        }
+        for (int64_t i = 0; i < sim->n; i++)
+            broke |= force_one(sim, st, i, failure, buf);
     }
     return pd_comm_or(broke);
 }
@@ -827,13 +833,8 @@ static pd_status lps_kernel(pd_sim *sim, lps_state *st, pd_bond_mode failure)
                 eps_yield_row(sim, st, i);
         }
 #pragma omp for schedule(dynamic, 256) reduction(| : broke)
-        for (int64_t i = 0; i < sim->n; i++) {
-            if (st->model == PD_MODEL_LPS)
-                force_fast(sim, st, i, failure, buf);
-            else
-                force_row(sim, st, i, failure);
-            broke |= failure && st->touched[i];
-        }
+        for (int64_t i = 0; i < sim->n; i++)
+            broke |= force_one(sim, st, i, failure, buf);
     }
     if (st->model == PD_MODEL_EPS && !sim->setup) {
 #pragma omp parallel for schedule(dynamic, 256)

@@ -112,6 +112,27 @@ static int64_t piece_first_block(const int64_t *K, int r)
     return r == 0 ? 0 : (K[r] - 1) - ((K[r] - 1) & 1);
 }
 
+/* The run's step, time and sums over the body (the same on every rank):
+ * the energies' terms, the indenter's force, the projectile (which every
+ * rank moves alike). */
+static void copy_sums(const pd_sim *from, pd_sim *to)
+{
+    to->step = from->step;
+    to->time = from->time;
+    to->power = from->power;
+    to->work = from->work;
+    to->released = from->released;
+    to->energy0 = from->energy0;
+    to->penalty0 = from->penalty0;
+    to->damped = from->damped;
+    to->damp_power = from->damp_power;
+    to->lost_energy = from->lost_energy;
+    memcpy(to->ind_f, from->ind_f, sizeof to->ind_f);
+    memcpy(to->proj_x, from->proj_x, sizeof to->proj_x);
+    memcpy(to->proj_v, from->proj_v, sizeof to->proj_v);
+    memcpy(to->proj_f, from->proj_f, sizeof to->proj_f);
+}
+
 /* The whole body's state into the piece: its rows', the run's sums. */
 static void copy_state(const pd_sim *whole, pd_sim *sim)
 {
@@ -134,20 +155,7 @@ static void copy_state(const pd_sim *whole, pd_sim *sim)
                 sim->nlost += sim->lost[i] != 0;
         }
     }
-    sim->step = whole->step;
-    sim->time = whole->time;
-    sim->power = whole->power;
-    sim->work = whole->work;
-    sim->released = whole->released;
-    sim->energy0 = whole->energy0;
-    sim->penalty0 = whole->penalty0;
-    sim->damped = whole->damped;
-    sim->damp_power = whole->damp_power;
-    sim->lost_energy = whole->lost_energy;
-    memcpy(sim->ind_f, whole->ind_f, sizeof sim->ind_f);
-    memcpy(sim->proj_x, whole->proj_x, sizeof sim->proj_x); /* every rank moves it alike */
-    memcpy(sim->proj_v, whole->proj_v, sizeof sim->proj_v);
-    memcpy(sim->proj_f, whole->proj_f, sizeof sim->proj_f);
+    copy_sums(whole, sim);
     memcpy(sim->box_lo, whole->box_lo, sizeof sim->box_lo);
     memcpy(sim->box_hi, whole->box_hi, sizeof sim->box_hi);
     sim->half.gap = whole->half.gap; /* the whole body's (the bond list's rows' contact) */
@@ -393,20 +401,7 @@ pd_status pd_sim_gather(const pd_sim *sim, pd_sim *whole)
     cs = pd_lps_gather(sim, whole);
     st = st == PD_OK ? cs : st;
     if (root) { /* the run's sums: the same on every rank */
-        whole->step = sim->step;
-        whole->time = sim->time;
-        whole->power = sim->power;
-        whole->work = sim->work;
-        whole->released = sim->released;
-        whole->energy0 = sim->energy0;
-        whole->penalty0 = sim->penalty0;
-        whole->damped = sim->damped;
-        whole->damp_power = sim->damp_power;
-        whole->lost_energy = sim->lost_energy;
-        memcpy(whole->ind_f, sim->ind_f, sizeof whole->ind_f);
-        memcpy(whole->proj_x, sim->proj_x, sizeof whole->proj_x);
-        memcpy(whole->proj_v, sim->proj_v, sizeof whole->proj_v);
-        memcpy(whole->proj_f, sim->proj_f, sizeof whole->proj_f);
+        copy_sums(sim, whole);
         memcpy(whole->timers, sim->timers, sizeof whole->timers);
     }
     return st;
