@@ -1105,6 +1105,9 @@ const pd_set *pd_sets_find(const pd_sets *s, const char *name);
 /* The local rows of a set's particles (ascending ids order), malloc'ed;
  * PD_ERR_INVALID when an id is not one of p's. */
 pd_status pd_set_rows(const pd_set *set, const pd_particles *p, int64_t **rows);
+/* The same, -1 for a member that is not among p (a piece of a body on MPI
+ * ranks holds some of a set). */
+pd_status pd_set_rows_present(const pd_set *set, const pd_particles *p, int64_t **rows);
 /* Read /sets (an empty pd_sets when the file has none), checking every set
  * against the particles p: names, type, rank, order, ids that exist. */
 pd_status pd_read_sets(const pd_file *f, const pd_particles *p, pd_sets **out);

@@ -62,6 +62,14 @@ every 50
 EOF
 }
 
+# The disk of impact_body with two sets: `core` (a cylinder of 6 mm under
+# the indenter) and `rim` (z > 12 mm), in bodys.h5.
+sets_body() {
+    pd-lattice --spacing 0.001 --cylinder y,0,0,0.02,-0.0025,0 --density 2200 \
+        --set core=cylinder,y,0,0,0.006,-1,1 --set rim=box,-1,1,-1,1,0.012,1 -q -o lats.h5
+    pd-bonds --horizon 0.0030001 -q lats.h5 -o bodys.h5
+}
+
 # same_on_ranks RANKS THREADS ARG...: the run on one rank of the serial
 # build, then on each count of RANKS with THREADS a rank: every dataset and
 # attribute bit for bit the same.
@@ -124,8 +132,9 @@ with h5py.File('np4.h5') as f:
 
 @test "mpi: what the pieces do not yet carry is one line and exit 1; a model on stdin is a usage error" {
     impact_body
-    run -1 mpi 2 --scene impact.scene --damping 1e3 body.h5 -o c.h5
-    assert_output --partial "pd-run: error: on 2 MPI ranks pd-run does not yet carry damping; run it on one rank"
+    sets_body
+    run -1 mpi 2 --scene impact.scene --velocity-bc rim,y,-1 bodys.h5 -o c.h5
+    assert_output --partial "pd-run: error: on 2 MPI ranks pd-run does not yet carry prescribed-motion; run it on one rank"
     [ "$(grep -c 'pd-run: error' <<<"$output")" -eq 1 ]
     [ ! -e c.h5 ]
     run -2 mpi 2 --scene impact.scene - -o c.h5 <body.h5
@@ -278,4 +287,17 @@ with h5py.File('k.h5') as f:
     frames = [g for g in f['frames'].values() if g.attrs['complete'] == 1]
     steps = sorted(int(g.attrs['step']) for g in frames)
     assert len(steps) >= 3 and steps == list(range(0, 20 * len(steps), 20)), steps"
+}
+
+@test "mpi: damping (every particle, and a set's) and --no-failure sets, the same bits" {
+    impact_body
+    sets_body
+    same_on_ranks "2 3" 1 --scene impact.scene --damping 3e4 bodys.h5
+    same_on_ranks "3" 1 --scene impact.scene --damping 3e4,rim bodys.h5
+    same_on_ranks "2 3" 1 --scene impact.scene --no-failure rim --damping 1e4,core bodys.h5
+    run -0 "$PY" -c "
+import h5py
+with h5py.File('np3.h5') as f:
+    last = f['frames'][sorted(f['frames'])[-1]]
+    assert last.attrs['damped_energy'] > 0, dict(last.attrs)"
 }

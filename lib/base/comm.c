@@ -137,6 +137,31 @@ void pd_comm_bcast(void *buf, int64_t bytes)
         MPI_Bcast(buf, (int)bytes, MPI_BYTE, 0, MPI_COMM_WORLD);
 }
 
+double pd_comm_chain_in(void)
+{
+    const int me = pd_comm_rank();
+    double s = 0;
+    if (me > 0)
+        MPI_Recv(&s, 1, MPI_DOUBLE, me - 1, 11, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    return s;
+}
+
+double pd_comm_chain_out(double sum)
+{
+    const int me = pd_comm_rank(), P = pd_comm_size();
+    if (me + 1 < P)
+        MPI_Send(&sum, 1, MPI_DOUBLE, me + 1, 11, MPI_COMM_WORLD);
+    if (P > 1)
+        MPI_Bcast(&sum, 1, MPI_DOUBLE, P - 1, MPI_COMM_WORLD);
+    return sum;
+}
+
+void pd_comm_add(double *x, int64_t n)
+{
+    if (pd_comm_size() > 1)
+        MPI_Allreduce(MPI_IN_PLACE, x, (int)n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+}
+
 void pd_comm_box(double lo[3], double hi[3])
 {
     if (pd_comm_size() == 1)
@@ -234,6 +259,22 @@ void pd_comm_box(double lo[3], double hi[3])
 {
     (void)lo;
     (void)hi;
+}
+
+double pd_comm_chain_in(void)
+{
+    return 0;
+}
+
+double pd_comm_chain_out(double sum)
+{
+    return sum;
+}
+
+void pd_comm_add(double *x, int64_t n)
+{
+    (void)x;
+    (void)n;
 }
 
 void pd_comm_alltoall(const double *send, const int64_t *send_count, double *recv,

@@ -20,6 +20,15 @@ void pd_comm_box(double lo[3], double hi[3]);
  * order) and receives recv_count[r] from it (into `recv`, in rank order). */
 void pd_comm_alltoall(const double *send, const int64_t *send_count, double *recv,
                       const int64_t *recv_count);
+/* A sum taken in the one rank's order over rows the ranks hold in rank
+ * order, as a chain: pd_comm_chain_in gives the sum of the ranks below (0
+ * on rank 0), to which this rank adds its own terms in order; then
+ * pd_comm_chain_out passes it on and gives every rank the last one's. */
+double pd_comm_chain_in(void);
+double pd_comm_chain_out(double sum);
+/* Element-wise sums of n doubles over the ranks, in place (exact where
+ * each element is non-zero on one rank at most). */
+void pd_comm_add(double *x, int64_t n);
 /* Rank 0's `bytes` at buf into every rank's. */
 void pd_comm_bcast(void *buf, int64_t bytes);
 /* Send `ns` doubles to rank `to` and receive `nr` from rank `from` (either

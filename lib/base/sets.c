@@ -112,6 +112,22 @@ int64_t pd_row_of_id(const pd_id_row *ix, int64_t n, int64_t id)
     return hit ? hit->row : -1;
 }
 
+pd_status pd_set_rows_present(const pd_set *set, const pd_particles *p, int64_t **rows)
+{
+    pd_id_row *ix = pd_id_index(p);
+    int64_t *r = malloc((size_t)(set->n > 0 ? set->n : 1) * sizeof(int64_t));
+    if (ix == NULL || r == NULL) {
+        free(ix);
+        free(r);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for set '%s'", set->name);
+    }
+    for (int64_t k = 0; k < set->n; k++)
+        r[k] = pd_row_of_id(ix, p->n, set->id[k]);
+    free(ix);
+    *rows = r;
+    return PD_OK;
+}
+
 pd_status pd_set_rows(const pd_set *set, const pd_particles *p, int64_t **rows)
 {
     pd_id_row *ix = pd_id_index(p);

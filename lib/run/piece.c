@@ -96,11 +96,9 @@ static const char *not_carried(const pd_sim *whole)
 {
     if (whole->sc.relax)
         return "--relax";
-    if (whole->nofail)
-        return "--no-failure";
     for (int k = 1; k < whole->neffects; k++)
         if (whole->effects[k] != &pd_effect_indenter && whole->effects[k] != &pd_effect_contact &&
-            whole->effects[k] != &pd_effect_projectile)
+            whole->effects[k] != &pd_effect_projectile && whole->effects[k] != &pd_effect_damping)
             return whole->effects[k]->name;
     return NULL;
 }
@@ -272,8 +270,7 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
     }
     free(start);
     free(K);
-    pd_scene sc = whole->sc;
-    sc.sets = NULL; /* the sets are the whole run's (its time series) */
+    pd_scene sc = whole->sc; /* its sets: their members in the piece */
     pd_sim *sim = NULL;
     if (st == PD_OK)
         st = pd_sim_new_cut(pc->p, pc->b, &sc, pc, &sim);

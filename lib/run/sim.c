@@ -75,12 +75,14 @@ static pd_status no_failure_rows(pd_sim *sim)
                            "--no-failure: the model has no set '%s' (pd-lattice --set and "
                            "pd-mesh name them)",
                            sc->no_failure[k]);
-        int64_t *rows = NULL;
-        pd_status s = pd_set_rows(set, sim->p, &rows);
+        int64_t *rows = NULL; /* a piece: -1 for members beyond it */
+        pd_status s = sim->piece ? pd_set_rows_present(set, sim->p, &rows)
+                                 : pd_set_rows(set, sim->p, &rows);
         if (s != PD_OK)
             return s;
         for (int64_t m = 0; m < set->n; m++)
-            sim->nofail[rows[m]] = 1;
+            if (rows[m] >= 0)
+                sim->nofail[rows[m]] = 1;
         free(rows);
     }
     return PD_OK;
@@ -90,7 +92,7 @@ static pd_status no_failure_rows(pd_sim *sim)
 static pd_status set_rows(pd_sim *sim)
 {
     const pd_sets *sets = sim->sc.sets;
-    if (sets == NULL || sets->count == 0)
+    if (sets == NULL || sets->count == 0 || sim->piece) /* the series is the whole run's */
         return PD_OK;
     if ((sim->set_rows = calloc((size_t)sets->count, sizeof *sim->set_rows)) == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the sets");
