@@ -1207,7 +1207,7 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
         if (output) /* the bond pass counts the energies */
             pd_sim_energy_next(stepper);
         pd_relax_info relaxed;
-        s = sc->relax ? pd_sim_relax(sim, &relaxed) : pd_sim_step(stepper);
+        s = sc->relax ? pd_sim_relax(stepper, &relaxed) : pd_sim_step(stepper);
         if (s == PD_OK && output && h->piece) /* the pieces' state to rank 0's run */
             s = agreed(pd_sim_gather(stepper, sim));
         if (s != PD_OK)

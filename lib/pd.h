@@ -673,12 +673,12 @@ void pd_comm_abort(int code);
 int pd_comm_or(int v);
 int64_t pd_comm_min(int64_t v);
 
-/* This rank's piece of the run `whole` (a pd_sim_new of the whole body, not
- * yet set up), for pd_comm_size() ranks: *piece is a run of its own (its
- * own particles and bonds, freed with it), stepped with pd_sim_setup and
- * pd_sim_step by every rank together.  Bodies the rank count cannot share
- * (fewer than two blocks a rank), and the effects pieces do not yet carry
- * (named in the message), are refused with PD_ERR_INVALID. */
+/* This rank's piece of the run `whole` (a pd_sim_new of the whole body,
+ * restored or not, not yet set up), for pd_comm_size() ranks: *piece is a
+ * run of its own (its own particles and bonds, freed with it), stepped with
+ * pd_sim_setup, pd_sim_step or pd_sim_relax by every rank together.  A body
+ * the rank count cannot share (fewer than two blocks a rank) is refused
+ * with PD_ERR_INVALID. */
 pd_status pd_sim_piece(const pd_sim *whole, pd_sim **piece);
 /* The pieces' state into `whole` on rank 0 (collective: every rank calls
  * it; `whole` is read on rank 0 only): positions, velocities, forces, s0,

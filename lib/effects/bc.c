@@ -39,6 +39,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
 #include "effects/effect.h"
 
 const char *pd_bc_option(pd_bc_kind kind)
@@ -76,8 +77,9 @@ pd_status pd_bc_parse(pd_bc_kind kind, const char *spec, pd_bc *bc)
 typedef struct {
     const pd_bc *bc;
     int64_t n;
-    int64_t *rows;
+    int64_t *rows; /* a piece of a body on MPI ranks: -1 for a member beyond it */
     double *fprev; /* prescribed: f of the held component at step n, N/m^3 */
+    double *terms; /* a piece: each member's term of the work, from its owner */
 } cond;
 
 typedef struct {
@@ -93,6 +95,7 @@ static void bc_free(void *state)
     for (int k = 0; k < st->count; k++) {
         free(st->c[k].rows);
         free(st->c[k].fprev);
+        free(st->c[k].terms);
     }
     free(st->c);
     free(st);
@@ -126,7 +129,11 @@ static pd_status bc_init(pd_sim *sim, void **state, int want_prescribed)
         cond *c = &st->c[st->count++];
         c->bc = bc;
         c->n = set->n;
-        pd_status s = pd_set_rows(set, sim->p, &c->rows);
+        pd_status s = sim->piece ? pd_set_rows_present(set, sim->p, &c->rows)
+                                 : pd_set_rows(set, sim->p, &c->rows);
+        if (s == PD_OK && sim->piece &&
+            (c->terms = malloc((size_t)(c->n > 0 ? c->n : 1) * sizeof(double))) == NULL)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory for the boundary conditions");
         if (s != PD_OK)
             return s;
         if (want_prescribed && (c->fprev = calloc((size_t)c->n, sizeof(double))) == NULL)
@@ -142,6 +149,8 @@ static pd_status bc_init(pd_sim *sim, void **state, int want_prescribed)
     for (int k = 0; k < st->count && s == PD_OK; k++) {
         const cond *c = &st->c[k];
         for (int64_t m = 0; m < c->n && s == PD_OK; m++) {
+            if (c->rows[m] < 0) /* beyond a piece */
+                continue;
             int *o = &owner[3 * c->rows[m] + c->bc->axis];
             if (*o) {
                 const pd_bc *a = st->c[*o - 1].bc;
@@ -162,6 +171,26 @@ static pd_status bc_init(pd_sim *sim, void **state, int want_prescribed)
             sim->held[i] |= (uint8_t)((owner[3 * i + a] != 0) << a);
     free(owner);
     return s;
+}
+
+/* The sum of a condition's terms in its members' order, on a piece of a
+ * body on MPI ranks: each member's from the rank that owns it (terms[m],
+ * 0 elsewhere and for the lost), summed over the ranks exactly, then in
+ * order, as one rank sums them. */
+static double member_sum(const pd_sim *sim, const cond *c)
+{
+    pd_comm_add(c->terms, c->n);
+    double sum = 0;
+    for (int64_t m = 0; m < c->n; m++)
+        sum += c->terms[m];
+    (void)sim;
+    return sum;
+}
+
+/* Is row i (>= 0) of a piece its own? */
+static inline int own_row(const pd_sim *sim, int64_t i)
+{
+    return i >= sim->piece->own_lo && i < sim->piece->own_hi;
 }
 
 /* ------------------------------------------------------------ body force */
@@ -195,13 +224,20 @@ static pd_status body_force(pd_sim *sim, void *state)
         const double b = pd_profile_value(&c->bc->profile, t);
         const double bmid = 0.5 * (pd_profile_value(&c->bc->profile, tprev) + b);
         double sum = 0; /* in row order: the same at any thread count */
+        if (c->terms)
+            memset(c->terms, 0, (size_t)c->n * sizeof(double));
         for (int64_t m = 0; m < c->n; m++) {
             const int64_t i = c->rows[m];
-            if (lost && lost[i])
+            if (i < 0 || (lost && lost[i]))
                 continue;
             sim->f[a][i] += b;
-            sum += V[i] * sim->v[a][i];
+            if (!c->terms)
+                sum += V[i] * sim->v[a][i];
+            else if (own_row(sim, i))
+                c->terms[m] = V[i] * sim->v[a][i];
         }
+        if (c->terms) /* a piece: over the ranks */
+            sum = member_sum(sim, c);
         work += bmid * sum * dt;
     }
     if (!sim->setup && !sim->sc.relax) /* the relaxation books its own */
@@ -232,7 +268,7 @@ static void body_reaction(const pd_sim *sim, void *state, double *const r[3])
         const double b = pd_profile_value(&c->bc->profile, sim->time);
         for (int64_t m = 0; m < c->n; m++) {
             const int64_t i = c->rows[m];
-            if (!(sim->lost && sim->lost[i]))
+            if (i >= 0 && !(sim->lost && sim->lost[i]))
                 r[c->bc->axis][i] += sim->p->volume[i] * b;
         }
     }
@@ -280,16 +316,19 @@ static pd_status held_constrain(pd_sim *sim, void *state, int phase)
         switch (phase) {
         case PD_PHASE_SETUP: {
             const double P = offset(c->bc, sim->time), U = rate(c->bc, sim->time);
-            for (int64_t m = 0; m < c->n; m++) {
-                y[c->rows[m]] = x[c->rows[m]] + P;
-                v[c->rows[m]] = U;
-            }
+            for (int64_t m = 0; m < c->n; m++)
+                if (c->rows[m] >= 0) {
+                    y[c->rows[m]] = x[c->rows[m]] + P;
+                    v[c->rows[m]] = U;
+                }
             break;
         }
         case PD_PHASE_KICK1: {
             const double u = (offset(c->bc, t1) - offset(c->bc, t0)) / dt;
             for (int64_t m = 0; m < c->n; m++) {
                 const int64_t i = c->rows[m];
+                if (i < 0)
+                    continue;
                 c->fprev[m] = f[i];
                 if (!(lost && lost[i]))
                     v[i] = u;
@@ -299,7 +338,7 @@ static pd_status held_constrain(pd_sim *sim, void *state, int phase)
         case PD_PHASE_DRIFT: {
             const double P = offset(c->bc, t1);
             for (int64_t m = 0; m < c->n; m++)
-                if (!(lost && lost[c->rows[m]]))
+                if (c->rows[m] >= 0 && !(lost && lost[c->rows[m]]))
                     y[c->rows[m]] = x[c->rows[m]] + P;
             break;
         }
@@ -307,13 +346,21 @@ static pd_status held_constrain(pd_sim *sim, void *state, int phase)
             const double U0 = rate(c->bc, t0), U1 = rate(c->bc, t1);
             const double dP = offset(c->bc, t1) - offset(c->bc, t0);
             const double dK = 0.5 * (U1 * U1 - U0 * U0);
+            if (c->terms)
+                memset(c->terms, 0, (size_t)c->n * sizeof(double));
             for (int64_t m = 0; m < c->n; m++) {
                 const int64_t i = c->rows[m];
-                if (lost && lost[i])
+                if (i < 0 || (lost && lost[i]))
                     continue;
-                sum += V[i] * (rho[i] * dK - 0.5 * (c->fprev[m] + f[i]) * dP);
+                const double t = V[i] * (rho[i] * dK - 0.5 * (c->fprev[m] + f[i]) * dP);
+                if (!c->terms)
+                    sum += t;
+                else if (own_row(sim, i))
+                    c->terms[m] = t;
                 v[i] = U1;
             }
+            if (c->terms) /* a piece: over the ranks */
+                sum = member_sum(sim, c);
             work += sum;
             break;
         }
@@ -341,7 +388,7 @@ static void held_reaction(const pd_sim *sim, void *state, double *const r[3])
                                : 0.0; /* at rest when relaxed */
         for (int64_t m = 0; m < c->n; m++) {
             const int64_t i = c->rows[m];
-            if (!(sim->lost && sim->lost[i]))
+            if (i >= 0 && !(sim->lost && sim->lost[i]))
                 r[a][i] += V[i] * (rho[i] * acc - sim->f[a][i]);
         }
     }

@@ -91,18 +91,6 @@ static pd_status slice_bonds(const pd_particles *p, const pd_bonds *b, const uin
     return PD_OK;
 }
 
-/* What a piece does not yet carry: its name, or NULL. */
-static const char *not_carried(const pd_sim *whole)
-{
-    if (whole->sc.relax)
-        return "--relax";
-    for (int k = 1; k < whole->neffects; k++)
-        if (whole->effects[k] != &pd_effect_indenter && whole->effects[k] != &pd_effect_contact &&
-            whole->effects[k] != &pd_effect_projectile && whole->effects[k] != &pd_effect_damping)
-            return whole->effects[k]->name;
-    return NULL;
-}
-
 /* The first block of rank r's piece: the block below its own if that is
  * even, else the one below that (rank 0: block 0). */
 static int64_t piece_first_block(const int64_t *K, int r)
@@ -129,6 +117,7 @@ static void copy_sums(const pd_sim *from, pd_sim *to)
     memcpy(to->proj_x, from->proj_x, sizeof to->proj_x);
     memcpy(to->proj_v, from->proj_v, sizeof to->proj_v);
     memcpy(to->proj_f, from->proj_f, sizeof to->proj_f);
+    to->relaxed = from->relaxed; /* the last load step's relaxation */
 }
 
 /* The whole body's state into the piece: its rows', the run's sums. */
@@ -184,10 +173,6 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
 {
     *out = NULL;
     const int P = pd_comm_size(), me = pd_comm_rank();
-    const char *no = not_carried(whole);
-    if (no)
-        return pd_fail(PD_ERR_INVALID,
-                       "on %d MPI ranks pd-run does not yet carry %s; run it on one rank", P, no);
     /* the whole body's blocks: the first row of each, and the end */
     const int grid = whole->grid != NULL;
     int64_t nb = grid ? pd_grid_blocks(whole->grid, NULL, NULL, NULL) : whole->half.nblocks;
@@ -225,8 +210,8 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
     if (nb < 2 * (int64_t)P)
         st = pd_fail(PD_ERR_INVALID,
                      "the body is cut into %lld blocks and each of the %d MPI ranks needs two: "
-                     "run it on at most %lld ranks",
-                     (long long)nb, P, (long long)(nb / 2));
+                     "run it on at most %lld rank%s",
+                     (long long)nb, P, (long long)(nb / 2), nb / 2 == 1 ? "" : "s");
     /* the ranks' blocks: about n/P rows each, two blocks at least */
     K[0] = 0;
     K[P] = nb;

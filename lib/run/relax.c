@@ -47,6 +47,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
 #include "state/sim.h"
 
 enum { RESIDUAL, LOAD, QUOTIENT, NORM, KINETIC, NBUF };
@@ -95,11 +96,16 @@ static pd_status relax_new(const pd_sim *sim, struct pd_relax **out)
     double k = sim->sc.bulk_modulus;
     if (!(k > 0)) /* c given: c is linear in K */
         k = sim->sc.c / pd_pmb_c_for(sim->p, 1.0, sim->b->horizon);
-    double sum = 0;
-    for (int64_t i = 0; i < sim->n; i++) {
+    /* in row order (a piece of a body on MPI ranks: its own rows, on from
+     * the ranks below) */
+    const int64_t lo = sim->piece ? sim->piece->own_lo : 0, hi = sim->piece ? sim->piece->own_hi : sim->n;
+    double sum = sim->piece ? pd_comm_chain_in() : 0.0;
+    for (int64_t i = lo; i < hi; i++) {
         const double f = k * PD_PENALTY_STRAIN * pow(sim->p->volume[i], 2.0 / 3.0);
         sum += f * f;
     }
+    if (sim->piece)
+        sum = pd_comm_chain_out(sum);
     r->floor = sqrt(sum);
     *out = r;
     return PD_OK;
@@ -140,8 +146,7 @@ static void sums(const pd_sim *sim, struct pd_relax *R, int quotient, double out
         for (int k = 0; k < NBUF; k++)
             R->term[k][i] = t[k];
     }
-    for (int k = 0; k < NBUF; k++)
-        out[k] = pd_sum_fixed(R->term[k], sim->n);
+    pd_sim_sum(sim, (const double *const *)R->term, NBUF, out); /* over the ranks too */
 }
 
 /* One iteration's move of the free components with damping c (`first`:
@@ -161,6 +166,18 @@ static void move(pd_sim *sim, struct pd_relax *R, double c, int first)
             *v = first ? 0.5 * h * f / rho[i] : (a0 * *v + 2.0 * h * f / rho[i]) * a1;
             sim->y[a][i] += h * *v;
         }
+}
+
+/* The forces at the current positions (a piece of a body on MPI ranks:
+ * its ghosts' positions first, and its ghosts at rest after). */
+static pd_status forces(pd_sim *sim)
+{
+    if (sim->piece)
+        pd_piece_halo(sim);
+    pd_status s = pd_sim_compute_forces(sim);
+    if (sim->piece)
+        pd_piece_ghosts_rest(sim);
+    return s;
 }
 
 /* Relax from rest under the current loads until the residual is within
@@ -203,7 +220,7 @@ static pd_status iterate(pd_sim *sim, struct pd_relax *R, pd_relax_info *info, i
             c = 2.0 * sqrt(sum[QUOTIENT] / sum[NORM]);
         move(sim, R, c, k == 0);
         sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
-        pd_status s = pd_sim_compute_forces(sim);
+        pd_status s = forces(sim);
         if (s != PD_OK)
             return s;
     }
@@ -218,7 +235,7 @@ static pd_status load_step(pd_sim *sim, struct pd_relax *R, pd_relax_info *info,
 {
     const pd_scene *sc = &sim->sc;
     double t0 = pd_wtime();
-    pd_status s = pd_sim_compute_forces(sim); /* the state the step starts from */
+    pd_status s = forces(sim); /* the state the step starts from */
     if (s != PD_OK)
         return s;
     pd_sim_reactions(sim, R->r0);
@@ -231,7 +248,7 @@ static pd_status load_step(pd_sim *sim, struct pd_relax *R, pd_relax_info *info,
     if ((s = pd_sim_constrain(sim, PD_PHASE_SETUP)) != PD_OK)
         return s;
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
-    if ((s = pd_sim_compute_forces(sim)) != PD_OK)
+    if ((s = forces(sim)) != PD_OK)
         return s;
     memset(info, 0, sizeof *info);
     for (int64_t total = 0;;) {
@@ -239,14 +256,17 @@ static pd_status load_step(pd_sim *sim, struct pd_relax *R, pd_relax_info *info,
             return s;
         const int64_t broken = pd_sim_broken(sim);
         sim->setup = 0;
-        s = pd_sim_compute_forces(sim);
+        s = forces(sim);
         sim->setup = 1;
-        if (s != PD_OK || pd_sim_broken(sim) == broken)
+        int more = pd_sim_broken(sim) != broken; /* a piece: on some rank */
+        if (sim->piece)
+            more = pd_comm_or(more);
+        if (s != PD_OK || !more)
             return s;
         info->rounds++;
         /* the forces without the bonds just broken (the breaking pass
          * still had them), to relax from */
-        if ((s = pd_sim_compute_forces(sim)) != PD_OK)
+        if ((s = forces(sim)) != PD_OK)
             return s;
     }
 }
@@ -284,7 +304,9 @@ pd_status pd_sim_relax(pd_sim *sim, pd_relax_info *info)
             t += 0.5 * (R->r0[a][i] + R->r[a][i]) * (sim->y[a][i] - R->y0[a][i]);
         w[i] = t;
     }
-    sim->work += pd_sum_fixed(w, sim->n) + dc;
+    double wsum;
+    pd_sim_sum(sim, (const double *const *)&w, 1, &wsum);
+    sim->work += wsum + dc;
     sim->relaxed = *info;
     sim->timers[PD_T_INTEGRATE] += pd_wtime() - t0;
     return PD_OK;
