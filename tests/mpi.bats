@@ -318,3 +318,23 @@ with h5py.File('np3.h5') as f:
     last = f['frames'][sorted(f['frames'])[-1]]
     assert last.attrs['broken_bonds'] > 0, dict(last.attrs)"
 }
+
+@test "mpi: on 2 and 3 ranks pd-run agrees with LAMMPS peri/pmb (the agreement test's disk, failure + contact + indenter)" {
+    command -v lmp >/dev/null || skip "lmp (LAMMPS with the PERI package) is not installed"
+    local tools=$BATS_TEST_DIRNAME/lammps c=1.6863e22 fail=0.0005,0.25 ind=sphere,0,0.0050,0,0.005,1e17,0,-100,0
+    pd-lattice --spacing 0.0005 --cylinder y,0,0,0.006,-0.0025,0 --density 2200 -q -o lat.h5
+    pd-bonds --horizon 0.0015001 -q lat.h5 -o model.h5
+    "$PY" "$tools/pd2lmp.py" model.h5 -d data.lmp -i in.lmp --dump dump.lmp --c "$c" \
+        --horizon 0.0015001 --failure "$fail" --dt 1e-7 --steps 100 --every 50 --indenter "$ind"
+    lmp -in in.lmp -log none >lmp.out 2>&1
+    for np in 2 3; do
+        mpi "$np" --threads 1 -q --c "$c" --failure "$fail" --dt 1e-7 --contact --indenter "$ind" \
+            --steps 100 --every 50 model.h5 -o "np$np.h5"
+        pd-damage "np$np.h5" >/dev/null
+        for step in 50 100; do
+            run -0 "$PY" "$tools/compare.py" "np$np.h5" dump.lmp --step "$step"
+            assert_line --partial "OK"
+        done
+        run -0 "$PY" "$tools/compare.py" "np$np.h5" dump.lmp --step 100 --min-damaged 100
+    done
+}

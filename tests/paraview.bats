@@ -117,3 +117,17 @@ pv_run() {
         view/run.xdmf xdmf.png
     assert_output "ok 5"
 }
+
+@test "ParaView's XDMF Reader opens the run of pd-run on 2 MPI ranks, in place" {
+    local mpi_run=$BATS_TEST_DIRNAME/../mpi/bin/pd-run
+    [ -x "$mpi_run" ] || skip "no MPI build (mpicc and libhdf5-openmpi-dev)"
+    make_block
+    OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ASAN_OPTIONS=detect_leaks=0 \
+        mpirun --oversubscribe --bind-to none -x ASAN_OPTIONS -np 2 "$mpi_run" -q \
+        "${RUN_OPTS[@]}" --threads 1 --steps 100 --every 25 --fields energy,stress model.h5 \
+        -o run.h5
+    pd-dump2vtk -q --xdmf run.h5
+    run -0 --separate-stderr pv_run "$BATS_TEST_DIRNAME/paraview/check_xdmf.py" run.h5 run.xdmf xdmf.png
+    assert_output "ok 5"
+    [ -s xdmf.png ]
+}
