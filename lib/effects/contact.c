@@ -566,6 +566,68 @@ static int grow(void **a, int64_t *cap, int64_t need, size_t size)
     return 1;
 }
 
+/* The search of a piece's pairs: what it reads, and what it finds. */
+enum { PAIR_OW = 7 }; /* a pair sent: the mover, our particle, its position, d, its volume */
+typedef struct {
+    const pd_sim *sim;
+    const pd_cells *G;       /* the whole body's grid                    */
+    const search_point *pt;  /* the points and their positions           */
+    const uint8_t *mv;       /* the piece's movers                       */
+    const double *py[3];
+    double reach2, prune2;
+    int prune;
+    pair_rec *rec;           /* the own particles' pairs                 */
+    int64_t nrec, caprec;
+    double *out;             /* to the movers' owners                    */
+    int64_t *dest, nout, capout, capdest;
+} pair_search;
+
+/* The pair of own particle i (not lost) and point k, when it passes
+ * candidates()'s tests: into i's list; a pair of another rank's mover
+ * with a non-mover that rank's piece lacks goes to that rank too. */
+static pd_status add_pair(pair_search *ps, int64_t i, int64_t k)
+{
+    const pd_sim *sim = ps->sim;
+    const pd_piece *pc = sim->piece;
+    const search_point *s = &ps->pt[k];
+    const int mover = ps->mv[i];
+    const double yi[3] = {sim->y[0][i], sim->y[1][i], sim->y[2][i]};
+    const double xi[3] = {sim->p->x[0][i], sim->p->x[1][i], sim->p->x[2][i]};
+    const double yq[3] = {ps->py[0][k], ps->py[1][k], ps->py[2][k]};
+    int64_t ki[3];
+    double d;
+    if (!mover && !s->mover)
+        return PD_OK;
+    pd_cells_locate(ps->G, yi, ki);
+    if (!pair_test(sim, ps->G, yi, xi, sim->p->radius[i], ki, i, yq, s, ps->reach2, ps->prune2,
+                   ps->prune, &d))
+        return PD_OK;
+    if (!grow((void **)&ps->rec, &ps->caprec, ps->nrec + 1, sizeof *ps->rec))
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
+    pair_rec *r = &ps->rec[ps->nrec++];
+    r->row = i;
+    r->j = s->g;
+    r->d = d;
+    r->v = s->v;
+    if (mover)
+        cell_key(ps->G, yq, r->key);
+    else
+        r->key[0] = r->key[1] = r->key[2] = 0;
+    const int t = mover ? pc->rank : owner_of(pc, s->g);
+    if (t == pc->rank || in_piece(pc, t, pc->first + i))
+        return PD_OK;
+    if (!grow((void **)&ps->out, &ps->capout, PAIR_OW * (ps->nout + 1), sizeof(double)) ||
+        !grow((void **)&ps->dest, &ps->capdest, ps->nout + 1, sizeof(int64_t)))
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
+    double *o = ps->out + PAIR_OW * ps->nout;
+    o[0] = (double)s->g;
+    o[1] = (double)(pc->first + i);
+    o[2] = yi[0], o[3] = yi[1], o[4] = yi[2], o[5] = d;
+    o[6] = sim->p->volume[i];
+    ps->dest[ps->nout++] = t;
+    return PD_OK;
+}
+
 static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
 {
     const pd_piece *pc = sim->piece;
@@ -670,62 +732,37 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
         }
         st = pd_cells_build_except(&C, np, py, reach, skip);
     }
-    /* the pairs of the own particles, and those sent to the movers' owners */
-    pair_rec *rec = NULL;
-    enum { OW = 7 };    /* to each rank: its mover, our particle, its position, d, volume */
-    double *out = NULL;
-    int64_t nrec = 0, caprec = 0, nout = 0, capout = 0;
-    int64_t *dest = NULL, capdest = 0;
-    const double reach2 = reach * reach;
+    /* the pairs of the own particles, and those sent to the movers' owners:
+     * an own mover's from its own search, a non-mover's from the searches
+     * of the movers (only movers search, as in build_movers) */
+    pair_search ps = {.sim = sim, .G = &G, .pt = pt, .mv = mv, .py = {py[0], py[1], py[2]},
+                      .reach2 = reach * reach, .prune2 = prune2, .prune = prune};
     for (int64_t i = pc->own_lo; i < pc->own_hi && st == PD_OK; i++) {
-        if (lost && lost[i])
+        if (!mv[i]) /* (a lost particle is no mover) */
             continue;
-        const double yi[3] = {y[0][i], y[1][i], y[2][i]}, xi[3] = {x[0][i], x[1][i], x[2][i]};
-        int64_t ki[3];
-        pd_cells_locate(&G, yi, ki);
         int64_t rl[9], rh[9];
+        const double yi[3] = {y[0][i], y[1][i], y[2][i]};
         const int nr = pd_cells_adjacent_rows(&C, yi, rl, rh);
         for (int q = 0; q < nr && st == PD_OK; q++)
-            for (int64_t e = rl[q]; e < rh[q]; e++) {
-                const int64_t k = C.index[e];
-                const search_point *s = &pt[k];
-                if (s->g == first + i || (!mv[i] && !s->mover))
-                    continue;
-                const double yq[3] = {py[0][k], py[1][k], py[2][k]};
-                double d;
-                if (!pair_test(sim, &G, yi, xi, sim->p->radius[i], ki, i, yq, s, reach2, prune2,
-                               prune, &d))
-                    continue;
-                if (!grow((void **)&rec, &caprec, nrec + 1, sizeof *rec)) {
-                    st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
-                    break;
-                }
-                pair_rec *r = &rec[nrec++];
-                r->row = i;
-                r->j = s->g;
-                r->d = d;
-                r->v = s->v;
-                if (mv[i])
-                    cell_key(&G, yq, r->key);
-                else
-                    r->key[0] = r->key[1] = r->key[2] = 0;
-                /* a mover of a rank whose piece lacks this non-mover */
-                const int t = s->mover && !mv[i] ? owner_of(pc, s->g) : me;
-                if (t != me && !in_piece(pc, t, first + i)) {
-                    if (!grow((void **)&out, &capout, OW * (nout + 1), sizeof(double)) ||
-                        !grow((void **)&dest, &capdest, nout + 1, sizeof(int64_t))) {
-                        st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
-                        break;
-                    }
-                    double *o = out + OW * nout;
-                    o[0] = (double)s->g;
-                    o[1] = (double)(first + i);
-                    o[2] = yi[0], o[3] = yi[1], o[4] = yi[2], o[5] = d;
-                    o[6] = sim->p->volume[i];
-                    dest[nout++] = t;
-                }
+            for (int64_t e = rl[q]; e < rh[q] && st == PD_OK; e++)
+                if (pt[C.index[e]].g != first + i)
+                    st = add_pair(&ps, i, C.index[e]);
+    }
+    for (int64_t k = n; k < np && st == PD_OK; k++) { /* every mover: own non-movers near it */
+        int64_t rl[9], rh[9];
+        const double yk[3] = {py[0][k], py[1][k], py[2][k]};
+        const int nr = pd_cells_adjacent_rows(&C, yk, rl, rh);
+        for (int q = 0; q < nr && st == PD_OK; q++)
+            for (int64_t e = rl[q]; e < rh[q] && st == PD_OK; e++) {
+                const int64_t i = C.index[e]; /* a point of the piece (movers are past n) */
+                if (i < n && i >= pc->own_lo && i < pc->own_hi)
+                    st = add_pair(&ps, i, k);
             }
     }
+    pair_rec *rec = ps.rec;
+    double *out = ps.out;
+    int64_t nrec = ps.nrec, caprec = ps.caprec, nout = ps.nout, *dest = ps.dest;
+    enum { OW = PAIR_OW };
     pd_cells_free(&C);
     /* the pairs sent (in rank order: a counting sort by destination) */
     st = pd_comm_or(st != PD_OK) && st == PD_OK ? pd_fail(PD_ERR_IO, "a rank failed in the contact search") : st;
