@@ -113,6 +113,7 @@ pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
     h->block = (n + nb - 1) / nb;
     h->block = h->block > span ? h->block : span;
     h->nblocks = h->block > 0 ? (n + h->block - 1) / h->block : 0;
+    h->walk = h->nblocks;
     h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
     if (h->released == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");
@@ -129,7 +130,7 @@ pd_status pd_half_set_block(pd_half_bonds *h, int64_t block)
         return pd_fail(PD_ERR_INVALID, "blocks of %lld rows are shorter than a bond's span, %lld",
                        (long long)block, (long long)span);
     h->block = block;
-    h->nblocks = (h->n + block - 1) / block;
+    h->nblocks = h->walk = (h->n + block - 1) / block;
     free(h->released);
     h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
     return h->released ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");

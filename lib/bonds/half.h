@@ -21,6 +21,9 @@ typedef struct {
     uint64_t *intact;  /* mu per bond                                    */
     int64_t block;     /* rows per block (>= the largest j - i)          */
     int64_t nblocks;
+    int64_t walk;      /* blocks the bond list's kernel walks: nblocks, or
+                          (a piece of a body on MPI ranks) up to its own
+                          last                                           */
     double *released;  /* nblocks: energy of the bonds broken in a block
                           in this step, J (summed in block order)        */
     int64_t *cursor;   /* scratch of the weights' set-up (pmb.c, lps.c)    */

@@ -542,7 +542,7 @@ static void pmb_blocks(pd_sim *sim, pd_bond_mode failure)
     const pd_half_bonds *h = &sim->half;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel for schedule(dynamic, 1)
-        for (int64_t blk = phase; blk < h->nblocks; blk += 2) {
+        for (int64_t blk = phase; blk < h->walk; blk += 2) {
             int64_t lo = blk * h->block, hi = lo + h->block < sim->n ? lo + h->block : sim->n;
             if (failure)
                 h->released[blk] = 0;

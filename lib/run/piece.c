@@ -212,12 +212,17 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
                      "the body is cut into %lld blocks and each of the %d MPI ranks needs two: "
                      "run it on at most %lld rank%s",
                      (long long)nb, P, (long long)(nb / 2), nb / 2 == 1 ? "" : "s");
-    /* the ranks' blocks: about n/P rows each, two blocks at least */
+    /* the ranks' blocks, two at least each: about as many rows walked
+     * each, a rank above the first walking one or two blocks below its own
+     * again (1.5 blocks of rows on average, dup): rank 0 owns W rows, the
+     * others W - dup, W = (n + (P - 1) dup) / P */
     K[0] = 0;
     K[P] = nb;
+    const double dup = 1.5 * (double)n / (double)(nb > 0 ? nb : 1);
+    const double W = ((double)n + (P - 1) * dup) / P;
     for (int r = 1; r < P && st == PD_OK; r++) {
         int64_t k = K[r - 1] + 2;
-        while (k < nb - 2 * (P - r) && start[k] < (int64_t)((double)n * r / P))
+        while (k < nb - 2 * (P - r) && (double)start[k] < r * W - (r - 1) * dup)
             k++;
         K[r] = k;
     }

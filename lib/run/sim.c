@@ -167,6 +167,8 @@ pd_status pd_sim_new_cut(const pd_particles *p, const pd_bonds *b, const pd_scen
         st = pd_half_build(sim->b, &sim->half);
     if (st == PD_OK && piece && !piece->grid)
         st = pd_half_set_block(&sim->half, piece->half_block);
+    if (st == PD_OK && piece && !piece->grid && piece->own_blk_hi < sim->half.nblocks)
+        sim->half.walk = piece->own_blk_hi; /* not the ghosts' block above its own */
     if (st == PD_OK)
         st = no_failure_rows(sim);
     if (st == PD_OK)
@@ -179,6 +181,8 @@ pd_status pd_sim_new_cut(const pd_particles *p, const pd_bonds *b, const pd_scen
             st = pd_half_build(sim->b, &sim->half);
         if (st == PD_OK && piece && !piece->grid)
             st = pd_half_set_block(&sim->half, piece->half_block);
+        if (st == PD_OK && piece && !piece->grid && piece->own_blk_hi < sim->half.nblocks)
+            sim->half.walk = piece->own_blk_hi;
     }
     if (st == PD_OK && piece && piece->grid != (sim->grid != NULL))
         st = pd_fail(PD_ERR_INVALID, "a piece of the body is not walked as the whole body is");

@@ -689,6 +689,9 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
         pd_grid_free(G);
         return ok < 0 ? pd_fail(PD_ERR_NOMEM, "out of memory for the lattice bonds") : PD_OK;
     }
+    G->walk = G->nblocks; /* a piece: not the ghosts' block above its own */
+    if (sim->piece && sim->piece->own_blk_hi < G->nblocks)
+        G->walk = sim->piece->own_blk_hi;
     pd_grid_sync(sim, G);
 #if PD_AVX512_KERNELS
     G->tile = !lps && G->words == 1 && __builtin_cpu_supports("avx512f") && !getenv("PD_NO_AVX512");

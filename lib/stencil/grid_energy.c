@@ -68,7 +68,7 @@ static void pair_energy(const pd_sim *sim, double *e, const int contact)
     const pd_grid *G = sim->grid;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel
-        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
+        for (int64_t blk = phase; blk < G->walk; blk += 2)
             if (grid_mine(G, blk))
                 block_energy(sim, blk, e, contact);
     }

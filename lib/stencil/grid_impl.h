@@ -95,6 +95,10 @@ struct pd_grid {
                             from the whole body's outer plane 0 on, in its
                             lattice coordinates                           */
     int thick;           /* outer planes a block                           */
+    int64_t walk;        /* blocks whose bonds the force and energy passes
+                            walk: nblocks, or (a piece) up to its own last:
+                            the block above is ghosts, whose forces are
+                            not wanted                                    */
     int64_t *block_run;  /* nblocks + 1: block b holds the runs
                             [block_run[b], block_run[b + 1])               */
     double *block_at;    /* nblocks: where a block's middle particle falls

@@ -155,7 +155,7 @@ pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode 
         theta[i] = 0.0;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel
-        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
+        for (int64_t blk = phase; blk < G->walk; blk += 2)
             if (grid_mine(G, blk))
                 lps_theta_block(G, blk, &A, theta, V);
     }
@@ -178,7 +178,7 @@ pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode 
         G->breaks[blk].n = 0;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel reduction(| : bad)
-        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
+        for (int64_t blk = phase; blk < G->walk; blk += 2)
             if (grid_mine(G, blk))
                 bad |= (failure ? lps_force_block_1 : lps_force_block_0)(
                            G, blk, &A, ta, tb, V, dil, sim->sc.shear_modulus) != 0;

@@ -508,7 +508,7 @@ int grid_tile_energies(const pd_sim *sim)
     const int contact = G->cmask != NULL;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel
-        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
+        for (int64_t blk = phase; blk < G->walk; blk += 2)
             if (grid_mine(G, blk))
                 tile_energy_block(G, blk, &A, contact);
     }
@@ -583,7 +583,7 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
         G->breaks[blk].n = 0;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel reduction(| : bad)
-        for (int64_t blk = phase; blk < G->nblocks; blk += 2)
+        for (int64_t blk = phase; blk < G->walk; blk += 2)
             if (grid_mine(G, blk))
                 bad |= fn(G, blk, &A) != 0;
     }
@@ -617,7 +617,7 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
          * new s0, with -inf: two passes over the particles fewer. */
         for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel if (!perm)
-            for (int64_t blk = phase; blk < G->nblocks; blk += 2) {
+            for (int64_t blk = phase; blk < G->walk; blk += 2) {
                 if (!grid_mine(G, blk))
                     continue;
                 if (!perm)
