@@ -116,6 +116,24 @@ void pd_comm_allgather(const double *mine, const int64_t *counts, double *all)
     free(c);
 }
 
+void pd_comm_counts(int64_t mine, int64_t *all)
+{
+    if (pd_comm_size() == 1) {
+        all[0] = mine;
+        return;
+    }
+    MPI_Allgather(&mine, 1, MPI_INT64_T, all, 1, MPI_INT64_T, MPI_COMM_WORLD);
+}
+
+void pd_comm_counts_to(const int64_t *send, int64_t *recv)
+{
+    if (pd_comm_size() == 1) {
+        recv[0] = send[0];
+        return;
+    }
+    MPI_Alltoall(send, 1, MPI_INT64_T, recv, 1, MPI_INT64_T, MPI_COMM_WORLD);
+}
+
 void pd_comm_gather_bytes(const void *mine, const int64_t *bytes, void *all)
 {
     const int P = pd_comm_size(), me = pd_comm_rank();
@@ -242,6 +260,16 @@ int64_t pd_comm_min(int64_t v)
 void pd_comm_allgather(const double *mine, const int64_t *counts, double *all)
 {
     memmove(all, mine, (size_t)counts[0] * sizeof(double));
+}
+
+void pd_comm_counts(int64_t mine, int64_t *all)
+{
+    all[0] = mine;
+}
+
+void pd_comm_counts_to(const int64_t *send, int64_t *recv)
+{
+    recv[0] = send[0];
 }
 
 void pd_comm_gather_bytes(const void *mine, const int64_t *bytes, void *all)

@@ -12,6 +12,10 @@
 /* Every rank's `count` doubles at `mine`, in rank order, into `all` on
  * every rank; counts[r] is rank r's count (the same table on every rank). */
 void pd_comm_allgather(const double *mine, const int64_t *counts, double *all);
+/* Every rank's one count `mine` into all[r], r its rank, on every rank. */
+void pd_comm_counts(int64_t mine, int64_t *all);
+/* Each rank's send[r] to rank r, which gets it as recv[this rank]. */
+void pd_comm_counts_to(const int64_t *send, int64_t *recv);
 /* The same to rank 0 alone, of bytes (`all` is read on rank 0 only). */
 void pd_comm_gather_bytes(const void *mine, const int64_t *bytes, void *all);
 /* The smallest lo[d] and the largest hi[d] over the ranks, in place. */

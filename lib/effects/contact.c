@@ -668,8 +668,7 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
     }
     enum { MW = 9 }; /* a mover: row, y, x, radius, volume */
     double *mine = malloc((size_t)(nmine > 0 ? nmine : 1) * MW * sizeof(double));
-    double total_d = (double)nmine * MW, *all_c = malloc((size_t)P * sizeof(double));
-    pd_status st = mine && all_c ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for the movers");
+    pd_status st = mine ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for the movers");
     int64_t m = 0;
     double *M = NULL;
     if (st == PD_OK) {
@@ -684,18 +683,15 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
                 q[7] = sim->p->radius[i];
                 q[8] = sim->p->volume[i];
             }
+        pd_comm_counts(nmine * MW, counts);
         for (int r = 0; r < P; r++)
-            counts[r] = 1;
-        pd_comm_allgather(&total_d, counts, all_c);
-        for (int r = 0; r < P; r++)
-            m += (counts[r] = (int64_t)all_c[r]) / MW;
+            m += counts[r] / MW;
         if ((M = malloc((size_t)(m > 0 ? m : 1) * MW * sizeof(double))) == NULL)
             st = pd_fail(PD_ERR_NOMEM, "out of memory for the movers");
         else
             pd_comm_allgather(mine, counts, M);
     }
     free(mine);
-    free(all_c);
     /* the points: the piece's particles that are neither movers nor lost,
      * and every mover */
     const int64_t np = n + m;
@@ -782,26 +778,16 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
                 at[dest[e]] += OW;
             }
         /* how many each rank sends here */
-        double *cd = malloc((size_t)P * sizeof(double)), *rd = malloc((size_t)P * sizeof(double));
-        int64_t *ones = malloc((size_t)P * sizeof(int64_t));
         int64_t ngot = 0;
-        if (cd && rd && ones && sorted) {
-            for (int r = 0; r < P; r++) {
-                cd[r] = (double)counts[r];
-                ones[r] = 1;
-            }
-            pd_comm_alltoall(cd, ones, rd, ones);
-            for (int r = 0; r < P; r++)
-                ngot += c2[r] = (int64_t)rd[r];
+        pd_comm_counts_to(counts, c2);
+        for (int r = 0; r < P; r++)
+            ngot += c2[r];
+        if (sorted)
             got = malloc((size_t)(ngot > 0 ? ngot : 1) * sizeof(double));
-        }
         if (got)
             pd_comm_alltoall(sorted, counts, got, c2);
         else
             st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
-        free(cd);
-        free(rd);
-        free(ones);
         for (int64_t e = 0; st == PD_OK && e < ngot / OW; e++) { /* a remote non-mover's pair */
             const double *o = got + OW * e;
             if (!grow((void **)&rec, &caprec, nrec + 1, sizeof *rec)) {
@@ -923,22 +909,15 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
         }
         /* the rows each rank sends here are those it counted (both ends of
          * a pair see it alike): checked, for a list built wrong is silent */
-        double *cd = malloc((size_t)P * sizeof(double)), *rd = malloc((size_t)P * sizeof(double));
-        int64_t *ones = malloc((size_t)P * sizeof(int64_t));
-        if (cd && rd && ones) {
-            for (int r = 0; r < P; r++) {
-                cd[r] = (double)cl->scount[r];
-                ones[r] = 1;
-            }
-            pd_comm_alltoall(cd, ones, rd, ones);
+        int64_t *rd = malloc((size_t)P * sizeof(int64_t));
+        if (rd) {
+            pd_comm_counts_to(cl->scount, rd);
             for (int r = 0; r < P && st == PD_OK; r++)
-                if ((int64_t)rd[r] != cl->rcount[r])
+                if (rd[r] != cl->rcount[r])
                     st = pd_fail(PD_ERR_INVALID, "the contact pairs of ranks %d and %d disagree", r, me);
         } else
             st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
-        free(cd);
         free(rd);
-        free(ones);
     }
     if (st != PD_OK)
         memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
@@ -1161,13 +1140,10 @@ pd_status pd_contact_gather(const pd_sim *piece, pd_sim *whole)
     /* per own row its count, then its partners (rows of the whole body)
      * and their d, as doubles */
     double *mine = malloc((size_t)((hi - lo) + 2 * (q1 - q0) + 1) * sizeof(double));
-    int64_t *bytes = malloc((size_t)P * sizeof(int64_t)), *ones = calloc((size_t)P, sizeof(int64_t));
-    double *sizes = malloc((size_t)P * sizeof(double));
-    if (!mine || !bytes || !ones || !sizes) {
+    int64_t *bytes = malloc((size_t)P * sizeof(int64_t));
+    if (!mine || !bytes) {
         free(mine);
         free(bytes);
-        free(ones);
-        free(sizes);
         return pd_fail(PD_ERR_NOMEM, "out of memory gathering the contact list");
     }
     double *m = mine;
@@ -1178,13 +1154,10 @@ pd_status pd_contact_gather(const pd_sim *piece, pd_sim *whole)
         *m++ = (double)(j < n ? first + j : cl->remote_g[j - n]);
         *m++ = cl->d[q];
     }
-    const double size = (double)(m - mine);
-    for (int r = 0; r < P; r++)
-        ones[r] = 1;
-    pd_comm_allgather(&size, ones, sizes);
+    pd_comm_counts((int64_t)(m - mine) * (int64_t)sizeof(double), bytes);
     int64_t total = 0;
     for (int r = 0; r < P; r++)
-        total += bytes[r] = (int64_t)sizes[r] * (int64_t)sizeof(double);
+        total += bytes[r];
     double *all = root ? malloc((size_t)(total > 0 ? total : 1)) : NULL;
     pd_comm_gather_bytes(mine, bytes, all);
     /* and the positions of the last build */
@@ -1223,7 +1196,5 @@ pd_status pd_contact_gather(const pd_sim *piece, pd_sim *whole)
     free(all);
     free(mine);
     free(bytes);
-    free(ones);
-    free(sizes);
     return st;
 }

@@ -1133,21 +1133,13 @@ pd_status pd_lps_gather(const pd_sim *piece, pd_sim *whole)
      * families are whole), w values each */
     const int P = pc->ranks, root = pc->rank == 0;
     const int64_t k0 = piece->b->offset[pc->own_lo], k1 = piece->b->offset[pc->own_hi];
-    const double mine = h ? (double)((k1 - k0) * w) : 0.0;
-    double *counts = malloc((size_t)P * sizeof(double));
-    int64_t *ones = calloc((size_t)P, sizeof(int64_t)), *bytes = malloc((size_t)P * sizeof(int64_t));
-    if (!counts || !ones || !bytes) {
-        free(counts);
-        free(ones);
-        free(bytes);
+    int64_t *bytes = malloc((size_t)P * sizeof(int64_t));
+    if (!bytes)
         return pd_fail(PD_ERR_NOMEM, "out of memory gathering the bond history");
-    }
-    for (int r = 0; r < P; r++)
-        ones[r] = 1;
-    pd_comm_allgather(&mine, ones, counts);
+    pd_comm_counts(h ? (k1 - k0) * w * (int64_t)sizeof(double) : 0, bytes);
     int64_t total = 0;
     for (int r = 0; r < P; r++)
-        total += bytes[r] = (int64_t)counts[r] * (int64_t)sizeof(double);
+        total += bytes[r];
     int ww = 0;
     double *hw = root ? pd_sim_bond_history(whole, &ww) : NULL;
     pd_status st = PD_OK;
@@ -1156,8 +1148,6 @@ pd_status pd_lps_gather(const pd_sim *piece, pd_sim *whole)
     double *scratch = root && st != PD_OK ? malloc((size_t)(total > 0 ? total : 1)) : NULL;
     pd_comm_gather_bytes(h ? h + k0 * w : NULL, bytes, root ? (st == PD_OK ? hw : scratch) : NULL);
     free(scratch);
-    free(counts);
-    free(ones);
     free(bytes);
     return st;
 }

@@ -349,15 +349,12 @@ pd_status pd_sim_gather(const pd_sim *sim, pd_sim *whole)
     const int64_t q0 = h->offset[pc->own_lo], q1 = h->offset[pc->own_hi];
     uint8_t *state = malloc((size_t)(q1 > q0 ? q1 - q0 : 1));
     int64_t *counts = malloc((size_t)pc->ranks * sizeof(int64_t));
-    double c = (double)(q1 - q0), *all = malloc((size_t)pc->ranks * sizeof(double));
     uint8_t *every = NULL;
-    if (state && counts && all) {
-        for (int r = 0; r < pc->ranks; r++)
-            counts[r] = 1;
-        pd_comm_allgather(&c, counts, all);
+    if (state && counts) {
+        pd_comm_counts(q1 - q0, counts);
         int64_t total = 0;
         for (int r = 0; r < pc->ranks; r++)
-            total += counts[r] = (int64_t)all[r];
+            total += counts[r];
         for (int64_t q = q0; q < q1; q++)
             state[q - q0] = (uint8_t)pd_bond_intact(h->intact, q);
         if (root && total != whole->half.count)
@@ -381,7 +378,6 @@ pd_status pd_sim_gather(const pd_sim *sim, pd_sim *whole)
     free(every);
     free(state);
     free(counts);
-    free(all);
     free(bytes);
     pd_status cs = pd_contact_gather(sim, whole);
     st = st == PD_OK ? cs : st;

@@ -74,33 +74,23 @@ pd_status pd_piece_halo(pd_sim *sim)
 
 pd_status pd_piece_add_in_order(const pd_sim *sim, const double *v, int64_t n, double *sum)
 {
-    const pd_piece *pc = sim->piece;
-    const int P = pc->ranks;
-    double *counts = malloc((size_t)P * sizeof(double));
-    int64_t *ones = calloc((size_t)P, sizeof(int64_t)), *each = malloc((size_t)P * sizeof(int64_t));
-    if (!counts || !ones || !each) {
-        free(counts);
-        free(ones);
-        free(each);
+    const int P = sim->piece->ranks;
+    int64_t *each = malloc((size_t)P * sizeof(int64_t));
+    if (!each)
         return pd_fail(PD_ERR_NOMEM, "out of memory for a sum over the ranks");
-    }
-    const double mine = (double)n;
+    pd_comm_counts(n, each);
     int64_t total = 0;
     for (int r = 0; r < P; r++)
-        ones[r] = 1;
-    pd_comm_allgather(&mine, ones, counts);
-    for (int r = 0; r < P; r++)
-        total += each[r] = (int64_t)counts[r];
+        total += each[r];
     double *all = malloc((size_t)(total > 0 ? total : 1) * sizeof(double));
+    const pd_status st = all ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for a sum over the ranks");
     if (all) {
         pd_comm_allgather(v, each, all);
         for (int64_t k = 0; k < total; k++)
             *sum += all[k];
     }
     free(all);
-    free(counts);
-    free(ones);
     free(each);
-    return all ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for a sum over the ranks");
+    return st;
 }
 
