@@ -22,6 +22,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "pd.h"
@@ -825,6 +826,11 @@ static void status_line(const pd_sim *sim, int64_t steps, int tty, const pd_ener
     static int flagged;
     const pd_energy e = *energy;
     double ratio;
+    /* the body's figures (every MPI rank takes part; rank 0 tells) */
+    const int64_t broken = pd_sim_broken(sim), lost = pd_sim_lost(sim);
+    const double max_damage = pd_sim_max_damage(sim);
+    if (pd_comm_rank() > 0)
+        return;
     if (flag && !flagged && pd_energy_runaway(sim, &e, &ratio)) {
         fprintf(stderr,
                 "%s" PROG ": warning: at step %lld the kinetic energy is %.3g times the energy "
@@ -838,7 +844,7 @@ static void status_line(const pd_sim *sim, int64_t steps, int tty, const pd_ener
             "released=%.6e J work=%.6e J balance=%.6e J broken=%lld max_damage=%.4f\n",
             tty ? "\r\033[K" : "", (long long)pd_sim_stepno(sim), (long long)steps,
             pd_sim_time(sim), e.kinetic, e.elastic, e.contact, e.released, e.work,
-            pd_energy_total(&e), (long long)pd_sim_broken(sim), pd_sim_max_damage(sim));
+            pd_energy_total(&e), (long long)broken, max_damage);
     double px[3], pv[3];
     if (pd_sim_projectile(sim, px, pv))
         fprintf(stderr, PROG ": projectile at (%.6e, %.6e, %.6e) m, velocity (%.6e, %.6e, %.6e) "
@@ -846,17 +852,18 @@ static void status_line(const pd_sim *sim, int64_t steps, int tty, const pd_ener
                 px[0], px[1], px[2], pv[0], pv[1], pv[2], e.projectile);
     if (pd_sim_damping(sim) > 0)
         fprintf(stderr, PROG ": damping took %.6e J so far\n", e.damped);
-    if (e.lost > 0 || pd_sim_lost(sim) > 0)
-        fprintf(stderr, PROG ": %lld particles lost so far, carrying %.6e J\n",
-                (long long)pd_sim_lost(sim), e.lost);
+    if (e.lost > 0 || lost > 0)
+        fprintf(stderr, PROG ": %lld particles lost so far, carrying %.6e J\n", (long long)lost,
+                e.lost);
 }
 
 /* A frame, its time booked as output's. */
-static pd_status timed_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
-                             const pd_sim *sim, unsigned fields, double *t_out, pd_energy *energy)
+static pd_status timed_frame(pd_file *out, const pd_sim *sim, unsigned fields, double *t_out,
+                             pd_energy *energy)
 {
     double t0 = pd_wtime();
-    pd_status s = pd_run_file_frame(out, p, b, sim, fields, energy);
+    pd_status s = pd_run_file_frame(out, pd_sim_particles(sim), pd_sim_bonds(sim), sim, fields,
+                                    energy);
     *t_out += pd_wtime() - t0;
     return s;
 }
@@ -924,7 +931,11 @@ static pd_status agreed(pd_status s)
 {
     if (pd_comm_size() == 1 || !pd_comm_or(s != PD_OK))
         return s;
-    const int64_t me = pd_comm_rank(), first = pd_comm_min(s != PD_OK ? me : INT64_MAX);
+    /* a rank that failed for another (pd_comm_agree) lets that one tell */
+    const int64_t me = pd_comm_rank(), own = s != PD_OK && !pd_comm_echo();
+    int64_t first = pd_comm_min(own ? me : INT64_MAX);
+    if (first == INT64_MAX)
+        first = pd_comm_min(s != PD_OK ? me : INT64_MAX);
     if (first != me) {
         failure_told = 1;
         return s != PD_OK ? s : pd_fail(PD_ERR_IO, "MPI rank %lld failed", (long long)first);
@@ -950,6 +961,7 @@ struct held {
     struct options *opts; /* its profiles */
     pd_scene_report report; /* a fresh run's scene at t = 0 */
     double t_setup;          /* its step 0 (pd_sim_setup), s */
+    int64_t nbonds;          /* the whole body's directed bonds */
     int64_t iterations;      /* --relax: the iterations of its load steps */
 };
 
@@ -1081,6 +1093,17 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
                 h->report.frames == 1 ? "" : "s");
 }
 
+/* The whole body, once a rank steps its piece. */
+static void drop_whole(struct held *h)
+{
+    pd_sim_free(h->sim);
+    pd_bonds_free(h->b);
+    pd_particles_free(h->p);
+    h->sim = NULL;
+    h->b = NULL;
+    h->p = NULL;
+}
+
 /* A fresh run's step 0 (pd_sim_setup), before its file is made: a start
  * that is mostly penalty energy is one more warning of the scene's. */
 static pd_status start_energy(struct held *h)
@@ -1088,8 +1111,6 @@ static pd_status start_energy(struct held *h)
     double t0 = pd_wtime();
     pd_sim *sim = h->piece ? h->piece : h->sim;
     pd_status s = pd_sim_setup(sim);
-    if (s == PD_OK)
-        s = pd_sim_gather(sim, h->sim);
     h->t_setup = pd_wtime() - t0; /* the run's wall clock, as before */
     pd_scene_report *r = &h->report;
     if (s == PD_OK && r->nwarnings < PD_SCENE_WARNINGS &&
@@ -1109,11 +1130,12 @@ static int64_t status_interval(const struct options *o, int64_t nsteps)
  * Returns 0, or the exit status after printing the error. */
 static int start(struct options *o, struct held *h, int64_t *first)
 {
-    const int restart = o->restart != NULL, root = pd_comm_rank() == 0;
-    /* a restart updates the run (through a copy renamed over it, rank 0's;
-     * the other ranks read the run as it was) */
-    pd_status s = restart && root ? pd_file_update(o->restart, o->output, &h->in)
-                                  : pd_file_open(restart ? o->restart : o->input, &h->in);
+    const int restart = o->restart != NULL, ranks = pd_comm_size() > 1;
+    /* a restart updates the run (through a copy renamed over it; on MPI
+     * ranks every rank reads the run as it was, and the copy is made when
+     * the ranks have their pieces) */
+    pd_status s = restart && !ranks ? pd_file_update(o->restart, o->output, &h->in)
+                                    : pd_file_open(restart ? o->restart : o->input, &h->in);
     if (s == PD_OK)
         s = pd_read_particles(h->in, &h->p);
     if (s == PD_OK)
@@ -1139,36 +1161,35 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_sim_new(h->p, h->b, sc, &h->sim);
     if (s == PD_OK && restart)
         s = pd_sim_restore(h->sim, *first, &h->r, h->v0, h->bits0);
-    if (s == PD_OK && pd_comm_size() > 1) /* this rank's piece of the body */
+    if (s == PD_OK && ranks) /* this rank's piece of the body */
         s = pd_sim_piece(h->sim, &h->piece);
     s = agreed(s);
-    if (s == PD_OK && h->piece && !root) { /* the whole body is rank 0's alone */
-        pd_sim_free(h->sim);
-        pd_bonds_free(h->b);
-        pd_particles_free(h->p);
-        h->sim = NULL;
-        h->b = NULL;
-        h->p = NULL;
-    }
     if (s == PD_OK && !restart) /* step 0's forces, and the check of its energy */
         s = start_energy(h);
     if (s == PD_OK && o->strict && h->report.nwarnings > 0)
         s = pd_fail(PD_ERR_INVALID, "%s (--strict)", h->report.warning[0]);
     if (s == PD_OK && (h->text = pd_scene_text(sc)) == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory for the scene's text");
-    if (s == PD_OK && restart && root)
+    s = agreed(s);
+    /* the run file, written by every rank (parallel HDF5 on MPI ranks) */
+    if (s == PD_OK && restart && !ranks)
         h->out = h->in; /* the same file goes on */
-    else if (s == PD_OK && root) /* rank 0 writes the run file */
-        s = pd_file_create(o->output, &h->out);
-    if (s == PD_OK && root)
-        s = pd_run_file_start(h->out, restart, h->in, h->p, h->b, h->sets, sc,
-                              pd_sim_effects(h->sim), h->cmdline ? h->cmdline : PROG,
+    else if (s == PD_OK && restart)
+        s = pd_file_update_ranks(o->restart, o->output, &h->out);
+    else if (s == PD_OK)
+        s = pd_file_create_ranks(o->output, &h->out);
+    if (s == PD_OK)
+        s = pd_run_file_start(h->out, restart, restart ? h->out : h->in, h->p, h->b, h->sets,
+                              sc, pd_sim_effects(h->sim), h->cmdline ? h->cmdline : PROG,
                               h->text, *first);
     s = agreed(s);
-    if (!restart || !root) {
+    if (h->in != h->out) {
         pd_file_close(h->in);
         h->in = NULL;
     }
+    h->nbonds = h->b ? h->b->count : 0;
+    if (s == PD_OK && h->piece && pd_comm_rank() > 0)
+        drop_whole(h); /* rank 0's tells the run's set-up, then goes too */
     if (s != PD_OK) {
         if (h->out)
             pd_file_abort(h->out);
@@ -1185,41 +1206,35 @@ static int start(struct options *o, struct held *h, int64_t *first)
 static pd_status run_steps(const struct options *o, struct held *h, int64_t first, double *t_output)
 {
     const pd_scene *sc = &o->spec.sc;
-    pd_sim *sim = h->sim, *stepper = h->piece ? h->piece : h->sim;
+    /* the run, or on MPI ranks this rank's piece: every rank steps, sums,
+     * and writes its rows of each frame; rank 0 tells */
+    pd_sim *sim = h->piece ? h->piece : h->sim;
     const int root = pd_comm_rank() == 0;
     const int64_t nsteps = sc->steps - first;
     const int64_t status_every = status_interval(o, nsteps);
     const int tty = isatty(STDERR_FILENO) && !o->quiet && root;
     double t_start = pd_wtime(), t_shown = 0;
     pd_status s = PD_OK;
-    if (!o->restart && pd_frame_at(sc, 0) && root) /* pd_sim_setup came in start() */
-        s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, NULL);
-    else if (!o->restart && root) /* the series' row of step 0 */
+    if (!o->restart && pd_frame_at(sc, 0)) /* pd_sim_setup came in start() */
+        s = timed_frame(h->out, sim, sc->fields, t_output, NULL);
+    else if (!o->restart) /* the series' row of step 0 */
         s = timed_sample(h->out, sim, t_output, NULL);
     s = agreed(s);
-    int64_t lost = sim ? pd_sim_lost(sim) : 0; /* rank 0's whole run */
+    int64_t lost = pd_sim_lost(sim);
     for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
         const int status = ((n - first) % status_every == 0 || n == sc->steps) && !o->quiet;
-        const int row = root && pd_run_file_sample_due(h->out, n); /* rank 0's file */
-        int output = status || row || pd_frame_at(sc, n);
-        if (h->piece) /* the run file is rank 0's: it says when */
-            output = pd_comm_or(root && output);
+        const int row = pd_run_file_sample_due(h->out, n);
+        const int output = status || row || pd_frame_at(sc, n);
         if (output) /* the bond pass counts the energies */
-            pd_sim_energy_next(stepper);
+            pd_sim_energy_next(sim);
         pd_relax_info relaxed;
-        s = sc->relax ? pd_sim_relax(stepper, &relaxed) : pd_sim_step(stepper);
-        if (s == PD_OK && output && h->piece) /* the pieces' state to rank 0's run */
-            s = agreed(pd_sim_gather(stepper, sim));
+        s = sc->relax ? pd_sim_relax(sim, &relaxed) : pd_sim_step(sim);
         if (s != PD_OK)
             break;
-        if (!output && h->piece)
+        if (!output)
             continue;
-        if (!root) { /* rank 0 writes, and says how the others go on */
-            s = agreed(PD_OK);
-            continue;
-        }
         h->iterations += sc->relax ? relaxed.iterations : 0;
-        if (sc->relax && status)
+        if (sc->relax && status && root)
             fprintf(stderr,
                     "%s" PROG ": load step %lld: relaxed in %lld iterations (%lld times "
                     "again after bonds broke), residual %.3e N of a load of %.3e N, kinetic "
@@ -1227,19 +1242,19 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
                     tty ? "\r\033[K" : "", (long long)n, (long long)relaxed.iterations,
                     (long long)relaxed.rounds, relaxed.residual, relaxed.load, relaxed.kinetic,
                     relaxed.kinetic_peak);
-        if (lost == 0 && pd_sim_lost(sim) > 0 && !o->quiet) /* the first; then counts */
+        const int64_t now_lost = pd_sim_lost(sim);
+        if (lost == 0 && now_lost > 0 && !o->quiet && root) /* the first; then counts */
             fprintf(stderr,
                     "%s" PROG ": step %lld: %lld particles lost (farther than %g m outside the "
                     "body's box): their bonds broken, at rest from now on\n",
-                    tty ? "\r\033[K" : "", (long long)n, (long long)pd_sim_lost(sim),
-                    sc->lost_margin);
-        lost = pd_sim_lost(sim);
+                    tty ? "\r\033[K" : "", (long long)n, (long long)now_lost, sc->lost_margin);
+        lost = now_lost;
         /* a frame first, so that a status line of the same step takes its
          * energies instead of another pass over the bonds */
         pd_energy e;
         int known = 0;
         if (pd_frame_at(sc, n)) { /* with the series' row of the step */
-            s = timed_frame(h->out, h->p, h->b, sim, sc->fields, t_output, &e);
+            s = timed_frame(h->out, sim, sc->fields, t_output, &e);
             known = s == PD_OK;
         } else if (row) {
             s = timed_sample(h->out, sim, t_output, &e);
@@ -1253,8 +1268,7 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
         if (status && known) /* with the alarm's step too */
             status_line(sim, sc->steps, tty, &e, s == PD_OK);
         *t_output += pd_wtime() - t0;
-        if (h->piece)
-            s = agreed(s);
+        s = agreed(s);
         if (tty) {
             double now = pd_wtime();
             if (now - t_shown > 0.2 || n == sc->steps) {
@@ -1323,10 +1337,17 @@ static int run_main(int argc, char **argv)
     h.cmdline = pd_join_argv(argc, argv);
     h.opts = &o;
     int rc = options(argc, argv, &o);
+    struct stat st;
     if (rc == 0 && pd_comm_size() > 1 && strcmp(o.input, "-") == 0)
         rc = usage_error(o.restart ? "on several MPI ranks the run to go on from must be a file, not"
                                    : "on several MPI ranks the model must be a file, not",
                          "'-'");
+    else if (rc == 0 && pd_comm_size() > 1 &&
+             (strcmp(o.output, "-") == 0 ||
+              (stat(o.output, &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode))))
+        rc = usage_error("on several MPI ranks the run file must be a regular file, which the "
+                         "ranks write together (parallel HDF5), not",
+                         o.output);
     if (rc) {
         release(&h);
         return rc;
@@ -1349,38 +1370,43 @@ static int run_main(int argc, char **argv)
         pd_sim_owned(h.piece, &lo, &hi);
     const int64_t halo = -pd_comm_min(h.piece ? -pd_sim_halo_bytes(h.piece) : 0),
                   rows = -pd_comm_min(lo - hi);
-    if (pd_comm_rank() > 0)
-        o.quiet = 1;
-    if (!o.quiet)
+    /* rank 0 tells (the others' stderr is /dev/null), from the whole body,
+     * which then goes: each rank steps its piece */
+    const int tell = !o.quiet && pd_comm_rank() == 0;
+    if (tell)
         log_scene(&o, &h, first, nsteps);
-    if (!o.quiet && h.piece)
+    if (tell && h.piece)
         fprintf(stderr,
                 PROG ": the body in %d pieces of at most %lld particles, each stepped with "
-                     "its ghosts; halo of at most %.3g MB a rank a step\n",
-                pd_comm_size(), (long long)rows, (double)halo / 1e6);
+                     "its ghosts; halo of at most %.3g MB a rank a step; every rank writes "
+                     "its rows of '%s' (parallel HDF5)\n",
+                pd_comm_size(), (long long)rows, (double)halo / 1e6, o.output);
+    if (h.piece && h.sim)
+        drop_whole(&h);
+    const pd_sim *sim = h.piece ? h.piece : h.sim;
     double t_output = 0, t0 = pd_wtime();
     pd_status s = run_steps(&o, &h, first, &t_output);
     const double wall = pd_wtime() - t0 + h.t_setup;
     /* contact partners from beyond a piece, the most of a rank (collective) */
     const int64_t remote = h.piece ? -pd_comm_min(-pd_sim_contact_remote(h.piece)) : 0;
     s = finish(&h, s);
-    if (s == PD_OK && !o.quiet && o.spec.sc.relax)
+    const double bonds = (double)h.nbonds;
+    if (s == PD_OK && tell && o.spec.sc.relax)
         fprintf(stderr, PROG ": %lld load steps, %lld iterations, in %.3f s (%.3g bond "
                              "updates/s), contact list builds %lld\n",
                 (long long)nsteps, (long long)h.iterations, wall,
-                wall > 0 ? (double)h.b->count * (double)(h.iterations + 2 * nsteps) / wall : 0.0,
-                (long long)pd_sim_contact_builds(h.sim));
-    else if (s == PD_OK && !o.quiet)
+                wall > 0 ? bonds * (double)(h.iterations + 2 * nsteps) / wall : 0.0,
+                (long long)pd_sim_contact_builds(sim));
+    else if (s == PD_OK && tell)
         fprintf(stderr, PROG ": %lld steps in %.3f s (%.3g bond updates/s), contact list builds %lld\n",
-                (long long)nsteps, wall,
-                wall > 0 ? (double)h.b->count * (double)nsteps / wall : 0.0,
-                (long long)pd_sim_contact_builds(h.sim));
-    if (s == PD_OK && !o.quiet && h.piece && pd_sim_contact_builds(h.sim) > 0)
+                (long long)nsteps, wall, wall > 0 ? bonds * (double)nsteps / wall : 0.0,
+                (long long)pd_sim_contact_builds(sim));
+    if (s == PD_OK && tell && h.piece && pd_sim_contact_builds(sim) > 0)
         fprintf(stderr, PROG ": contact across the ranks: at most %lld partners of a rank's list "
                              "from beyond its piece\n",
                 (long long)remote);
-    if (s == PD_OK && o.timing && !o.quiet)
-        print_timing(h.sim, wall, t_output);
+    if (s == PD_OK && o.timing && tell)
+        print_timing(sim, wall, t_output);
     release(&h);
     return s == PD_OK ? 0 : failure_told ? 1 : fail();
 }

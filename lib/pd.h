@@ -669,9 +669,20 @@ int pd_comm_rank(void);
 int pd_comm_size(void);
 /* Abort every rank (MPI_Abort) when there are several; else nothing. */
 void pd_comm_abort(int code);
-/* The logical or, and the smallest value, over the ranks (collective). */
+/* The logical or, the smallest value, the largest and the sum over the
+ * ranks (collective). */
 int pd_comm_or(int v);
 int64_t pd_comm_min(int64_t v);
+double pd_comm_max(double v);
+int64_t pd_comm_total(int64_t v);
+/* The sum of v over the ranks below this one (0 on rank 0; collective). */
+int64_t pd_comm_below(int64_t v);
+/* s, or a failure of this rank too when another rank's s failed
+ * (collective): every rank then leaves a collective step together.  The
+ * failure said for another rank is marked as such: pd_comm_echo() is 1
+ * after it (and 0 once asked), so that the rank that failed tells why. */
+pd_status pd_comm_agree(pd_status s);
+int pd_comm_echo(void);
 
 /* This rank's piece of the run `whole` (a pd_sim_new of the whole body,
  * restored or not, not yet set up), for pd_comm_size() ranks: *piece is a
@@ -680,13 +691,19 @@ int64_t pd_comm_min(int64_t v);
  * the rank count cannot share (fewer than two blocks a rank) is refused
  * with PD_ERR_INVALID. */
 pd_status pd_sim_piece(const pd_sim *whole, pd_sim **piece);
-/* The pieces' state into `whole` on rank 0 (collective: every rank calls
- * it; `whole` is read on rank 0 only): positions, velocities, forces, s0,
- * bond states, lost particles and the run's sums, so that rank 0 writes
- * frames, series and status lines from `whole` as from a run of its own. */
-pd_status pd_sim_gather(const pd_sim *piece, pd_sim *whole);
 /* The rows [*lo, *hi) of the whole body that this piece owns. */
 void pd_sim_owned(const pd_sim *piece, int64_t *lo, int64_t *hi);
+/* What one process writes of a run into its run file: its own rows of
+ * particles and their bonds (a piece's on MPI ranks; every row on one).
+ * Local rows [lo, lo + rows) of the run's arrays are the whole body's rows
+ * [first, first + rows) of n; their bonds, [klo, klo + bonds) of the run's
+ * bond list, are the body's [bond0, bond0 + bonds) of nbonds. */
+typedef struct {
+    int64_t lo, first, rows, n;
+    int64_t klo, bond0, bonds, nbonds;
+} pd_part;
+/* The run's part (collective on MPI ranks). */
+void pd_sim_part(const pd_sim *sim, pd_part *part);
 /* The bytes this piece sends its neighbours at each step (the ghosts'
  * positions, and s0 with failure); 0 for a whole run. */
 int64_t pd_sim_halo_bytes(const pd_sim *piece);
@@ -1066,6 +1083,9 @@ const double *pd_sim_s0(const pd_sim *sim);
  * velocities and bond states. */
 pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double *const v[3],
                          const uint64_t *intact);
+/* The particles and bonds the run steps (a piece's own on MPI ranks). */
+const pd_particles *pd_sim_particles(const pd_sim *sim);
+const pd_bonds *pd_sim_bonds(const pd_sim *sim);
 /* Views of the state (current positions y, velocities v), SoA. */
 double *const *pd_sim_positions(const pd_sim *sim);
 double *const *pd_sim_velocities(const pd_sim *sim);
@@ -1217,6 +1237,16 @@ pd_status pd_file_create(const char *path, pd_file **out);
  * a temporary beside `outpath` ("-" for stdout), modified, and renamed to
  * `outpath` on close. */
 pd_status pd_file_update(const char *inpath, const char *outpath, pd_file **out);
+/* pd_file_create and pd_file_update for every MPI rank at once
+ * (collective): rank 0 makes the temporary (and the copy), every rank
+ * opens it with parallel HDF5, and from then on every rank takes part in
+ * each call on the file (the frames: each rank its own rows; metadata and
+ * whole datasets: the same call on every rank, rank 0's data written);
+ * pd_file_publish and pd_file_close flush it together and rank 0 renames
+ * it.  The output must be a regular file.  On one rank, and in a build
+ * without MPI, they are pd_file_create and pd_file_update. */
+pd_status pd_file_create_ranks(const char *path, pd_file **out);
+pd_status pd_file_update_ranks(const char *inpath, const char *outpath, pd_file **out);
 /* Close: flush, publish (rename or stream), free.  On failure the temporary
  * file is removed. */
 pd_status pd_file_close(pd_file *f);
@@ -1306,6 +1336,10 @@ pd_status pd_plan_series(pd_file *f, const pd_scene *sc, int64_t first, int fres
  * pd_restart_free). */
 pd_status pd_plan_restart(pd_file *f, int64_t n, int has_s0, int has_contact, int slots);
 pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart *r);
+/* The same for a part of the run (pd_sim_part): r's arrays are the run's,
+ * local rows, of which the part's go into the slot (on MPI ranks, every
+ * rank its own, at once, into a file of pd_file_create_ranks). */
+pd_status pd_write_restart_part(pd_file *f, const pd_part *pt, int64_t step, const pd_restart *r);
 pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart *r);
 /* Lay out the projectile's state in the restart slots (after
  * pd_plan_restart; nothing when it is there already). */
@@ -1372,6 +1406,12 @@ pd_status pd_drop_incomplete_frames(pd_file *f);
 pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
                          double *const y[3], double *const v[3],
                          const uint64_t *intact, int64_t nbonds, const pd_frame_fields *ff);
+/* The same for a part of the run (pd_sim_part): x, y, v, the bits and the
+ * fields are the run's, local rows and bonds, of which the part's go into
+ * the frame (on MPI ranks, every rank its own, at once). */
+pd_status pd_write_frame_part(pd_file *f, const pd_part *pt, const pd_frame_info *fi,
+                              double *const x[3], double *const y[3], double *const v[3],
+                              const uint64_t *intact, const pd_frame_fields *ff);
 /* Number of complete frames and their names in step order (none, from a
  * run killed before its first frame, is not an error; no /frames is);
  * caller frees with pd_frames_free_list.  Every reader of frames goes

@@ -3,8 +3,9 @@
 # body is shared out among the ranks in whole blocks of its bond kernel, and
 # every frame is bit for bit the one rank's, on 1 to 4 ranks, with any
 # threads a rank, for the stencil and the bond list, the portable loops and
-# the AVX-512 ones, fracture and lost particles.  What the pieces do not yet
-# carry is refused in one line.  Skipped where the MPI build cannot be made
+# the AVX-512 ones, fracture and lost particles.  Every rank writes its own
+# rows of each frame and restart slot into the one run file (parallel
+# HDF5), which is the one rank's, dataset for dataset.  Skipped where the MPI build cannot be made
 # (no mpicc or no parallel HDF5); CI installs both (share/install-deps.sh).
 
 load test_helper
@@ -103,6 +104,9 @@ with h5py.File('np4.h5') as f:
     run -0 mpi 2 --threads 1 --scene impact.scene body.h5 -o log.h5
     assert_line --partial "pd-run: 2 MPI ranks x 1 thread"
     assert_line --partial "lattice stencil"
+    assert_line --partial "every rank writes its rows of 'log.h5' (parallel HDF5)"
+    # the frames' energy density and stress, each rank its own rows'
+    same_on_ranks "3" 1 --scene impact.scene --fields energy,stress body.h5
 }
 
 @test "mpi: the bond list's AVX-512 rows and its portable loop, two threads a rank, material laws" {
@@ -130,10 +134,16 @@ with h5py.File('np4.h5') as f:
     assert last.attrs['lost_particles'] > 50 and last.attrs['lost_energy'] > 0, dict(last.attrs)"
 }
 
-@test "mpi: more ranks than the body has pairs of blocks is one line and exit 1; a model on stdin is a usage error" {
+@test "mpi: more ranks than the body has pairs of blocks is one line and exit 1; a model on stdin or a run file to stdout is a usage error" {
     impact_body
     run -2 mpi 2 --scene impact.scene - -o c.h5 <body.h5
     assert_output --partial "the model must be a file"
+    # the ranks write the run file together: a regular file, not stdout
+    run -2 mpi 2 --scene impact.scene body.h5 -o /dev/null
+    assert_output --partial "the run file must be a regular file, which the ranks write together (parallel HDF5), not '/dev/null'"
+    run -2 mpi 2 --scene impact.scene body.h5
+    assert_output --partial "not '-'"
+    [ ! -e c.h5 ]
     # more ranks than the body has pairs of blocks
     run -1 mpi 8 --scene impact.scene body.h5 -o c.h5
     assert_output --partial "cut into 14 blocks and each of the 8 MPI ranks needs two: run it on at most 7 ranks"
@@ -204,7 +214,9 @@ with h5py.File('r.h5') as f:
         --yield-stress 5e6 body.h5
     impact_body perturbed
     sed -i 's/^steps 400/steps 300/' impact.scene
-    same_on_ranks "3" 2 --scene impact.scene --model lps --bulk-modulus $K --shear-modulus $G body.h5
+    # the stress of a piece's rows takes its ghosts' dilatations from their owners
+    same_on_ranks "3" 2 --scene impact.scene --model lps --bulk-modulus $K --shear-modulus $G \
+        --fields energy,stress body.h5
 }
 
 @test "mpi: VES and EPS go on from a restart on other ranks, their bond history and all" {

@@ -89,6 +89,30 @@ int64_t pd_comm_min(int64_t v)
     return out;
 }
 
+double pd_comm_max(double v)
+{
+    double out = v;
+    if (pd_comm_size() > 1)
+        MPI_Allreduce(MPI_IN_PLACE, &out, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    return out;
+}
+
+int64_t pd_comm_total(int64_t v)
+{
+    int64_t out = v;
+    if (pd_comm_size() > 1)
+        MPI_Allreduce(MPI_IN_PLACE, &out, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+    return out;
+}
+
+int64_t pd_comm_below(int64_t v)
+{
+    int64_t out = 0;
+    if (pd_comm_size() > 1)
+        MPI_Exscan(&v, &out, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+    return pd_comm_rank() == 0 ? 0 : out; /* rank 0's is undefined */
+}
+
 /* Counts and displacements as MPI's ints (the callers' counts are far
  * below INT_MAX: a rank's rows of one array, or a chunk count). */
 static void int_counts(const int64_t *counts, int P, int *c, int *at)
@@ -132,21 +156,6 @@ void pd_comm_counts_to(const int64_t *send, int64_t *recv)
         return;
     }
     MPI_Alltoall(send, 1, MPI_INT64_T, recv, 1, MPI_INT64_T, MPI_COMM_WORLD);
-}
-
-void pd_comm_gather_bytes(const void *mine, const int64_t *bytes, void *all)
-{
-    const int P = pd_comm_size(), me = pd_comm_rank();
-    if (P == 1) {
-        memmove(all, mine, (size_t)bytes[0]);
-        return;
-    }
-    int *c = malloc((size_t)P * 2 * sizeof(int));
-    if (c == NULL)
-        MPI_Abort(MPI_COMM_WORLD, 1);
-    int_counts(bytes, P, c, c + P);
-    MPI_Gatherv(mine, c[me], MPI_BYTE, all, c, c + P, MPI_BYTE, 0, MPI_COMM_WORLD);
-    free(c);
 }
 
 void pd_comm_bcast(void *buf, int64_t bytes)
@@ -257,6 +266,22 @@ int64_t pd_comm_min(int64_t v)
     return v;
 }
 
+double pd_comm_max(double v)
+{
+    return v;
+}
+
+int64_t pd_comm_total(int64_t v)
+{
+    return v;
+}
+
+int64_t pd_comm_below(int64_t v)
+{
+    (void)v;
+    return 0;
+}
+
 void pd_comm_allgather(const double *mine, const int64_t *counts, double *all)
 {
     memmove(all, mine, (size_t)counts[0] * sizeof(double));
@@ -270,11 +295,6 @@ void pd_comm_counts(int64_t mine, int64_t *all)
 void pd_comm_counts_to(const int64_t *send, int64_t *recv)
 {
     recv[0] = send[0];
-}
-
-void pd_comm_gather_bytes(const void *mine, const int64_t *bytes, void *all)
-{
-    memmove(all, mine, (size_t)bytes[0]);
 }
 
 void pd_comm_bcast(void *buf, int64_t bytes)
@@ -319,6 +339,24 @@ void pd_comm_sendrecv(const double *send, int64_t ns, int to, double *recv, int6
 }
 
 #endif
+
+static int echo; /* 1: the last failure was another rank's */
+
+pd_status pd_comm_agree(pd_status s)
+{
+    if (pd_comm_size() > 1 && pd_comm_or(s != PD_OK) && s == PD_OK) {
+        echo = 1;
+        return pd_fail(PD_ERR_IO, "another MPI rank failed");
+    }
+    return s;
+}
+
+int pd_comm_echo(void)
+{
+    const int e = echo;
+    echo = 0;
+    return e;
+}
 
 #define SUM_MAX 8 /* arrays summed at once */
 

@@ -46,15 +46,12 @@ typedef struct {
                           volumes (room made at each build), so that the
                           list's loops are the whole body's, bit for bit */
     int64_t *send_row; /* local rows sent, by rank                   */
-    int64_t *remote_g; /* the remote partners' rows of the whole body */
     int64_t *scount, *rcount; /* doubles sent to / received from each rank */
     double *sbuf, *rbuf;
 } contact_list;
 
 static void remote_free(contact_list *cl)
 {
-    free(cl->remote_g);
-    cl->remote_g = NULL;
     free(cl->send_row);
     free(cl->scount);
     free(cl->rcount);
@@ -922,9 +919,7 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
     if (st != PD_OK)
         memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
     cl->remote = pd_comm_or(st == PD_OK && (nr > 0 || nsend > 0));
-    cl->remote_g = remote; /* kept: pd_contact_gather names them */
     sim->contact_remote = nr > sim->contact_remote ? nr : sim->contact_remote;
-    remote = NULL;
     free(rec);
     free(remote);
     free(send);
@@ -1117,84 +1112,4 @@ int64_t pd_sim_contact_builds(const pd_sim *sim)
 int64_t pd_sim_contact_remote(const pd_sim *sim)
 {
     return sim->contact_remote;
-}
-
-/* The contact state of a run (NULL: it has no contact). */
-static contact_list *list_of(const pd_sim *sim)
-{
-    for (int k = 0; k < sim->neffects; k++)
-        if (sim->effects[k] == &pd_effect_contact)
-            return sim->state[k];
-    return NULL;
-}
-
-pd_status pd_contact_gather(const pd_sim *piece, pd_sim *whole)
-{
-    const pd_piece *pc = piece->piece;
-    const contact_list *cl = list_of(piece);
-    if (pc == NULL || cl == NULL)
-        return PD_OK;
-    const int P = pc->ranks, root = pc->rank == 0;
-    const int64_t n = piece->n, lo = pc->own_lo, hi = pc->own_hi, first = pc->first;
-    const int64_t q0 = cl->offset[lo], q1 = cl->offset[hi];
-    /* per own row its count, then its partners (rows of the whole body)
-     * and their d, as doubles */
-    double *mine = malloc((size_t)((hi - lo) + 2 * (q1 - q0) + 1) * sizeof(double));
-    int64_t *bytes = malloc((size_t)P * sizeof(int64_t));
-    if (!mine || !bytes) {
-        free(mine);
-        free(bytes);
-        return pd_fail(PD_ERR_NOMEM, "out of memory gathering the contact list");
-    }
-    double *m = mine;
-    for (int64_t i = lo; i < hi; i++)
-        *m++ = (double)(cl->offset[i + 1] - cl->offset[i]);
-    for (int64_t q = q0; q < q1; q++) {
-        const int32_t j = cl->partner[q];
-        *m++ = (double)(j < n ? first + j : cl->remote_g[j - n]);
-        *m++ = cl->d[q];
-    }
-    pd_comm_counts((int64_t)(m - mine) * (int64_t)sizeof(double), bytes);
-    int64_t total = 0;
-    for (int r = 0; r < P; r++)
-        total += bytes[r];
-    double *all = root ? malloc((size_t)(total > 0 ? total : 1)) : NULL;
-    pd_comm_gather_bytes(mine, bytes, all);
-    /* and the positions of the last build */
-    contact_list *wl = root ? list_of(whole) : NULL;
-    for (int d = 0; d < 3; d++) {
-        for (int r = 0; r < P; r++)
-            bytes[r] = pc->rows[r] * (int64_t)sizeof(double);
-        pd_comm_gather_bytes(cl->ybuild[d] + lo, bytes, wl ? wl->ybuild[d] : NULL);
-    }
-    pd_status st = PD_OK;
-    if (root && (all == NULL || wl == NULL))
-        st = pd_fail(PD_ERR_NOMEM, "out of memory gathering the contact list");
-    if (root && st == PD_OK) { /* the ranks' rows in order: the whole body's */
-        const double *a = all;
-        int64_t row = 0, pairs = 0;
-        wl->offset[0] = 0;
-        for (int r = 0; r < P; r++) {
-            const int64_t rows = pc->rows[r];
-            const double *cnt = a, *pr = a + rows;
-            int64_t k = 0;
-            for (int64_t i = 0; i < rows; i++)
-                k += (int64_t)cnt[i];
-            if ((st = list_room(wl, pairs + k)) != PD_OK)
-                break;
-            for (int64_t i = 0; i < rows; i++, row++) {
-                wl->offset[row + 1] = wl->offset[row] + (int64_t)cnt[i];
-                for (int64_t e = 0; e < (int64_t)cnt[i]; e++, pr += 2, pairs++) {
-                    wl->partner[pairs] = (int32_t)pr[0];
-                    wl->d[pairs] = pr[1];
-                }
-            }
-            a = pr;
-        }
-        whole->contact_builds = piece->contact_builds;
-    }
-    free(all);
-    free(mine);
-    free(bytes);
-    return st;
 }

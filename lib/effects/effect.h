@@ -22,12 +22,6 @@ extern const pd_effect pd_effect_prescribed;
 extern const pd_effect pd_effect_projectile;
 extern const pd_effect pd_effect_damping;
 
-/* The contact lists of the pieces of a body on MPI ranks (their own
- * particles'), the positions of their last build and the count of builds,
- * into the whole body's run on rank 0 (lib/run/piece.c's pd_sim_gather;
- * collective): its frames' contact energy is then the one rank's. */
-pd_status pd_contact_gather(const pd_sim *piece, pd_sim *whole);
-
 /* The declarable effects in step order, NULL-terminated (effects.c). */
 extern const pd_effect *const pd_effects[];
 

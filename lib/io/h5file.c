@@ -21,6 +21,7 @@
 
 #include <hdf5.h>
 
+#include "base/comm.h"
 #include "io/h5util.h"
 #include "pd.h"
 
@@ -395,6 +396,27 @@ pd_status pd_file_create(const char *path, pd_file **out)
     return PD_OK;
 }
 
+/* len bytes at buf into a new temporary beside outpath (*tmp). */
+static pd_status copy_to_temp(const char *outpath, const unsigned char *buf, size_t len,
+                              char **tmp)
+{
+    pd_status s = make_temp(outpath, tmp);
+    if (s != PD_OK)
+        return s;
+    FILE *o = fopen(*tmp, "wb");
+    int ok = o != NULL && fwrite(buf, 1, len, o) == len;
+    if (o != NULL && fclose(o) != 0)
+        ok = 0;
+    if (!ok) {
+        s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", outpath, strerror(errno));
+        unlink(*tmp);
+        temp_forget(*tmp);
+        free(*tmp);
+        *tmp = NULL;
+    }
+    return s;
+}
+
 pd_status pd_file_update(const char *inpath, const char *outpath, pd_file **out)
 {
     unsigned char *buf;
@@ -427,23 +449,13 @@ pd_status pd_file_update(const char *inpath, const char *outpath, pd_file **out)
         f->image = buf;
         f->fid = open_image(buf, len, H5F_ACC_RDWR);
     } else {
-        if ((s = make_temp(outpath, &f->tmp)) != PD_OK) {
-            free(buf);
+        s = copy_to_temp(outpath, buf, len, &f->tmp);
+        free(buf);
+        if (s != PD_OK) {
             file_free(f);
             return s;
         }
         f->path = strdup(outpath);
-        FILE *o = fopen(f->tmp, "wb");
-        int ok = o != NULL && fwrite(buf, 1, len, o) == len;
-        if (o != NULL && fclose(o) != 0)
-            ok = 0;
-        free(buf);
-        if (!ok) {
-            s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", outpath, strerror(errno));
-            unlink(f->tmp);
-            file_free(f);
-            return s;
-        }
         f->fid = H5Fopen(f->tmp, H5F_ACC_RDWR, H5P_DEFAULT);
     }
     if (f->fid < 0) {
@@ -459,6 +471,149 @@ pd_status pd_file_update(const char *inpath, const char *outpath, pd_file **out)
     }
     *out = f;
     return PD_OK;
+}
+
+#ifdef H5_HAVE_PARALLEL
+/* Rank 0's temporary path, made beside the output, on every rank too;
+ * then the file opened there by every rank (parallel HDF5): created, or
+ * opened for update.  Collective; s is rank 0's making of the temporary. */
+static pd_status open_on_ranks(pd_file *f, pd_status s, int create)
+{
+    int64_t len = f->tmp ? (int64_t)strlen(f->tmp) + 1 : 0;
+    if ((s = pd_comm_agree(s)) != PD_OK)
+        return s;
+    pd_comm_bcast(&len, sizeof len);
+    char *name = malloc((size_t)len);
+    if (name && pd_comm_rank() == 0)
+        memcpy(name, f->tmp, (size_t)len);
+    if (pd_comm_or(name == NULL)) {
+        free(name);
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    }
+    pd_comm_bcast(name, len);
+    if (pd_comm_rank() > 0)
+        f->tmp = name;
+    else
+        free(name);
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    H5Pset_fapl_mpio(fapl, MPI_COMM_WORLD, MPI_INFO_NULL);
+    f->fid = create ? H5Fcreate(f->tmp, H5F_ACC_TRUNC, H5P_DEFAULT, fapl)
+                    : H5Fopen(f->tmp, H5F_ACC_RDWR, fapl);
+    H5Pclose(fapl);
+    f->ranks = pd_comm_size();
+    return pd_comm_agree(f->fid < 0 ? pd_fail(PD_ERR_IO, "cannot open '%s' on every MPI rank "
+                                                         "(parallel HDF5)",
+                                              f->name)
+                                    : PD_OK);
+}
+
+/* A regular file is what MPI ranks write together. */
+static pd_status ranks_output(const char *path)
+{
+    if (strcmp(path, "-") == 0 || is_special(path))
+        return pd_fail(PD_ERR_INVALID, "on several MPI ranks the run file must be a regular file "
+                                       "(the ranks write it with parallel HDF5), not '%s'",
+                       path);
+    return PD_OK;
+}
+
+/* Undo a parallel open that failed: every rank. */
+static pd_status undo_ranks(pd_file *f, pd_status s)
+{
+    if (f->fid >= 0)
+        H5Fclose(f->fid);
+    if (pd_comm_rank() == 0 && f->tmp)
+        unlink(f->tmp);
+    file_free(f);
+    return s;
+}
+#endif
+
+pd_status pd_file_create_ranks(const char *path, pd_file **out)
+{
+#ifdef H5_HAVE_PARALLEL
+    if (pd_comm_size() == 1)
+        return pd_file_create(path, out);
+    pd_status s = ranks_output(path);
+    if (s != PD_OK)
+        return s;
+    pd_file *f = file_new(path);
+    if (f == NULL || (f->path = strdup(path)) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory");
+    if (pd_comm_or(s != PD_OK)) {
+        file_free(f);
+        return s != PD_OK ? s : pd_comm_agree(s);
+    }
+    if (pd_comm_rank() == 0)
+        s = make_temp(path, &f->tmp);
+    if ((s = open_on_ranks(f, s, 1)) != PD_OK)
+        return undo_ranks(f, s);
+    *out = f;
+    return PD_OK;
+#else
+    return pd_file_create(path, out);
+#endif
+}
+
+pd_status pd_file_update_ranks(const char *inpath, const char *outpath, pd_file **out)
+{
+#ifdef H5_HAVE_PARALLEL
+    if (pd_comm_size() == 1)
+        return pd_file_update(inpath, outpath, out);
+    pd_status s = ranks_output(outpath);
+    if (s == PD_OK && strcmp(inpath, "-") == 0)
+        s = pd_fail(PD_ERR_INVALID, "on several MPI ranks the run to go on from must be a file");
+    if (s != PD_OK)
+        return s;
+    pd_file *f = file_new(inpath);
+    if (f == NULL || (f->path = strdup(outpath)) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory");
+    if (pd_comm_or(s != PD_OK)) {
+        file_free(f);
+        return s != PD_OK ? s : pd_comm_agree(s);
+    }
+    if (pd_comm_rank() == 0) { /* the copy, rank 0's */
+        unsigned char *buf = NULL;
+        size_t len = 0;
+        s = load_bytes(inpath, &buf, &len);
+        if (s == PD_OK)
+            s = check_signature(inpath, buf, len);
+        if (s == PD_OK)
+            s = copy_to_temp(outpath, buf, len, &f->tmp);
+        free(buf);
+    }
+    if ((s = open_on_ranks(f, s, 0)) == PD_OK)
+        s = pd_comm_agree(check_header(f));
+    if (s != PD_OK)
+        return undo_ranks(f, s);
+    *out = f;
+    return PD_OK;
+#else
+    return pd_file_update(inpath, outpath, out);
+#endif
+}
+
+/* Rank 0's end of a parallel file (its fsync and rename, published or
+ * not), agreed by every rank after the collective close. */
+static pd_status close_ranks(pd_file *f, pd_status s)
+{
+    s = pd_comm_agree(s);
+    if (pd_comm_rank() == 0) {
+        const char *at = f->published ? f->path : f->tmp;
+        int fd = s == PD_OK ? open(at, O_RDONLY) : -1;
+        if (fd >= 0 && fsync(fd) != 0)
+            s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", f->path, strerror(errno));
+        if (fd >= 0)
+            close(fd);
+        if (s == PD_OK && !f->published && rename(f->tmp, f->path) != 0)
+            s = pd_fail(PD_ERR_IO, "cannot rename the output to '%s': %s", f->path,
+                        strerror(errno));
+        if (s != PD_OK && !f->published)
+            unlink(f->tmp);
+    }
+    s = pd_comm_agree(s);
+    file_free(f);
+    return s;
 }
 
 pd_status pd_file_close(pd_file *f)
@@ -498,6 +653,8 @@ pd_status pd_file_close(pd_file *f)
     }
     if (H5Fclose(f->fid) < 0)
         s = pd_fail(PD_ERR_IO, "cannot write '%s' (disk full?)", f->path);
+    if (f->ranks > 1)
+        return close_ranks(f, s);
     if (f->published) { /* already under its final name: make it durable */
         int fd = open(f->path, O_RDONLY);
         if (s == PD_OK && fd >= 0 && fsync(fd) != 0)
@@ -528,16 +685,40 @@ void pd_file_abort(pd_file *f)
     if (f == NULL)
         return;
     if (f->fid >= 0)
-        H5Fclose(f->fid);
-    if (f->tmp && !f->published)
+        H5Fclose(f->fid); /* collective on a parallel file: every rank aborts it */
+    if (f->tmp && !f->published && (f->ranks <= 1 || pd_comm_rank() == 0))
         unlink(f->tmp);
     file_free(f);
+}
+
+static pd_status publish_ranks(pd_file *f)
+{
+    pd_status s = PD_OK;
+    if (H5Fflush(f->fid, H5F_SCOPE_GLOBAL) < 0)
+        s = pd_fail(PD_ERR_IO, "cannot write '%s' (disk full?)", f->path);
+    if ((s = pd_comm_agree(s)) == PD_OK && pd_comm_rank() == 0) {
+        int fd = open(f->tmp, O_RDONLY);
+        if (fd < 0 || fsync(fd) != 0)
+            s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", f->path, strerror(errno));
+        if (fd >= 0)
+            close(fd);
+        if (s == PD_OK && rename(f->tmp, f->path) != 0)
+            s = pd_fail(PD_ERR_IO, "cannot rename the output to '%s': %s", f->path,
+                        strerror(errno));
+    }
+    if ((s = pd_comm_agree(s)) == PD_OK) {
+        temp_forget(f->tmp);
+        f->published = 1;
+    }
+    return s;
 }
 
 pd_status pd_file_publish(pd_file *f)
 {
     if (f->to_stdout || f->published || f->tmp == NULL)
         return PD_OK;
+    if (f->ranks > 1) /* every rank flushes; rank 0 renames */
+        return publish_ranks(f);
     if (H5Fflush(f->fid, H5F_SCOPE_GLOBAL) < 0)
         return pd_fail(PD_ERR_IO, "cannot write '%s' (disk full?)", f->path);
     int fd = open(f->tmp, O_RDONLY);

@@ -7,6 +7,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "base/comm.h"
 #include "io/h5util.h"
 
 int pd_h5_has_attr(hid_t loc, const char *name)
@@ -185,11 +186,101 @@ pd_status pd_h5_update_attr(hid_t loc, const char *name, hid_t memtype, const vo
     return s;
 }
 
+/* Is loc's file written by every MPI rank at once (parallel HDF5)? */
+static int parallel_file(hid_t loc)
+{
+#ifdef H5_HAVE_PARALLEL
+    hid_t fid = H5Iget_file_id(loc);
+    hid_t fapl = fid >= 0 ? H5Fget_access_plist(fid) : H5I_INVALID_HID;
+    const int mpio = fapl >= 0 && H5Pget_driver(fapl) == H5FD_MPIO;
+    if (fapl >= 0)
+        H5Pclose(fapl);
+    if (fid >= 0)
+        H5Fclose(fid); /* the identifier, not the file */
+    return mpio;
+#else
+    (void)loc;
+    return 0;
+#endif
+}
+
+int pd_h5_writes_whole(hid_t loc)
+{
+    return !parallel_file(loc) || pd_comm_rank() == 0;
+}
+
+/* Rows [row0, row0 + rows) of dataset d (of its first dimension, all of
+ * the others) from data; on a parallel file every rank at once, each its
+ * own rows (none: rows 0). */
+static herr_t write_part(hid_t d, hid_t memtype, const void *data, int64_t row0, int64_t rows)
+{
+    hid_t fs = H5Dget_space(d);
+    hsize_t dims[H5S_MAX_RANK], start[H5S_MAX_RANK] = {0};
+    const int rank = fs >= 0 ? H5Sget_simple_extent_dims(fs, dims, NULL) : -1;
+    if (rank < 1) {
+        if (fs >= 0)
+            H5Sclose(fs);
+        return -1;
+    }
+    start[0] = (hsize_t)row0;
+    dims[0] = (hsize_t)rows;
+    hsize_t one = 1;
+    hid_t ms = rows > 0 ? H5Screate_simple(rank, dims, NULL) : H5Screate_simple(1, &one, NULL);
+    if (rows > 0)
+        H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, dims, NULL);
+    else {
+        H5Sselect_none(fs);
+        H5Sselect_none(ms);
+    }
+    hid_t x = H5P_DEFAULT;
+#ifdef H5_HAVE_PARALLEL
+    if (parallel_file(d)) {
+        x = H5Pcreate(H5P_DATASET_XFER);
+        H5Pset_dxpl_mpio(x, H5FD_MPIO_COLLECTIVE);
+    }
+#endif
+    static const double none;
+    const herr_t e = H5Dwrite(d, memtype, ms, fs, x, data ? data : (const void *)&none);
+    if (x != H5P_DEFAULT)
+        H5Pclose(x);
+    H5Sclose(ms);
+    H5Sclose(fs);
+    return e;
+}
+
+/* All of dataset d from data: on a parallel file rank 0's, with every
+ * rank taking part. */
+static herr_t write_whole(hid_t d, hid_t memtype, const void *data)
+{
+    if (!parallel_file(d))
+        return H5Dwrite(d, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+    hid_t fs = H5Dget_space(d);
+    hsize_t dims[H5S_MAX_RANK];
+    const int rank = fs >= 0 ? H5Sget_simple_extent_dims(fs, dims, NULL) : -1;
+    if (fs >= 0)
+        H5Sclose(fs);
+    if (rank < 1)
+        return -1;
+    return write_part(d, memtype, data, 0, pd_comm_rank() == 0 ? (int64_t)dims[0] : 0);
+}
+
 pd_status pd_h5_write_into(hid_t loc, const char *name, hid_t memtype, const void *data)
 {
     hid_t d = H5Dopen2(loc, name, H5P_DEFAULT);
     pd_status s = PD_OK;
-    if (d < 0 || H5Dwrite(d, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
+    if (d < 0 || write_whole(d, memtype, data) < 0)
+        s = pd_fail(PD_ERR_IO, "cannot write dataset '%s' (disk full?)", name);
+    if (d >= 0)
+        H5Dclose(d);
+    return s;
+}
+
+pd_status pd_h5_write_rows(hid_t loc, const char *name, hid_t memtype, const void *data,
+                           int64_t row0, int64_t rows)
+{
+    hid_t d = H5Dopen2(loc, name, H5P_DEFAULT);
+    pd_status s = PD_OK;
+    if (d < 0 || write_part(d, memtype, data, row0, rows) < 0)
         s = pd_fail(PD_ERR_IO, "cannot write dataset '%s' (disk full?)", name);
     if (d >= 0)
         H5Dclose(d);
@@ -235,7 +326,7 @@ pd_status pd_h5_write_data(hid_t loc, const char *name, hid_t filetype, hid_t me
     hsize_t total = 1;
     for (int r = 0; r < rank; r++)
         total *= dims[r];
-    if (d < 0 || (total > 0 && H5Dwrite(d, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0))
+    if (d < 0 || (total > 0 && write_whole(d, memtype, data) < 0))
         s = pd_fail(PD_ERR_IO, "cannot write dataset '%s' (disk full?)", name);
     if (d >= 0)
         H5Dclose(d);

@@ -22,6 +22,8 @@ struct pd_file {
                              pd's for a file it makes             */
     struct pd_series_plan *series; /* the rows of /series still to
                                       write (series_io.c), or NULL     */
+    int ranks;            /* >1: every MPI rank writes it (parallel
+                             HDF5), rank 0 renames it               */
 };
 
 void pd_series_plan_free(struct pd_series_plan *plan);
@@ -37,8 +39,19 @@ pd_status pd_h5_write_attr_int(hid_t loc, const char *name, int64_t value);
 pd_status pd_h5_write_attr_doubles(hid_t loc, const char *name, const double *v, int n);
 /* Write an existing attribute in place (no change to the file's layout). */
 pd_status pd_h5_update_attr(hid_t loc, const char *name, hid_t memtype, const void *value);
-/* Write a whole existing dataset in place. */
+/* Write a whole existing dataset in place.  On a file every MPI rank
+ * writes at once (parallel HDF5, pd_file_create_ranks) every rank calls
+ * it, and rank 0's data are written. */
 pd_status pd_h5_write_into(hid_t loc, const char *name, hid_t memtype, const void *data);
+/* Write rows [row0, row0 + rows) of an existing dataset (of its first
+ * dimension, all of the others) from data, in place.  On a parallel file
+ * every rank calls it at once (collective), each with its own rows, which
+ * may be none. */
+pd_status pd_h5_write_rows(hid_t loc, const char *name, hid_t memtype, const void *data,
+                           int64_t row0, int64_t rows);
+/* 1 when this process writes the whole of datasets of loc's file: always,
+ * but on a parallel file, where rank 0 does. */
+int pd_h5_writes_whole(hid_t loc);
 /* A dataset with its storage allocated now, to be written in place later. */
 pd_status pd_h5_reserve_data(hid_t loc, const char *name, hid_t filetype, int rank,
                              const hsize_t *dims);

@@ -10,6 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
+#include "io/h5util.h"
 #include "pd.h"
 
 /* Every frame of the run laid out (pd_frame_steps: the steps after `first`
@@ -124,46 +126,52 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
 pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
                             const pd_sim *sim, unsigned fields, pd_energy *energy)
 {
+    (void)b; /* the run's own (a piece's on MPI ranks) */
+    /* on MPI ranks every rank takes part in each sum and write below */
+    pd_part pt;
+    pd_sim_part(sim, &pt);
     pd_frame_info fi = {.step = pd_sim_stepno(sim), .time = pd_sim_time(sim),
                         .broken = pd_sim_broken(sim), .lost = pd_sim_lost(sim)};
     fi.has_projectile = pd_sim_projectile(sim, fi.projectile_position, fi.projectile_velocity);
     fi.has_damping = pd_sim_damping(sim) > 0;
-    size_t n = (size_t)(p->n > 0 ? p->n : 1);
-    double *density = NULL, *stress = NULL, *mises = NULL;
-    if ((fields & PD_FIELD_ENERGY) && (density = malloc(n * sizeof(double))) == NULL)
-        return pd_fail(PD_ERR_NOMEM, "out of memory for the strain energy density");
-    if ((fields & PD_FIELD_STRESS) && ((stress = malloc(9 * n * sizeof(double))) == NULL ||
-                                       (mises = malloc(n * sizeof(double))) == NULL)) {
-        free(density);
-        free(stress);
-        return pd_fail(PD_ERR_NOMEM, "out of memory for the stress");
-    }
-    pd_status s = pd_sim_energy(sim, &fi.energy, density);
+    const pd_particles *q = pd_sim_particles(sim);
+    size_t n = (size_t)(q->n > 0 ? q->n : 1);
+    double *density = NULL, *stress = NULL, *mises = NULL, *damage = malloc(n * sizeof(double));
+    pd_status s = damage ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for the damage");
+    if (s == PD_OK && (fields & PD_FIELD_ENERGY) &&
+        (density = malloc(n * sizeof(double))) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the strain energy density");
+    if (s == PD_OK && (fields & PD_FIELD_STRESS) &&
+        ((stress = malloc(9 * n * sizeof(double))) == NULL ||
+         (mises = malloc(n * sizeof(double))) == NULL))
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the stress");
+    if (out->ranks > 1)
+        s = pd_comm_agree(s);
+    if (s == PD_OK)
+        s = pd_sim_energy(sim, &fi.energy, density);
     if (s == PD_OK) /* the series' row of the step before the frame: a
                        restart from the frame finds it */
         s = pd_run_file_sample(out, sim, &fi.energy);
     if (s == PD_OK && stress) {
         s = pd_sim_stress(sim, stress);
-        for (int64_t i = 0; i < p->n; i++)
+        for (int64_t i = pt.lo; i < pt.lo + pt.rows; i++)
             mises[i] = pd_von_mises(stress + 9 * i);
     }
     /* the frame's damage from its bond states, as pd-damage computes it */
-    double *damage = malloc(n * sizeof(double));
     const uint64_t *intact = pd_sim_intact(sim);
-    if (s == PD_OK && damage == NULL)
-        s = pd_fail(PD_ERR_NOMEM, "out of memory for the damage");
     if (s == PD_OK)
-        pd_damage(p, b, intact, damage);
+        pd_damage(q, pd_sim_bonds(sim), intact, damage);
     pd_frame_fields ff = {damage, density, stress, mises};
     /* what a restart needs, then the frame (marked complete last) */
     pd_restart r;
     memset(&r, 0, sizeof r);
     pd_sim_accumulated(sim, &r);
     if (s == PD_OK)
-        s = pd_write_restart(out, p->n, fi.step, &r);
+        s = pd_write_restart_part(out, &pt, fi.step, &r);
     if (s == PD_OK)
-        s = pd_write_frame(out, p, &fi, pd_sim_positions(sim), pd_sim_velocities(sim),
-                           intact, b->count, &ff);
+        s = pd_write_frame_part(out, &pt, &fi, q->x, pd_sim_positions(sim),
+                                pd_sim_velocities(sim), intact, &ff);
+    (void)p;
     free(damage);
     free(density);
     free(stress);

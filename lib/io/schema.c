@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
 #include "io/h5util.h"
 #include "models/model.h"
 
@@ -992,9 +993,75 @@ pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
     return s;
 }
 
-pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
-                         double *const y[3], double *const v[3], const uint64_t *intact,
-                         int64_t nbonds, const pd_frame_fields *ff)
+/* 8 bond bits from bit k of words (k + 7 within them). */
+static uint8_t bits8(const uint64_t *words, int64_t k)
+{
+    const int64_t w = k >> 6;
+    const int o = (int)(k & 63);
+    uint64_t v = words[w] >> o;
+    if (o > 56)
+        v |= words[w + 1] << (64 - o);
+    return (uint8_t)v;
+}
+
+/* The bytes of a frame's bond states that a part writes: the body's bits
+ * [bond0, bond0 + bonds), the part's local bits from klo, as bytes
+ * [*at, *at + *count) of the body's.  On MPI ranks a byte the part shares
+ * with the part below gets that part's bits (a chain over the ranks, which
+ * every rank joins), and a byte it shares with the part above is left to
+ * that part. */
+static uint8_t *state_bytes(const pd_file *f, const pd_part *pt, const uint64_t *intact,
+                            int64_t *at, int64_t *count)
+{
+    const int64_t g0 = pt->bond0, g1 = pt->bond0 + pt->bonds, B0 = g0 / 8, B1 = (g1 + 7) / 8;
+    uint8_t *bytes = NULL;
+    if (f->ranks <= 1 && g0 == 0 && pt->klo == 0) { /* the whole body's, as they lie */
+        bytes = words_to_bytes(intact, pt->bonds);
+        *at = 0;
+        *count = B1;
+        return bytes;
+    }
+    bytes = calloc((size_t)(B1 > B0 ? B1 - B0 : 1), 1);
+    if (bytes) {
+        const int64_t shift = pt->klo - g0; /* local bit of body bit g */
+        for (int64_t B = B0; B < B1; B++) {
+            const int64_t lo = B * 8 > g0 ? B * 8 : g0, hi = B * 8 + 8 < g1 ? B * 8 + 8 : g1;
+            if (lo == B * 8 && hi == B * 8 + 8)
+                bytes[B - B0] = bits8(intact, B * 8 + shift);
+            else
+                for (int64_t g = lo; g < hi; g++)
+                    bytes[B - B0] |= (uint8_t)(pd_bond_intact(intact, g + shift) << (g % 8));
+        }
+    }
+    int64_t end = B1;
+    if (f->ranks > 1) {
+        const int carry = (int)pd_comm_chain_in();
+        int out = 0;
+        if (bytes && B1 > B0)
+            bytes[0] |= (uint8_t)carry;
+        if (pd_comm_rank() + 1 < f->ranks && g1 % 8) { /* the next part's first byte */
+            out = B1 > B0 ? (bytes ? bytes[B1 - 1 - B0] : 0) : carry;
+            end = B1 - 1;
+        }
+        pd_comm_chain_out((double)out);
+    }
+    *at = B0;
+    *count = end > B0 ? end - B0 : 0;
+    return bytes;
+}
+
+/* A part's rows of the first index of an array of `width` values a row
+ * (local rows from pt->lo) into dataset `name` of g. */
+static pd_status write_part(hid_t g, const char *name, hid_t memtype, const double *a, int width,
+                            const pd_part *pt)
+{
+    return pd_h5_write_rows(g, name, memtype, a ? a + pt->lo * width : NULL, pt->first,
+                            pt->rows);
+}
+
+pd_status pd_write_frame_part(pd_file *f, const pd_part *pt, const pd_frame_info *fi,
+                              double *const x[3], double *const y[3], double *const v[3],
+                              const uint64_t *intact, const pd_frame_fields *ff)
 {
     static const pd_frame_fields none;
     if (ff == NULL)
@@ -1006,42 +1073,47 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
                           (ff->stress && ff->von_mises ? PD_FIELD_STRESS : 0) |
                           (fi->has_projectile ? PD_FRAME_PROJECTILE : 0) |
                           (fi->has_damping ? PD_FRAME_DAMPING : 0);
-        pd_status s = lay_out_frame(f, p->n, nbonds, fi->step, fi->time, fields);
+        pd_status s = lay_out_frame(f, pt->n, pt->nbonds, fi->step, fi->time, fields);
         if (s != PD_OK)
             return s;
     }
     hid_t g = H5Gopen2(f->fid, path, H5P_DEFAULT);
     if (g < 0)
         return pd_fail(PD_ERR_IO, "cannot open frame %s", path);
-    size_t n = (size_t)p->n;
+    const size_t n = (size_t)pt->rows, lo = (size_t)pt->lo;
     double *buf = malloc((n ? n : 1) * 3 * sizeof(double));
-    uint8_t *bytes = words_to_bytes(intact, nbonds);
+    int64_t at = 0, count = 0;
+    uint8_t *bytes = pt->nbonds > 0 ? state_bytes(f, pt, intact, &at, &count) : NULL;
     pd_status s = PD_OK;
-    if (buf == NULL || bytes == NULL)
+    if (buf == NULL || (pt->nbonds > 0 && bytes == NULL))
         s = pd_fail(PD_ERR_NOMEM, "out of memory writing a frame");
+    if (f->ranks > 1)
+        s = pd_comm_agree(s);
     if (s == PD_OK) {
 #pragma omp parallel for schedule(static)
         for (size_t i = 0; i < n; i++)
             for (int d = 0; d < 3; d++)
-                buf[3 * i + d] = y[d][i] - p->x[d][i];
-        s = pd_h5_write_into(g, "displacement", H5T_NATIVE_DOUBLE, buf);
+                buf[3 * i + d] = y[d][lo + i] - x[d][lo + i];
+        s = pd_h5_write_rows(g, "displacement", H5T_NATIVE_DOUBLE, buf, pt->first, pt->rows);
     }
     if (s == PD_OK) {
-        interleave(buf, v, p->n);
-        s = pd_h5_write_into(g, "velocity", H5T_NATIVE_DOUBLE, buf);
+        const double *vv[3] = {v[0] + lo, v[1] + lo, v[2] + lo};
+        interleave(buf, (double *const *)vv, pt->rows);
+        s = pd_h5_write_rows(g, "velocity", H5T_NATIVE_DOUBLE, buf, pt->first, pt->rows);
     }
-    if (s == PD_OK && nbonds > 0)
-        s = pd_h5_write_into(g, "state", H5T_NATIVE_UINT8, bytes);
-    if (s == PD_OK) {
-        if (ff->damage == NULL)
-            memset(buf, 0, n * sizeof(double));
-        s = pd_h5_write_into(g, "damage", H5T_NATIVE_DOUBLE, ff->damage ? ff->damage : buf);
+    if (s == PD_OK && pt->nbonds > 0)
+        s = pd_h5_write_rows(g, "state", H5T_NATIVE_UINT8, bytes, at, count);
+    if (s == PD_OK && ff->damage)
+        s = write_part(g, "damage", H5T_NATIVE_DOUBLE, ff->damage, 1, pt);
+    else if (s == PD_OK) {
+        memset(buf, 0, n * sizeof(double));
+        s = pd_h5_write_rows(g, "damage", H5T_NATIVE_DOUBLE, buf, pt->first, pt->rows);
     }
     if (s == PD_OK && ff->energy_density)
-        s = pd_h5_write_into(g, "strain_energy_density", H5T_NATIVE_DOUBLE, ff->energy_density);
+        s = write_part(g, "strain_energy_density", H5T_NATIVE_DOUBLE, ff->energy_density, 1, pt);
     if (s == PD_OK && ff->stress && ff->von_mises &&
-        (s = pd_h5_write_into(g, "stress", H5T_NATIVE_DOUBLE, ff->stress)) == PD_OK)
-        s = pd_h5_write_into(g, "von_mises", H5T_NATIVE_DOUBLE, ff->von_mises);
+        (s = write_part(g, "stress", H5T_NATIVE_DOUBLE, ff->stress, 9, pt)) == PD_OK)
+        s = write_part(g, "von_mises", H5T_NATIVE_DOUBLE, ff->von_mises, 1, pt);
     pd_energy e = fi->energy;
     for (int k = 0; k < NENERGY && s == PD_OK; k++)
         s = pd_h5_update_attr(g, energy_attrs[k], H5T_NATIVE_DOUBLE, energy_field(&e, k));
@@ -1072,6 +1144,14 @@ pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info 
     free(bytes);
     H5Gclose(g);
     return s;
+}
+
+pd_status pd_write_frame(pd_file *f, const pd_particles *p, const pd_frame_info *fi,
+                         double *const y[3], double *const v[3], const uint64_t *intact,
+                         int64_t nbonds, const pd_frame_fields *ff)
+{
+    const pd_part whole = {0, 0, p->n, p->n, 0, 0, nbonds, nbonds};
+    return pd_write_frame_part(f, &whole, fi, p->x, y, v, intact, ff);
 }
 
 typedef struct {
@@ -1556,7 +1636,7 @@ static void slot_info(hid_t fid, int k, int64_t *step, int64_t *complete)
     H5Gclose(g);
 }
 
-pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart *r)
+pd_status pd_write_restart_part(pd_file *f, const pd_part *pt, int64_t step, const pd_restart *r)
 {
     int64_t st[2], done[2];
     slot_info(f->fid, 0, &st[0], &done[0]);
@@ -1577,27 +1657,32 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
                           pd_h5_has_attr(g, "contact_builds") &&
                           pd_h5_read_attr_int(g, "contact_builds", &builds) == PD_OK &&
                           builds == r->contact_builds && pd_h5_has_link(g, "contact_position");
+    const int64_t n = pt->rows, lo = pt->lo;
     double *buf = malloc((size_t)(n > 0 ? n : 1) * 3 * sizeof(double));
     int64_t zero = 0, one = 1;
     pd_status s = buf ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory writing restart data");
+    if (f->ranks > 1)
+        s = pd_comm_agree(s);
     if (s == PD_OK)
         s = pd_h5_update_attr(g, "complete", H5T_NATIVE_INT64, &zero);
     if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
         s = pd_fail(PD_ERR_IO, "cannot write restart data (disk full?)");
-    if (s == PD_OK) {
-        interleave(buf, r->position, n);
-        s = pd_h5_write_into(g, "position", H5T_NATIVE_DOUBLE, buf);
-    }
-    if (s == PD_OK) {
-        interleave(buf, r->force, n);
-        s = pd_h5_write_into(g, "force", H5T_NATIVE_DOUBLE, buf);
-    }
+    /* the part's rows of an array of three */
+#define ROWS3(name, a)                                                                          \
+    do {                                                                                       \
+        const double *own[3] = {(a)[0] + lo, (a)[1] + lo, (a)[2] + lo};                        \
+        interleave(buf, (double *const *)own, n);                                              \
+        s = pd_h5_write_rows(g, name, H5T_NATIVE_DOUBLE, buf, pt->first, n);                   \
+    } while (0)
+    if (s == PD_OK)
+        ROWS3("position", r->position);
+    if (s == PD_OK)
+        ROWS3("force", r->force);
     if (s == PD_OK && r->s0)
-        s = pd_h5_write_into(g, "s0", H5T_NATIVE_DOUBLE, r->s0);
-    if (s == PD_OK && r->contact_position[0] && !same_list) {
-        interleave(buf, r->contact_position, n);
-        s = pd_h5_write_into(g, "contact_position", H5T_NATIVE_DOUBLE, buf);
-    }
+        s = pd_h5_write_rows(g, "s0", H5T_NATIVE_DOUBLE, r->s0 + lo, pt->first, n);
+    if (s == PD_OK && r->contact_position[0] && !same_list)
+        ROWS3("contact_position", r->contact_position);
+#undef ROWS3
     if (s == PD_OK)
         s = pd_h5_update_attr(g, "step", H5T_NATIVE_INT64, &step);
     if (s == PD_OK)
@@ -1606,18 +1691,23 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
     for (int a = 0; a < NSUMS && s == PD_OK; a++)
         s = pd_h5_update_attr(g, restart_sums[a], H5T_NATIVE_DOUBLE, restart_sum(&sums, a));
     int64_t nlost = 0;
-    for (int64_t i = 0; r->lost && i < n; i++)
+    for (int64_t i = lo; r->lost && i < lo + n; i++)
         nlost += r->lost[i] != 0;
+    if (f->ranks > 1)
+        nlost = pd_comm_total(nlost);
     if (s == PD_OK && nlost > 0)
-        s = pd_h5_write_into(g, "lost", H5T_NATIVE_UINT8, r->lost);
+        s = pd_h5_write_rows(g, "lost", H5T_NATIVE_UINT8, r->lost ? r->lost + lo : NULL, pt->first,
+                             r->lost ? n : 0);
     if (s == PD_OK)
         s = pd_h5_update_attr(g, "lost_particles", H5T_NATIVE_INT64, &nlost);
     if (s == PD_OK && r->has_projectile)
         s = pd_h5_update_attr(g, "projectile", H5T_NATIVE_DOUBLE, sums.projectile);
     if (s == PD_OK && r->has_damping)
         s = pd_h5_update_attr(g, "damping", H5T_NATIVE_DOUBLE, sums.damping);
+    const int w = r->history_width;
     if (s == PD_OK && r->bond_history)
-        s = pd_h5_write_into(g, "bond_history", H5T_NATIVE_DOUBLE, r->bond_history);
+        s = pd_h5_write_rows(g, "bond_history", H5T_NATIVE_DOUBLE, r->bond_history + pt->klo * w,
+                             pt->bond0, pt->bonds);
     if (s == PD_OK && H5Fflush(f->fid, H5F_SCOPE_LOCAL) < 0)
         s = pd_fail(PD_ERR_IO, "cannot write restart data (disk full?)");
     if (s == PD_OK)
@@ -1625,6 +1715,13 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
     free(buf);
     H5Gclose(g);
     return s;
+}
+
+pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart *r)
+{
+    const int64_t nb = r->bond_history ? r->history_bonds : 0;
+    const pd_part whole = {0, 0, n, n, 0, 0, nb, nb};
+    return pd_write_restart_part(f, &whole, step, r);
 }
 
 void pd_restart_free(pd_restart *r)

@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
 #include "io/h5util.h"
 
 struct pd_series_plan {
@@ -158,19 +159,9 @@ static pd_status lay_out(hid_t fid, const char *columns, int ncols, int64_t capa
         s = pd_h5_write_attr_int(g, "rows", kept);
     if (s == PD_OK)
         s = pd_h5_reserve_data(g, "values", H5T_IEEE_F64LE, 2, dims);
-    if (s == PD_OK && kept > 0) {
-        hid_t d = H5Dopen2(g, "values", H5P_DEFAULT);
-        hid_t fs = H5Dget_space(d);
-        hsize_t start[2] = {0, 0}, count[2] = {(hsize_t)kept, (hsize_t)ncols};
-        hid_t ms = H5Screate_simple(2, count, NULL);
-        H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, count, NULL);
-        if (d < 0 || H5Dwrite(d, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, old->value) < 0)
-            s = pd_fail(PD_ERR_IO, "cannot write /series/values (disk full?)");
-        H5Sclose(ms);
-        H5Sclose(fs);
-        if (d >= 0)
-            H5Dclose(d);
-    }
+    if (s == PD_OK && kept > 0) /* one writer (rank 0 of a parallel file) */
+        s = pd_h5_write_rows(g, "values", H5T_NATIVE_DOUBLE, old->value, 0,
+                             pd_h5_writes_whole(g) ? kept : 0);
     H5Gclose(g);
     return s;
 }
@@ -244,30 +235,22 @@ pd_status pd_run_file_sample(pd_file *out, const pd_sim *sim, const pd_energy *e
     double *row = malloc((size_t)plan->ncols * sizeof(double));
     if (row == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the time series");
-    pd_status s = pd_sim_series_row(sim, e, row);
+    pd_status s = pd_sim_series_row(sim, e, row); /* collective on MPI ranks */
+    if (out->ranks > 1)
+        s = pd_comm_agree(s);
     const int64_t at = plan->base + plan->next;
     hid_t g = s == PD_OK ? H5Gopen2(out->fid, "/series", H5P_DEFAULT) : H5I_INVALID_HID;
-    hid_t d = g >= 0 ? H5Dopen2(g, "values", H5P_DEFAULT) : H5I_INVALID_HID;
-    if (s == PD_OK && d < 0)
-        s = pd_fail(PD_ERR_IO, "'%s': cannot open /series/values", out->name);
-    if (s == PD_OK) {
-        hid_t fs = H5Dget_space(d);
-        hsize_t start[2] = {(hsize_t)at, 0}, count[2] = {1, (hsize_t)plan->ncols};
-        hid_t ms = H5Screate_simple(2, count, NULL);
-        H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, count, NULL);
-        if (H5Dwrite(d, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, row) < 0)
-            s = pd_fail(PD_ERR_IO, "cannot write /series/values (disk full?)");
-        H5Sclose(ms);
-        H5Sclose(fs);
-    }
+    if (s == PD_OK && g < 0)
+        s = pd_fail(PD_ERR_IO, "'%s': cannot open /series", out->name);
+    if (s == PD_OK) /* one writer (rank 0 of a parallel file) */
+        s = pd_h5_write_rows(g, "values", H5T_NATIVE_DOUBLE, row, at,
+                             pd_h5_writes_whole(g) ? 1 : 0);
     /* the row on disk first, then counted */
     if (s == PD_OK && H5Fflush(out->fid, H5F_SCOPE_LOCAL) < 0)
         s = pd_fail(PD_ERR_IO, "cannot flush '%s' (disk full?)", out->name);
     const int64_t rows = at + 1;
     if (s == PD_OK)
         s = pd_h5_update_attr(g, "rows", H5T_NATIVE_INT64, &rows);
-    if (d >= 0)
-        H5Dclose(d);
     if (g >= 0)
         H5Gclose(g);
     free(row);

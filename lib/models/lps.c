@@ -892,6 +892,8 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++)
         theta[i] = theta_row(sim, st, bits, i);
+    if (sim->piece) /* a ghost's family is whole on its owner (collective) */
+        pd_piece_exchange((pd_sim *)sim, &theta, 1);
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++) {
         double sum[9] = {0}, d[3], r;
@@ -1121,36 +1123,6 @@ const pd_model pd_model_eps = {
     .stencil = no_stencil, .dissipative = 1, .history_width = 1, .needs = eps_needs, .takes = lps_takes,
     .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .params = eps_params,
     .describe = eps_describe};
-
-pd_status pd_lps_gather(const pd_sim *piece, pd_sim *whole)
-{
-    const pd_piece *pc = piece->piece;
-    int w = 0;
-    const double *h = pc ? pd_sim_bond_history(piece, &w) : NULL;
-    if (pc == NULL || !pd_comm_or(h != NULL))
-        return PD_OK;
-    /* the own rows' directed bonds, in the whole body's order (their
-     * families are whole), w values each */
-    const int P = pc->ranks, root = pc->rank == 0;
-    const int64_t k0 = piece->b->offset[pc->own_lo], k1 = piece->b->offset[pc->own_hi];
-    int64_t *bytes = malloc((size_t)P * sizeof(int64_t));
-    if (!bytes)
-        return pd_fail(PD_ERR_NOMEM, "out of memory gathering the bond history");
-    pd_comm_counts(h ? (k1 - k0) * w * (int64_t)sizeof(double) : 0, bytes);
-    int64_t total = 0;
-    for (int r = 0; r < P; r++)
-        total += bytes[r];
-    int ww = 0;
-    double *hw = root ? pd_sim_bond_history(whole, &ww) : NULL;
-    pd_status st = PD_OK;
-    if (root && (hw == NULL || ww != w || total != whole->b->count * w * (int64_t)sizeof(double)))
-        st = pd_fail(PD_ERR_INVALID, "the pieces' bond history is not the body's");
-    double *scratch = root && st != PD_OK ? malloc((size_t)(total > 0 ? total : 1)) : NULL;
-    pd_comm_gather_bytes(h ? h + k0 * w : NULL, bytes, root ? (st == PD_OK ? hw : scratch) : NULL);
-    free(scratch);
-    free(bytes);
-    return st;
-}
 
 void pd_lps_copy_history(const pd_sim *whole, pd_sim *piece)
 {

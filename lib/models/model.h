@@ -74,10 +74,8 @@ pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd
  * i's family (lib/models/pmb.c). */
 void pd_half_contact_energy(const pd_sim *sim, double *e);
 
-/* A body on MPI ranks (lib/run/piece.c): the bond history of VES and EPS
- * of the pieces' own rows into the whole body's run on rank 0
- * (collective), and the whole run's into a piece (a restart's). */
-pd_status pd_lps_gather(const pd_sim *piece, pd_sim *whole);
+/* A body on MPI ranks (lib/run/piece.c): the whole run's bond history of
+ * VES and EPS into a piece (a restart's). */
 void pd_lps_copy_history(const pd_sim *whole, pd_sim *piece);
 
 /* The models' forces in the step's effect table. */

@@ -21,9 +21,11 @@
  *   - Sums over the body (energies, the indenter's force, the energy of
  *     broken bonds and of lost particles) are taken in the whole body's
  *     order: pd_comm_sum_fixed, pd_sim_add_released, in rank order.
- *   - Files.  pd_sim_gather brings the pieces' state to a run of the whole
- *     body on rank 0, which writes frames, series and status lines as a
- *     run of one rank does.
+ *   - Files.  Every rank writes its own rows of each frame and restart
+ *     slot into the one run file, at once (parallel HDF5, lib/io), with
+ *     the sums over the body every rank holds; the series and status
+ *     lines take their figures over the ranks in the same order
+ *     (pd_sim_part, pd_sim_broken, pd_sim_lost, pd_sim_damage_stats).
  */
 #include <float.h>
 #include <math.h>
@@ -300,92 +302,22 @@ void pd_sim_owned(const pd_sim *sim, int64_t *lo, int64_t *hi)
     *hi = pc ? pc->first + pc->own_hi : sim->n;
 }
 
-/* Rows [own_lo, own_hi) of every piece's array a (bytes a row) into the
- * whole body's w on rank 0. */
-static void gather_rows(const pd_piece *pc, const void *a, size_t row, void *w, int64_t *bytes)
-{
-    for (int r = 0; r < pc->ranks; r++)
-        bytes[r] = pc->rows[r] * (int64_t)row;
-    pd_comm_gather_bytes((const char *)a + pc->own_lo * row, bytes, w);
-}
-
-pd_status pd_sim_gather(const pd_sim *sim, pd_sim *whole)
+void pd_sim_part(const pd_sim *sim, pd_part *part)
 {
     const pd_piece *pc = sim->piece;
-    if (pc == NULL)
-        return PD_OK;
-    const int root = pc->rank == 0;
-    int64_t *bytes = malloc((size_t)pc->ranks * sizeof(int64_t));
-    if (bytes == NULL)
-        return pd_fail(PD_ERR_NOMEM, "out of memory gathering the run");
-    for (int d = 0; d < 3; d++) {
-        gather_rows(pc, sim->y[d], sizeof(double), root ? whole->y[d] : NULL, bytes);
-        gather_rows(pc, sim->v[d], sizeof(double), root ? whole->v[d] : NULL, bytes);
-        gather_rows(pc, sim->f[d], sizeof(double), root ? whole->f[d] : NULL, bytes);
+    const int64_t *off = sim->b->offset;
+    if (pc == NULL) {
+        *part = (pd_part){0, 0, sim->n, sim->n, 0, 0, sim->b->count, sim->b->count};
+        return;
     }
-    if (sim->s0)
-        gather_rows(pc, sim->s0, sizeof(double), root ? whole->s0 : NULL, bytes);
-    /* lost particles, once some rank has one */
-    pd_status st = PD_OK;
-    if (pd_comm_or(sim->lost != NULL)) {
-        uint8_t *mine = sim->lost ? sim->lost : calloc((size_t)sim->n, 1);
-        if (root && whole->lost == NULL)
-            whole->lost = calloc((size_t)whole->n, 1);
-        if (mine && (!root || whole->lost)) {
-            gather_rows(pc, mine, 1, root ? whole->lost : NULL, bytes);
-            if (root) {
-                whole->nlost = 0;
-                for (int64_t i = 0; i < whole->n; i++)
-                    whole->nlost += whole->lost[i] != 0;
-            }
-        } else
-            st = pd_fail(PD_ERR_NOMEM, "out of memory gathering the run");
-        if (mine != sim->lost)
-            free(mine);
-    }
-    /* the bond states: the half bonds of the own rows, in the whole body's
-     * order (their families are whole), a byte each */
-    const pd_half_bonds *h = &sim->half;
-    const int64_t q0 = h->offset[pc->own_lo], q1 = h->offset[pc->own_hi];
-    uint8_t *state = malloc((size_t)(q1 > q0 ? q1 - q0 : 1));
-    int64_t *counts = malloc((size_t)pc->ranks * sizeof(int64_t));
-    uint8_t *every = NULL;
-    if (state && counts) {
-        pd_comm_counts(q1 - q0, counts);
-        int64_t total = 0;
-        for (int r = 0; r < pc->ranks; r++)
-            total += counts[r];
-        for (int64_t q = q0; q < q1; q++)
-            state[q - q0] = (uint8_t)pd_bond_intact(h->intact, q);
-        if (root && total != whole->half.count)
-            st = pd_fail(PD_ERR_INVALID, "the pieces hold %lld bonds, the body %lld",
-                         (long long)total, (long long)whole->half.count);
-        every = root ? malloc((size_t)(total > 0 ? total : 1)) : NULL;
-        pd_comm_gather_bytes(state, counts, every);
-        if (root && every && st == PD_OK) {
-            uint64_t *bits = whole->half.intact;
-            for (int64_t q = 0; q < total; q++)
-                if (every[q])
-                    bits[q >> 6] |= UINT64_C(1) << (q & 63);
-                else
-                    bits[q >> 6] &= ~(UINT64_C(1) << (q & 63));
-            whole->half.epoch++;
-            whole->intact_stale = 1;
-            st = pd_grid_resync(whole); /* the stencil's masks from the bits */
-        }
-    } else
-        st = pd_fail(PD_ERR_NOMEM, "out of memory gathering the run");
-    free(every);
-    free(state);
-    free(counts);
-    free(bytes);
-    pd_status cs = pd_contact_gather(sim, whole);
-    st = st == PD_OK ? cs : st;
-    cs = pd_lps_gather(sim, whole);
-    st = st == PD_OK ? cs : st;
-    if (root) { /* the run's sums: the same on every rank */
-        copy_sums(sim, whole);
-        memcpy(whole->timers, sim->timers, sizeof whole->timers);
-    }
-    return st;
+    part->lo = pc->own_lo;
+    part->first = pc->first + pc->own_lo;
+    part->rows = pc->own_hi - pc->own_lo;
+    part->n = pc->n_whole;
+    part->klo = off[pc->own_lo];
+    part->bonds = off[pc->own_hi] - off[pc->own_lo];
+    /* the ranks' own bonds follow one another in rank order */
+    part->bond0 = pd_comm_below(part->bonds);
+    part->nbonds = pd_comm_total(part->bonds);
 }
+

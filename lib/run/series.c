@@ -21,6 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
 #include "state/sim.h"
 
 static const char *const fixed[] = {
@@ -68,46 +69,83 @@ int pd_series_columns(const pd_scene *sc, char (*names)[PD_SERIES_NAME])
     return k;
 }
 
-/* The body's momentum, kg m/s, in fixed chunks (any thread count). */
+/* The body's momentum, kg m/s, in fixed chunks (any thread count, any
+ * ranks: collective on a piece). */
 static pd_status momentum(const pd_sim *sim, double P[3])
 {
-    double *buf = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
+    double *buf = malloc((size_t)(sim->n > 0 ? sim->n : 1) * 3 * sizeof(double));
+    if (sim->piece && pd_comm_or(buf == NULL)) {
+        free(buf);
+        buf = NULL;
+    }
     if (buf == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the momentum");
     const double *rho = sim->p->density, *V = sim->p->volume;
-    for (int d = 0; d < 3; d++) {
-        const double *v = sim->v[d];
+    const double *each[3] = {buf, buf + sim->n, buf + 2 * sim->n};
 #pragma omp parallel for schedule(static)
-        for (int64_t i = 0; i < sim->n; i++)
-            buf[i] = rho[i] * V[i] * v[i];
-        P[d] = pd_sum_fixed(buf, sim->n);
-    }
+    for (int64_t i = 0; i < sim->n; i++)
+        for (int d = 0; d < 3; d++)
+            buf[d * sim->n + i] = rho[i] * V[i] * sim->v[d][i];
+    pd_sim_sum(sim, each, 3, P);
     free(buf);
     return PD_OK;
 }
 
+/* A member's terms of set_figures: its displacement, its r, 1 when it is
+ * not lost. */
+enum { TERMS = 7 };
+
+static void member_terms(const pd_sim *sim, int64_t i, double *const r[3], double *t)
+{
+    for (int d = 0; d < 3; d++) {
+        t[d] = sim->y[d][i] - sim->p->x[d][i];
+        t[3 + d] = r ? r[d][i] : 0.0;
+    }
+    t[6] = !(sim->lost && sim->lost[i]);
+}
+
 /* Per set: the mean displacement of its particles that are not lost
- * (NaN when all are) and the sum of r over all of them, in row order. */
-static void set_figures(const pd_sim *sim, int s, double *const r[3], double *out)
+ * (NaN when all are) and the sum of r over all of them, in row order.  A
+ * piece's members are summed in the same order, each from its owner's
+ * terms (a sum over the ranks of terms that are zero but on one). */
+static pd_status set_figures(const pd_sim *sim, int s, double *const r[3], double *out)
 {
     const int64_t *rows = sim->set_rows[s];
     const int64_t n = sim->sc.sets->set[s].n;
+    const pd_piece *pc = sim->piece;
+    double *terms = NULL;
+    if (pc) {
+        terms = calloc((size_t)(n > 0 ? n : 1) * TERMS, sizeof(double));
+        if (pd_comm_or(terms == NULL)) {
+            free(terms);
+            return pd_fail(PD_ERR_NOMEM, "out of memory for the sets' figures");
+        }
+        for (int64_t m = 0; m < n; m++)
+            if (rows[m] >= pc->own_lo && rows[m] < pc->own_hi)
+                member_terms(sim, rows[m], r, terms + TERMS * m);
+        pd_comm_add(terms, n * TERMS);
+    }
     double u[3] = {0, 0, 0}, F[3] = {0, 0, 0};
     int64_t kept = 0;
     for (int64_t m = 0; m < n; m++) {
-        const int64_t i = rows[m];
+        double own[TERMS];
+        const double *t = terms ? terms + TERMS * m : own;
+        if (terms == NULL)
+            member_terms(sim, rows[m], r, own);
         for (int d = 0; d < 3 && r; d++)
-            F[d] += r[d][i];
-        if (sim->lost && sim->lost[i])
+            F[d] += t[3 + d];
+        if (t[6] == 0)
             continue;
         for (int d = 0; d < 3; d++)
-            u[d] += sim->y[d][i] - sim->p->x[d][i];
+            u[d] += t[d];
         kept++;
     }
+    free(terms);
     for (int d = 0; d < 3; d++) {
         out[d] = kept ? u[d] / (double)kept : NAN;
         out[3 + d] = F[d];
     }
+    return PD_OK;
 }
 
 /* The reactions of every particle, or *r[0] NULL when no effect has one. */
@@ -189,7 +227,7 @@ pd_status pd_sim_series_row(const pd_sim *sim, const pd_energy *e, double *row)
     row[k++] = (double)pd_sim_broken(sim);
     row[k++] = (double)damaged;
     row[k++] = maxd;
-    row[k++] = (double)sim->nlost;
+    row[k++] = (double)pd_sim_lost(sim);
     for (int d = 0; d < 3; d++)
         row[k++] = P[d];
     if (sc->relax) {
@@ -198,10 +236,12 @@ pd_status pd_sim_series_row(const pd_sim *sim, const pd_energy *e, double *row)
         row[k++] = sim->relaxed.load;
         row[k++] = sim->relaxed.kinetic_peak;
     }
-    for (int set = 0; set < sim->nsets; set++, k += 6)
-        set_figures(sim, set, r[0] ? r : NULL, row + k);
+    for (int set = 0; set < sim->nsets && s == PD_OK; set++, k += 6)
+        s = set_figures(sim, set, r[0] ? r : NULL, row + k);
     for (int d = 0; d < 3; d++)
         free(r[d]);
+    if (s != PD_OK)
+        return s;
     if (sc->has_projectile)
         k = sphere(row, k, sim->proj_x, sim->proj_v, sim->proj_f);
     if (sc->has_indenter) {

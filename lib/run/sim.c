@@ -92,13 +92,14 @@ static pd_status no_failure_rows(pd_sim *sim)
 static pd_status set_rows(pd_sim *sim)
 {
     const pd_sets *sets = sim->sc.sets;
-    if (sets == NULL || sets->count == 0 || sim->piece) /* the series is the whole run's */
+    if (sets == NULL || sets->count == 0)
         return PD_OK;
     if ((sim->set_rows = calloc((size_t)sets->count, sizeof *sim->set_rows)) == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the sets");
     sim->nsets = sets->count;
-    for (int k = 0; k < sets->count; k++) {
-        pd_status s = pd_set_rows(&sets->set[k], sim->p, &sim->set_rows[k]);
+    for (int k = 0; k < sets->count; k++) { /* a piece: -1 for members beyond it */
+        pd_status s = sim->piece ? pd_set_rows_present(&sets->set[k], sim->p, &sim->set_rows[k])
+                                 : pd_set_rows(&sets->set[k], sim->p, &sim->set_rows[k]);
         if (s != PD_OK)
             return s;
     }
@@ -779,21 +780,31 @@ void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
 pd_status pd_sim_damage_stats(const pd_sim *sim, double threshold, double *max_damage,
                               int64_t *above)
 {
-    if (pd_grid_damage(sim, threshold, max_damage, above)) /* the stencil's masks */
+    const pd_piece *pc = sim->piece;
+    if (pc == NULL && pd_grid_damage(sim, threshold, max_damage, above)) /* the stencil's masks */
         return PD_OK;
+    /* a piece: its own rows (whole families), then over the ranks */
     double *dmg = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
+    if (pc) { /* every rank takes part */
+        if (!pd_comm_or(dmg == NULL))
+            pd_damage(sim->p, sim->b, pd_sim_intact(sim), dmg);
+        else {
+            free(dmg);
+            dmg = NULL;
+        }
+    } else if (dmg)
+        pd_damage(sim->p, sim->b, pd_sim_intact(sim), dmg);
     if (dmg == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the damage");
-    pd_damage(sim->p, sim->b, pd_sim_intact(sim), dmg);
     double m = 0;
     int64_t count = 0;
-    for (int64_t i = 0; i < sim->n; i++) {
+    for (int64_t i = pc ? pc->own_lo : 0; i < (pc ? pc->own_hi : sim->n); i++) {
         m = fmax(m, dmg[i]);
         count += dmg[i] > threshold;
     }
     free(dmg);
-    *max_damage = m;
-    *above = count;
+    *max_damage = pc ? pd_comm_max(m) : m;
+    *above = pc ? pd_comm_total(count) : count;
     return PD_OK;
 }
 

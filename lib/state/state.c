@@ -28,17 +28,40 @@ double pd_sim_time(const pd_sim *sim)
 
 int64_t pd_sim_lost(const pd_sim *sim)
 {
-    return sim->nlost;
+    const pd_piece *pc = sim->piece;
+    if (pc == NULL)
+        return sim->nlost;
+    int64_t mine = 0; /* the own rows' (a ghost is its owner's) */
+    for (int64_t i = pc->own_lo; sim->lost && i < pc->own_hi; i++)
+        mine += sim->lost[i] != 0;
+    return pd_comm_total(mine);
 }
 
 int64_t pd_sim_broken(const pd_sim *sim)
 {
-    return pd_bits_count_broken(sim->half.intact, sim->half.count);
+    const pd_piece *pc = sim->piece;
+    const pd_half_bonds *h = &sim->half;
+    if (pc == NULL)
+        return pd_bits_count_broken(h->intact, h->count);
+    /* the half bonds of the own rows: each bond of the body once */
+    const int64_t q0 = h->offset[pc->own_lo], q1 = h->offset[pc->own_hi];
+    return pd_comm_total(pd_bits_count_broken(h->intact, q1) -
+                         pd_bits_count_broken(h->intact, q0));
 }
 
 const double *pd_sim_timers(const pd_sim *sim)
 {
     return sim->timers;
+}
+
+const pd_particles *pd_sim_particles(const pd_sim *sim)
+{
+    return sim->p;
+}
+
+const pd_bonds *pd_sim_bonds(const pd_sim *sim)
+{
+    return sim->b;
 }
 
 double *const *pd_sim_positions(const pd_sim *sim)
