@@ -26,7 +26,7 @@ PD_CFLAGS  = -std=c11 -D_POSIX_C_SOURCE=200809L -Wall -Wextra -fopenmp -fno-math
              $(shell pkg-config --cflags $(HDF5_PC) gsl zlib 2>/dev/null)
 PD_LIBS    = $(shell pkg-config --libs $(HDF5_PC) gsl zlib 2>/dev/null) -fopenmp -lm
 
-# The MPI build of pd-run (mpi/bin/pd-run, its objects under mpi/): with
+# The MPI build of pd-run and pd-bonds (mpi/bin/, its objects under mpi/): with
 # Open MPI's mpicc and parallel HDF5 (Debian's libhdf5-openmpi-dev).  MPI=1
 # asks for it, MPI=0 leaves it out; by default it is built when both are
 # there.  The serial build never needs MPI.
@@ -57,7 +57,7 @@ BIN        = $(addprefix bin/,$(PROGRAMS))
 UNIT_SRC   = $(wildcard tests/unit/*.c)
 UNIT_BIN   = $(UNIT_SRC:tests/unit/%.c=bin/test-%)
 MPI_OBJ    = $(LIB_SRC:%.c=mpi/%.o)
-MPI_BIN    = $(if $(filter 1,$(MPI)),mpi/bin/pd-run)
+MPI_BIN    = $(if $(filter 1,$(MPI)),mpi/bin/pd-run mpi/bin/pd-bonds)
 
 .PHONY: all check test layers unit bats deps demo bench fuzz install uninstall clean
 
@@ -90,7 +90,7 @@ mpi/libpd.a: $(MPI_OBJ)
 	rm -f $@
 	ar rcs $@ $^
 
-mpi/bin/pd-run: cmd/pd-run.c cmd/cli.h mpi/libpd.a $(LIB_HDR)
+mpi/bin/%: cmd/%.c cmd/cli.h mpi/libpd.a $(LIB_HDR)
 	@mkdir -p mpi/bin
 	$(MPICC) $(MPI_CFLAGS) $(CFLAGS) -o $@ $< mpi/libpd.a $(MPI_LIBS)
 
@@ -160,7 +160,7 @@ install: all
 	    $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(MANDIR)/man5 $(DESTDIR)$(MANDIR)/man7 \
 	    $(DESTDIR)$(SHAREDIR)/python
 	install -m 755 $(BIN) $(DESTDIR)$(BINDIR)
-	$(if $(MPI_BIN),install -m 755 mpi/bin/pd-run $(DESTDIR)$(BINDIR)/pd-run)
+	$(if $(MPI_BIN),install -m 755 $(MPI_BIN) $(DESTDIR)$(BINDIR))
 	install -m 644 lib/libpd.a $(DESTDIR)$(LIBDIR)
 	install -m 644 lib/pd.h $(DESTDIR)$(INCDIR)
 	install -m 644 man/man1/*.1 $(DESTDIR)$(MANDIR)/man1

@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "pd.h"
@@ -230,6 +231,79 @@ static inline int fail(void)
 {
     fprintf(stderr, PROG ": error: %s\n", pd_errmsg());
     return 1;
+}
+
+/* On several MPI ranks (the MPI builds of pd-run and pd-bonds) rank 0
+ * speaks for the program: the ranks > 0 print nothing but their own
+ * failure that no lower rank shares (stderr is /dev/null until then;
+ * cli_real_stderr is the file descriptor of theirs). */
+static int cli_real_stderr = -1;
+static int cli_failure_told; /* 1: a lower rank tells the failure */
+
+/* MPI started (one rank without it), the other ranks' stderr silenced.
+ * Returns 0, or 1 after the error line. */
+static inline int cli_ranks_start(int *argc, char ***argv)
+{
+    if (pd_comm_init(argc, argv) != PD_OK)
+        return fail();
+    if (pd_comm_rank() > 0) {
+        cli_real_stderr = dup(STDERR_FILENO);
+        if (freopen("/dev/null", "w", stderr) == NULL)
+            return 1;
+    }
+    return 0;
+}
+
+/* A failure of any rank is every rank's (collective on several ranks):
+ * the lowest rank that failed of its own (not for another, pd_comm_agree)
+ * tells it. */
+static inline pd_status cli_agreed(pd_status s)
+{
+    if (pd_comm_size() == 1 || !pd_comm_or(s != PD_OK))
+        return s;
+    const int64_t me = pd_comm_rank(), own = s != PD_OK && !pd_comm_echo();
+    int64_t first = pd_comm_min(own ? me : INT64_MAX);
+    if (first == INT64_MAX)
+        first = pd_comm_min(s != PD_OK ? me : INT64_MAX);
+    if (first != me) {
+        cli_failure_told = 1;
+        return s != PD_OK ? s : pd_fail(PD_ERR_IO, "MPI rank %lld failed", (long long)first);
+    }
+    if (me > 0 && cli_real_stderr >= 0) /* its own failure: its own stderr again */
+        dup2(cli_real_stderr, STDERR_FILENO);
+    return s;
+}
+
+/* The exit status of a failure agreed by cli_agreed: 1, with the error
+ * line on the rank that tells it. */
+static inline int cli_failed(void)
+{
+    return cli_failure_told ? 1 : fail();
+}
+
+/* On several MPI ranks every rank reads the input and all write the
+ * output together (parallel HDF5): both must be files, the output a
+ * regular one.  Returns 0, or 2 after a usage error. */
+static inline int cli_ranks_files(const char *input, const char *in_what, const char *output,
+                                  const char *out_what)
+{
+    char msg[256];
+    struct stat st;
+    if (pd_comm_size() == 1)
+        return 0;
+    if (strcmp(input, "-") == 0) {
+        snprintf(msg, sizeof msg, "on several MPI ranks %s must be a file, not", in_what);
+        return usage_error(msg, "-");
+    }
+    if (strcmp(output, "-") == 0 ||
+        (stat(output, &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode))) {
+        snprintf(msg, sizeof msg,
+                 "on several MPI ranks %s must be a regular file, which the ranks write "
+                 "together (parallel HDF5), not",
+                 out_what);
+        return usage_error(msg, output);
+    }
+    return 0;
 }
 
 #endif

@@ -31,6 +31,8 @@
 #include "cli.h"
 #define MAX_CRACKS 64
 
+static int bonds_main(int argc, char **argv, const char *cmdline);
+
 struct options {
     double horizon;
     int has_horizon;
@@ -127,76 +129,141 @@ static int parse_options(int argc, char **argv, struct options *o)
     return 0;
 }
 
+/* The families of the sorted body: a lattice's stencil (or its lists) as
+ * one rank makes them on every rank; otherwise, on MPI ranks, each rank
+ * the families of its share of the rows [*lo, *hi) (pd_bonds_build_rows),
+ * pre-cracked; on one rank all of them. */
+static pd_status families(const struct options *o, const pd_particles *p, pd_bonds **b,
+                          int64_t *lo, int64_t *hi, int64_t *cut)
+{
+    const int64_t P = pd_comm_size(), r = pd_comm_rank();
+    *lo = 0;
+    *hi = p->n;
+    /* on a lattice whose families are a stencil, the file needs only that
+     * (unless the lists are asked for, or pre-cracks cut them) */
+    pd_status s = pd_bonds_build_lattice(p, o->horizon, o->csr || o->ncracks > 0, b);
+    if (s == PD_OK && *b == NULL && P == 1)
+        s = pd_bonds_build(p, o->horizon, b);
+    else if (s == PD_OK && *b == NULL) { /* rows in equal shares, in order */
+        *lo = p->n * r / P;
+        *hi = p->n * (r + 1) / P;
+        s = pd_bonds_build_rows(p, o->horizon, *lo, *hi, b);
+    }
+    if (s == PD_OK && o->ncracks > 0 && (*lo > 0 || *hi < p->n)) /* a part */
+        s = pd_bonds_precrack_rows(p, *b, o->cracks, o->ncracks, *lo, *hi, cut);
+    else if (s == PD_OK && o->ncracks > 0)
+        s = pd_bonds_precrack(p, *b, o->cracks, o->ncracks, cut);
+    if (s == PD_OK && o->csr) { /* the lists, though the families are a stencil */
+        pd_stencil_free((*b)->stencil);
+        (*b)->stencil = NULL;
+    }
+    return s;
+}
+
+/* The model file: every MPI rank writes it, its own rows' bonds. */
+static pd_status write_output(const struct options *o, pd_file *in, const char *cmdline,
+                              const pd_particles *p, const pd_bonds *b, const pd_sets *sets,
+                              int64_t lo, int64_t hi)
+{
+    pd_file *out = NULL;
+    pd_status s = pd_file_create_ranks(o->output, &out);
+    if (s == PD_OK && lo == 0 && hi == p->n)
+        s = pd_write_model(out, in, cmdline ? cmdline : PROG, p, b, sets);
+    else if (s == PD_OK) { /* a part of the bond lists */
+        const int64_t klo = b->offset[lo], bonds = b->offset[hi] - klo;
+        const pd_part pt = {lo, lo, hi - lo, p->n, klo, pd_comm_below(bonds), bonds,
+                            pd_comm_total(bonds)};
+        if ((s = pd_write_header(out, in, cmdline ? cmdline : PROG)) == PD_OK &&
+            (s = pd_write_particles(out, p)) == PD_OK &&
+            (s = pd_write_bonds_part(out, &pt, b)) == PD_OK)
+            s = pd_write_sets(out, sets);
+    }
+    s = cli_agreed(s);
+    if (s == PD_OK)
+        return cli_agreed(pd_file_close(out));
+    pd_file_abort(out);
+    return s;
+}
+
 int main(int argc, char **argv)
 {
     /* before getopt_long permutes argv */
     char *cmdline = pd_join_argv(argc, argv);
+    if (cli_ranks_start(&argc, &argv) != 0) {
+        free(cmdline);
+        return 1;
+    }
+    int rc = bonds_main(argc, argv, cmdline);
+    free(cmdline);
+    pd_comm_finalize();
+    return rc;
+}
+
+static int bonds_main(int argc, char **argv, const char *cmdline)
+{
     struct options o;
     int rc = parse_options(argc, argv, &o);
-    if (rc) {
-        free(cmdline);
+    if (rc == 0)
+        rc = cli_ranks_files(o.input, "the input", o.output, "the output");
+    if (rc)
         return rc;
-    }
     pd_h5_debug(o.debug);
     remove_temps_on_signal();
 
     pd_file *in = NULL;
     pd_particles *p = NULL;
-    if (pd_file_open(o.input, &in) != PD_OK || pd_read_particles(in, &p) != PD_OK) {
+    pd_status s = pd_file_open(o.input, &in);
+    if (s == PD_OK)
+        s = pd_read_particles(in, &p);
+    if (cli_agreed(s) != PD_OK) {
         pd_file_close(in);
-        free(cmdline);
-        return fail();
+        return cli_failed();
     }
     if (o.horizon < p->spacing) {
         fprintf(stderr, PROG ": error: horizon %g m is below the lattice spacing %g m\n",
                 o.horizon, p->spacing);
         pd_particles_free(p);
         pd_file_close(in);
-        free(cmdline);
         return 1;
     }
     pd_bonds *b = NULL;
     pd_sets *sets = NULL; /* carried through: by id, they survive the sort */
-    pd_status s = pd_read_sets(in, p, &sets);
+    s = pd_read_sets(in, p, &sets);
     if (s == PD_OK && !o.no_sort)
         s = pd_particles_sort_spatial(p, o.horizon);
-    /* on a lattice whose families are a stencil, the file needs only that
-     * (unless the lists are asked for, or pre-cracks cut them) */
+    int64_t cut[MAX_CRACKS], lo = 0, hi = 0;
     if (s == PD_OK)
-        s = pd_bonds_build_lattice(p, o.horizon, o.csr || o.ncracks > 0, &b);
-    if (s == PD_OK && b == NULL)
-        s = pd_bonds_build(p, o.horizon, &b);
-    int64_t cut[MAX_CRACKS];
-    if (s == PD_OK && o.ncracks > 0)
-        s = pd_bonds_precrack(p, b, o.cracks, o.ncracks, cut);
-    if (s == PD_OK && o.csr) { /* the lists, though the families are a stencil */
-        pd_stencil_free(b->stencil);
-        b->stencil = NULL;
-    }
-    pd_file *out = NULL;
+        s = families(&o, p, &b, &lo, &hi, cut);
+    s = cli_agreed(s);
     if (s == PD_OK)
-        s = pd_file_create(o.output, &out);
-    if (s == PD_OK)
-        s = pd_write_model(out, in, cmdline ? cmdline : PROG, p, b, sets);
-    if (s == PD_OK)
-        s = pd_file_close(out);
-    else
-        pd_file_abort(out);
-    free(cmdline);
+        s = write_output(&o, in, cmdline, p, b, sets, lo, hi);
     pd_file_close(in);
+    /* the families' sizes and the pre-cracks' pairs, over the ranks */
+    const int part = s == PD_OK && (lo > 0 || hi < p->n);
+    int64_t least = INT64_MAX, most = 0;
+    for (int64_t i = lo; s == PD_OK && i < hi; i++) {
+        int64_t m = b->offset[i + 1] - b->offset[i];
+        least = m < least ? m : least;
+        most = m > most ? m : most;
+    }
+    const int64_t count = part ? pd_comm_total(b->count) : b ? b->count : 0;
+    if (part) {
+        least = pd_comm_min(least);
+        most = -pd_comm_min(-most);
+        for (int c = 0; c < o.ncracks; c++)
+            cut[c] = pd_comm_total(cut[c]);
+    }
     if (s == PD_OK && !o.quiet) {
-        int64_t lo = INT64_MAX, hi = 0;
-        for (int64_t i = 0; i < b->n; i++) {
-            int64_t m = b->offset[i + 1] - b->offset[i];
-            lo = m < lo ? m : lo;
-            hi = m > hi ? m : hi;
-        }
         fprintf(stderr, PROG ": %lld particles, %lld bonds (%.2f per particle, %lld to %lld)\n",
-                (long long)p->n, (long long)(b->count / 2), (double)b->count / (double)p->n,
-                (long long)lo, (long long)hi);
+                (long long)p->n, (long long)(count / 2), (double)count / (double)p->n,
+                (long long)least, (long long)most);
         if (b->stencil)
             fprintf(stderr, PROG ": stored as a lattice stencil of %d offsets\n",
                     b->stencil->nk);
+        if (part)
+            fprintf(stderr, PROG ": families built by %d MPI ranks, each writing its rows' "
+                                 "(parallel HDF5)\n",
+                    pd_comm_size());
         for (int c = 0; c < o.ncracks; c++)
             fprintf(stderr, PROG ": --crack %s: %lld bonds broken\n", o.crack_specs[c],
                     (long long)cut[c]);
@@ -204,5 +271,5 @@ int main(int argc, char **argv)
     pd_sets_free(sets);
     pd_bonds_free(b);
     pd_particles_free(p);
-    return s == PD_OK ? 0 : fail();
+    return s == PD_OK ? 0 : cli_failed();
 }

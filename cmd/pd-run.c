@@ -22,7 +22,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "pd.h"
@@ -919,32 +918,6 @@ static void log_constants(const pd_particles *p, const pd_scene *sc, const struc
                 sc->alpha);
 }
 
-/* Free what main holds. */
-/* On several MPI ranks the ranks > 0 print nothing but their own failure
- * that no lower rank shares (stderr is /dev/null until then; real_stderr
- * is the file descriptor of theirs). */
-static int real_stderr = -1;
-static int failure_told; /* 1: a lower rank tells the failure */
-
-/* A failure of any rank is every rank's (collective on several ranks). */
-static pd_status agreed(pd_status s)
-{
-    if (pd_comm_size() == 1 || !pd_comm_or(s != PD_OK))
-        return s;
-    /* a rank that failed for another (pd_comm_agree) lets that one tell */
-    const int64_t me = pd_comm_rank(), own = s != PD_OK && !pd_comm_echo();
-    int64_t first = pd_comm_min(own ? me : INT64_MAX);
-    if (first == INT64_MAX)
-        first = pd_comm_min(s != PD_OK ? me : INT64_MAX);
-    if (first != me) {
-        failure_told = 1;
-        return s != PD_OK ? s : pd_fail(PD_ERR_IO, "MPI rank %lld failed", (long long)first);
-    }
-    if (me > 0 && real_stderr >= 0) /* its own failure: its own stderr again */
-        dup2(real_stderr, STDERR_FILENO);
-    return s;
-}
-
 struct held {
     pd_file *in, *out;
     pd_particles *p;
@@ -1163,14 +1136,14 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_sim_restore(h->sim, *first, &h->r, h->v0, h->bits0);
     if (s == PD_OK && ranks) /* this rank's piece of the body */
         s = pd_sim_piece(h->sim, &h->piece);
-    s = agreed(s);
+    s = cli_agreed(s);
     if (s == PD_OK && !restart) /* step 0's forces, and the check of its energy */
         s = start_energy(h);
     if (s == PD_OK && o->strict && h->report.nwarnings > 0)
         s = pd_fail(PD_ERR_INVALID, "%s (--strict)", h->report.warning[0]);
     if (s == PD_OK && (h->text = pd_scene_text(sc)) == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory for the scene's text");
-    s = agreed(s);
+    s = cli_agreed(s);
     /* the run file, written by every rank (parallel HDF5 on MPI ranks) */
     if (s == PD_OK && restart && !ranks)
         h->out = h->in; /* the same file goes on */
@@ -1182,8 +1155,8 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_run_file_start(h->out, restart, restart ? h->out : h->in, h->p, h->b, h->sets,
                               sc, pd_sim_effects(h->sim), h->cmdline ? h->cmdline : PROG,
                               h->text, *first);
-    s = agreed(s);
-    if (h->in != h->out) {
+    s = cli_agreed(s);
+    if (!restart || ranks) { /* read only (one rank's restart: the copy that goes on) */
         pd_file_close(h->in);
         h->in = NULL;
     }
@@ -1219,7 +1192,7 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
         s = timed_frame(h->out, sim, sc->fields, t_output, NULL);
     else if (!o->restart) /* the series' row of step 0 */
         s = timed_sample(h->out, sim, t_output, NULL);
-    s = agreed(s);
+    s = cli_agreed(s);
     int64_t lost = pd_sim_lost(sim);
     for (int64_t n = first + 1; n <= sc->steps && s == PD_OK; n++) {
         const int status = ((n - first) % status_every == 0 || n == sc->steps) && !o->quiet;
@@ -1268,7 +1241,7 @@ static pd_status run_steps(const struct options *o, struct held *h, int64_t firs
         if (status && known) /* with the alarm's step too */
             status_line(sim, sc->steps, tty, &e, s == PD_OK);
         *t_output += pd_wtime() - t0;
-        s = agreed(s);
+        s = cli_agreed(s);
         if (tty) {
             double now = pd_wtime();
             if (now - t_shown > 0.2 || n == sc->steps) {
@@ -1315,15 +1288,8 @@ int main(int argc, char **argv)
 {
     pd_h5_debug(0); /* before any file is opened (a --restart reads its scene) */
     settle_threads(argv);
-    if (pd_comm_init(&argc, &argv) != PD_OK) {
-        fail();
+    if (cli_ranks_start(&argc, &argv) != 0)
         return 1;
-    }
-    if (pd_comm_rank() > 0) { /* rank 0 speaks for the run */
-        real_stderr = dup(STDERR_FILENO);
-        if (freopen("/dev/null", "w", stderr) == NULL)
-            return 1;
-    }
     int code = run_main(argc, argv);
     pd_comm_finalize();
     return code;
@@ -1337,17 +1303,9 @@ static int run_main(int argc, char **argv)
     h.cmdline = pd_join_argv(argc, argv);
     h.opts = &o;
     int rc = options(argc, argv, &o);
-    struct stat st;
-    if (rc == 0 && pd_comm_size() > 1 && strcmp(o.input, "-") == 0)
-        rc = usage_error(o.restart ? "on several MPI ranks the run to go on from must be a file, not"
-                                   : "on several MPI ranks the model must be a file, not",
-                         "'-'");
-    else if (rc == 0 && pd_comm_size() > 1 &&
-             (strcmp(o.output, "-") == 0 ||
-              (stat(o.output, &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode))))
-        rc = usage_error("on several MPI ranks the run file must be a regular file, which the "
-                         "ranks write together (parallel HDF5), not",
-                         o.output);
+    if (rc == 0)
+        rc = cli_ranks_files(o.input, o.restart ? "the run to go on from" : "the model",
+                             o.output, "the run file");
     if (rc) {
         release(&h);
         return rc;
@@ -1408,5 +1366,5 @@ static int run_main(int argc, char **argv)
     if (s == PD_OK && o.timing && tell)
         print_timing(sim, wall, t_output);
     release(&h);
-    return s == PD_OK ? 0 : failure_told ? 1 : fail();
+    return s == PD_OK ? 0 : cli_failed();
 }

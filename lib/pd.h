@@ -358,6 +358,11 @@ void pd_bonds_free(pd_bonds *b);
  * (pd_bonds_build_lattice, which also finds their stencil), otherwise by
  * cell lists; the same bonds either way. */
 pd_status pd_bonds_build(const pd_particles *p, double horizon, pd_bonds **out);
+/* The families of rows [lo, hi) alone, by cell lists, as pd_bonds_build
+ * finds them (a part of the body for one MPI rank): a pd_bonds of all
+ * p->n rows whose rows outside [lo, hi) have none. */
+pd_status pd_bonds_build_rows(const pd_particles *p, double horizon, int64_t lo, int64_t hi,
+                              pd_bonds **out);
 /* The families of particles on their lattice (spacing p->spacing, origin
  * their lowest corner), walked over the offsets that can hold a pair
  * within the horizon: pd_bonds_build's bonds bit for bit, with b->stencil
@@ -477,6 +482,12 @@ int pd_crack_crosses(const pd_crack *c, const double x[3], const double y[3]);
  * partly cracked and is to be discarded. */
 pd_status pd_bonds_precrack(const pd_particles *p, pd_bonds *b, const pd_crack *cracks,
                             int ncracks, int64_t *counts);
+/* The same for the families of rows [lo, hi) alone (pd_bonds_build_rows):
+ * each bond from its own row, a pair decided as pd_bonds_precrack decides
+ * it; counts[c] are the pairs whose lower row is in [lo, hi), and
+ * b->precrack is kept even when none of these is cut. */
+pd_status pd_bonds_precrack_rows(const pd_particles *p, pd_bonds *b, const pd_crack *cracks,
+                                 int ncracks, int64_t lo, int64_t hi, int64_t *counts);
 
 /* Reorder particles so that families are close in memory and every bond
  * joins rows a bounded distance apart (the run's kernels cut rows into
@@ -1281,6 +1292,12 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
  * per-bond arrays but the bits.  A file of lists reads as lists. */
 pd_status pd_read_bonds_compact(const pd_file *f, const pd_particles *p, pd_bonds **out);
 pd_status pd_write_bonds(pd_file *f, const pd_bonds *b);
+/* The bond lists of a part of the body (pd_part: rows [first, first +
+ * rows), whose bonds are the body's [bond0, bond0 + bonds)) from b, a
+ * pd_bonds of every row whose rows outside the part may have none
+ * (pd_bonds_build_rows): on MPI ranks every rank writes its own, at once,
+ * into a file of pd_file_create_ranks. */
+pd_status pd_write_bonds_part(pd_file *f, const pd_part *pt, const pd_bonds *b);
 pd_status pd_write_scene(pd_file *f, const pd_scene *s, const char *effects,
                          const char *options_text);
 /* The resolved options of a run (/scene/options); caller frees. */

@@ -350,3 +350,43 @@ with h5py.File('np3.h5') as f:
         run -0 "$PY" "$tools/compare.py" "np$np.h5" dump.lmp --step 100 --min-damaged 100
     done
 }
+
+@test "mpi: mpirun pd-bonds builds an irregular body's families on 1 to 4 ranks, each writing its rows: the serial file, pre-cracks and all" {
+    local MPI_BONDS=$BATS_TEST_DIRNAME/../mpi/bin/pd-bonds
+    pd-lattice --spacing 0.001 --cylinder y,0,0,0.02,-0.0025,0 --density 2200 \
+        --perturb 1e-4 --set core=cylinder,y,0,0,0.006,-1,1 -q -o plat.h5
+    # two pre-cracks: one across the rows of every rank, one along them
+    local cracks=(--crack rect,0.0005,-0.003,-0.021,0,0.004,0,0,0,0.021
+        --crack rect,-0.021,-0.003,0.0052,0.01,0,0,0,0.004,0)
+    pd-bonds --horizon 0.0030001 "${cracks[@]}" plat.h5 -o one.h5 2>one.log
+    for np in 1 2 3 4; do
+        run -0 mpirun --oversubscribe --bind-to none ${ASAN_OPTIONS:+-x ASAN_OPTIONS} -np "$np" \
+            "$MPI_BONDS" --horizon 0.0030001 "${cracks[@]}" plat.h5 -o "np$np.h5"
+        run -0 "$PY" "$SAME" one.h5 "np$np.h5"
+    done
+    # the log's figures are the body's, summed over the ranks
+    run -0 mpirun --oversubscribe --bind-to none ${ASAN_OPTIONS:+-x ASAN_OPTIONS} -np 3 \
+        "$MPI_BONDS" --horizon 0.0030001 "${cracks[@]}" plat.h5 -o np3.h5
+    assert_line --partial "families built by 3 MPI ranks, each writing its rows' (parallel HDF5)"
+    [ "$(grep -v 'MPI ranks' <<<"$output")" = "$(cat one.log)" ]
+    # the pre-cracks did cut bonds of several ranks' rows
+    run -0 "$PY" -c "
+import h5py, numpy as np
+with h5py.File('np3.h5') as f:
+    bits = np.unpackbits(f['bonds/precrack'][:], bitorder='little')[:f['bonds'].attrs['count']]
+    off = f['bonds/offset'][:]
+    rows = np.searchsorted(off, np.nonzero(bits)[0], side='right') - 1
+    n = len(off) - 1
+    assert bits.sum() > 1000 and len(set(rows * 3 // n)) >= 2, (bits.sum(), set(rows * 3 // n))"
+    # a lattice body: its stencil, as one rank finds it
+    impact_body
+    run -0 mpirun --oversubscribe --bind-to none ${ASAN_OPTIONS:+-x ASAN_OPTIONS} -np 2 \
+        "$MPI_BONDS" --horizon 0.0030001 lat.h5 -o s2.h5
+    run -0 "$PY" "$SAME" body.h5 s2.h5
+    # files, not pipes, on several ranks
+    run -2 mpirun --oversubscribe --bind-to none -np 2 "$MPI_BONDS" --horizon 0.003 plat.h5
+    assert_output --partial "on several MPI ranks the output must be a regular file"
+    run -2 mpirun --oversubscribe --bind-to none -np 2 "$MPI_BONDS" --horizon 0.003 - -o x.h5 <plat.h5
+    assert_output --partial "on several MPI ranks the input must be a file, not '-'"
+    [ ! -e x.h5 ]
+}

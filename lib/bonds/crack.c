@@ -205,8 +205,12 @@ static int64_t mirror(const pd_bonds *b, int64_t i, int64_t j)
     return (lo < b->offset[j + 1] && b->neighbor[lo] == i) ? lo : -1;
 }
 
-pd_status pd_bonds_precrack(const pd_particles *p, pd_bonds *b, const pd_crack *cracks,
-                            int ncracks, int64_t *counts)
+/* pd_bonds_precrack over the families of rows [lo, hi): `mirrored`, each
+ * pair from its lower row, both its bonds at once (the whole body); else
+ * each bond from its own row (a part of the body, whose partners' families
+ * may be another's), the pair decided from its lower row's side alike. */
+static pd_status precrack(const pd_particles *p, pd_bonds *b, const pd_crack *cracks,
+                          int ncracks, int64_t *counts, int64_t lo, int64_t hi, int mirrored)
 {
     if (p->n != b->n)
         return pd_fail(PD_ERR_INVALID, "pre-crack: %lld particles but bonds of %lld",
@@ -240,17 +244,24 @@ pd_status pd_bonds_precrack(const pd_particles *p, pd_bonds *b, const pd_crack *
             s[i] = side_value(&q, x);
         }
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : pairs) reduction(max : bad)
-        for (int64_t i = 0; i < n; i++) {
-            double x[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
+        for (int64_t i = lo; i < hi; i++) {
             for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
                 int64_t j = b->neighbor[k];
-                /* each pair once, from its lower row, where both sides are
-                 * known to differ */
-                if (j <= i || (s[i] >= 0) == (s[j] >= 0))
+                /* each pair from its lower row a, where both sides are known
+                 * to differ */
+                const int64_t a = i < j ? i : j, e = i < j ? j : i;
+                if ((mirrored && j <= i) || (s[a] >= 0) == (s[e] >= 0))
                     continue;
-                double y[3] = {p->x[0][j], p->x[1][j], p->x[2][j]};
-                if (!crosses(&q, x, s[i], y, s[j]))
+                double x[3] = {p->x[0][a], p->x[1][a], p->x[2][a]};
+                double y[3] = {p->x[0][e], p->x[1][e], p->x[2][e]};
+                if (!crosses(&q, x, s[a], y, s[e]))
                     continue;
+                if (!mirrored) { /* this bond; its mirror is its own row's */
+                    pd_bond_break(b->intact, k);
+                    set_bit(bits, k);
+                    pairs += j > i;
+                    continue;
+                }
                 int64_t m = mirror(b, i, j);
                 if (m < 0) {
                     bad = i;
@@ -271,9 +282,21 @@ pd_status pd_bonds_precrack(const pd_particles *p, pd_bonds *b, const pd_crack *
         any += pairs;
     }
     free(s);
-    if (b->precrack == NULL && any > 0 && st == PD_OK)
-        b->precrack = bits;
+    if (b->precrack == NULL && (any > 0 || !mirrored) && st == PD_OK)
+        b->precrack = bits; /* a part's: kept, the body's may have some */
     else if (bits != b->precrack)
         free(bits);
     return st;
+}
+
+pd_status pd_bonds_precrack(const pd_particles *p, pd_bonds *b, const pd_crack *cracks,
+                            int ncracks, int64_t *counts)
+{
+    return precrack(p, b, cracks, ncracks, counts, 0, p->n, 1);
+}
+
+pd_status pd_bonds_precrack_rows(const pd_particles *p, pd_bonds *b, const pd_crack *cracks,
+                                 int ncracks, int64_t lo, int64_t hi, int64_t *counts)
+{
+    return precrack(p, b, cracks, ncracks, counts, lo, hi, 0);
 }

@@ -297,6 +297,63 @@ static uint8_t *words_to_bytes(const uint64_t *words, int64_t count)
     return bytes;
 }
 
+/* 8 bond bits from bit k of words (k + 7 within them). */
+static uint8_t bits8(const uint64_t *words, int64_t k)
+{
+    const int64_t w = k >> 6;
+    const int o = (int)(k & 63);
+    uint64_t v = words[w] >> o;
+    if (o > 56)
+        v |= words[w + 1] << (64 - o);
+    return (uint8_t)v;
+}
+
+/* The bytes of a frame's bond states that a part writes: the body's bits
+ * [bond0, bond0 + bonds), the part's local bits from klo, as bytes
+ * [*at, *at + *count) of the body's.  On MPI ranks a byte the part shares
+ * with the part below gets that part's bits (a chain over the ranks, which
+ * every rank joins), and a byte it shares with the part above is left to
+ * that part. */
+static uint8_t *state_bytes(const pd_file *f, const pd_part *pt, const uint64_t *intact,
+                            int64_t *at, int64_t *count)
+{
+    const int64_t g0 = pt->bond0, g1 = pt->bond0 + pt->bonds, B0 = g0 / 8, B1 = (g1 + 7) / 8;
+    uint8_t *bytes = NULL;
+    if (f->ranks <= 1 && g0 == 0 && pt->klo == 0) { /* the whole body's, as they lie */
+        bytes = words_to_bytes(intact, pt->bonds);
+        *at = 0;
+        *count = B1;
+        return bytes;
+    }
+    bytes = calloc((size_t)(B1 > B0 ? B1 - B0 : 1), 1);
+    if (bytes) {
+        const int64_t shift = pt->klo - g0; /* local bit of body bit g */
+        for (int64_t B = B0; B < B1; B++) {
+            const int64_t lo = B * 8 > g0 ? B * 8 : g0, hi = B * 8 + 8 < g1 ? B * 8 + 8 : g1;
+            if (lo == B * 8 && hi == B * 8 + 8)
+                bytes[B - B0] = bits8(intact, B * 8 + shift);
+            else
+                for (int64_t g = lo; g < hi; g++)
+                    bytes[B - B0] |= (uint8_t)(pd_bond_intact(intact, g + shift) << (g % 8));
+        }
+    }
+    int64_t end = B1;
+    if (f->ranks > 1) {
+        const int carry = (int)pd_comm_chain_in();
+        int out = 0;
+        if (bytes && B1 > B0)
+            bytes[0] |= (uint8_t)carry;
+        if (pd_comm_rank() + 1 < f->ranks && g1 % 8) { /* the next part's first byte */
+            out = B1 > B0 ? (bytes ? bytes[B1 - 1 - B0] : 0) : carry;
+            end = B1 - 1;
+        }
+        pd_comm_chain_out((double)out);
+    }
+    *at = B0;
+    *count = end > B0 ? end - B0 : 0;
+    return bytes;
+}
+
 /* Check the CSR structure; families must be sorted and symmetric with equal
  * state (and pre-crack bits) on both sides. */
 static pd_status check_compact(const char *fn, const pd_particles *p, const pd_bonds *b);
@@ -798,6 +855,58 @@ pd_status pd_write_bonds(pd_file *f, const pd_bonds *b)
     return s;
 }
 
+pd_status pd_write_bonds_part(pd_file *f, const pd_part *pt, const pd_bonds *b)
+{
+    hid_t g = pd_h5_create_group(f->fid, "/bonds");
+    if (g < 0)
+        return pd_fail(PD_ERR_IO, "cannot create /bonds");
+    const int last = pt->first + pt->rows == pt->n; /* writes offset[n] too */
+    const int64_t k0 = pt->klo, shift = pt->bond0 - pt->klo;
+    hsize_t dn[1] = {(hsize_t)pt->n + 1}, db[1] = {(hsize_t)pt->nbonds},
+            ds[1] = {(hsize_t)((pt->nbonds + 7) / 8)};
+    int64_t *off = malloc((size_t)(pt->rows + 1) * sizeof(int64_t));
+    int64_t at = 0, count = 0, pat = 0, pcount = 0;
+    uint8_t *bytes = pt->nbonds > 0 ? state_bytes(f, pt, b->intact, &at, &count) : NULL;
+    /* the pre-crack only when some bond is pre-cracked */
+    int cracked = 0;
+    for (int64_t k = k0; b->precrack && k < k0 + pt->bonds && !cracked; k++)
+        cracked = pd_bond_intact(b->precrack, k); /* a set bit: pre-cracked */
+    if (f->ranks > 1)
+        cracked = pd_comm_or(cracked);
+    uint8_t *pbytes = cracked ? state_bytes(f, pt, b->precrack, &pat, &pcount) : NULL;
+    pd_status s = off && (bytes || pt->nbonds == 0) && (pbytes || !cracked)
+                      ? PD_OK
+                      : pd_fail(PD_ERR_NOMEM, "out of memory");
+    if (f->ranks > 1)
+        s = pd_comm_agree(s);
+    for (int64_t i = 0; off && i <= pt->rows; i++)
+        off[i] = b->offset[pt->lo + i] + shift;
+    if (s == PD_OK && (s = pd_h5_reserve_data(g, "offset", H5T_STD_I64LE, 1, dn)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "neighbor", H5T_STD_I32LE, 1, db)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "length", H5T_IEEE_F64LE, 1, db)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "volume_factor", H5T_IEEE_F64LE, 1, db)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "state", H5T_STD_U8LE, 1, ds)) == PD_OK &&
+        (!cracked || (s = pd_h5_reserve_data(g, "precrack", H5T_STD_U8LE, 1, ds)) == PD_OK) &&
+        (s = pd_h5_write_rows(g, "offset", H5T_NATIVE_INT64, off, pt->first,
+                              pt->rows + last)) == PD_OK &&
+        (s = pd_h5_write_rows(g, "neighbor", H5T_NATIVE_INT32, b->neighbor + k0, pt->bond0,
+                              pt->bonds)) == PD_OK &&
+        (s = pd_h5_write_rows(g, "length", H5T_NATIVE_DOUBLE, b->length + k0, pt->bond0,
+                              pt->bonds)) == PD_OK &&
+        (s = pd_h5_write_rows(g, "volume_factor", H5T_NATIVE_DOUBLE, b->vfactor + k0,
+                              pt->bond0, pt->bonds)) == PD_OK &&
+        (s = pd_h5_write_rows(g, "state", H5T_NATIVE_UINT8, bytes, at, count)) == PD_OK &&
+        (!cracked ||
+         (s = pd_h5_write_rows(g, "precrack", H5T_NATIVE_UINT8, pbytes, pat, pcount)) == PD_OK) &&
+        (s = pd_h5_write_attr_doubles(g, "horizon", &b->horizon, 1)) == PD_OK)
+        s = pd_h5_write_attr_int(g, "count", pt->nbonds);
+    free(off);
+    free(bytes);
+    free(pbytes);
+    H5Gclose(g);
+    return s;
+}
+
 /* ------------------------------------------------------------ scene */
 
 pd_status pd_write_scene(pd_file *f, const pd_scene *sc, const char *effects,
@@ -991,63 +1100,6 @@ pd_status pd_plan_frames(pd_file *f, int64_t n, int64_t nbonds, int64_t nframes,
     for (int64_t k = 0; k < nframes && s == PD_OK; k++)
         s = lay_out_frame(f, n, nbonds, steps[k], times[k], fields);
     return s;
-}
-
-/* 8 bond bits from bit k of words (k + 7 within them). */
-static uint8_t bits8(const uint64_t *words, int64_t k)
-{
-    const int64_t w = k >> 6;
-    const int o = (int)(k & 63);
-    uint64_t v = words[w] >> o;
-    if (o > 56)
-        v |= words[w + 1] << (64 - o);
-    return (uint8_t)v;
-}
-
-/* The bytes of a frame's bond states that a part writes: the body's bits
- * [bond0, bond0 + bonds), the part's local bits from klo, as bytes
- * [*at, *at + *count) of the body's.  On MPI ranks a byte the part shares
- * with the part below gets that part's bits (a chain over the ranks, which
- * every rank joins), and a byte it shares with the part above is left to
- * that part. */
-static uint8_t *state_bytes(const pd_file *f, const pd_part *pt, const uint64_t *intact,
-                            int64_t *at, int64_t *count)
-{
-    const int64_t g0 = pt->bond0, g1 = pt->bond0 + pt->bonds, B0 = g0 / 8, B1 = (g1 + 7) / 8;
-    uint8_t *bytes = NULL;
-    if (f->ranks <= 1 && g0 == 0 && pt->klo == 0) { /* the whole body's, as they lie */
-        bytes = words_to_bytes(intact, pt->bonds);
-        *at = 0;
-        *count = B1;
-        return bytes;
-    }
-    bytes = calloc((size_t)(B1 > B0 ? B1 - B0 : 1), 1);
-    if (bytes) {
-        const int64_t shift = pt->klo - g0; /* local bit of body bit g */
-        for (int64_t B = B0; B < B1; B++) {
-            const int64_t lo = B * 8 > g0 ? B * 8 : g0, hi = B * 8 + 8 < g1 ? B * 8 + 8 : g1;
-            if (lo == B * 8 && hi == B * 8 + 8)
-                bytes[B - B0] = bits8(intact, B * 8 + shift);
-            else
-                for (int64_t g = lo; g < hi; g++)
-                    bytes[B - B0] |= (uint8_t)(pd_bond_intact(intact, g + shift) << (g % 8));
-        }
-    }
-    int64_t end = B1;
-    if (f->ranks > 1) {
-        const int carry = (int)pd_comm_chain_in();
-        int out = 0;
-        if (bytes && B1 > B0)
-            bytes[0] |= (uint8_t)carry;
-        if (pd_comm_rank() + 1 < f->ranks && g1 % 8) { /* the next part's first byte */
-            out = B1 > B0 ? (bytes ? bytes[B1 - 1 - B0] : 0) : carry;
-            end = B1 - 1;
-        }
-        pd_comm_chain_out((double)out);
-    }
-    *at = B0;
-    *count = end > B0 ? end - B0 : 0;
-    return bytes;
 }
 
 /* A part's rows of the first index of an array of `width` values a row
