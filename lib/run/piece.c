@@ -93,6 +93,43 @@ static pd_status slice_bonds(const pd_particles *p, const pd_bonds *b, const uin
     return PD_OK;
 }
 
+/* A lattice body's piece keeps its families compact, as the whole body
+ * does (no per-bond arrays; pd_bonds_compact on the piece's particles):
+ * each family the stencil's partners within the piece, which must be the
+ * whole family's in its order, with the states `intact` gives them.  *out
+ * NULL when they are not (the piece's lattice walked in another order):
+ * the caller then takes the lists. */
+static pd_status slice_compact(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
+                               const pd_particles *q, int64_t g0, pd_bonds **out)
+{
+    *out = NULL;
+    pd_bonds *c = NULL;
+    pd_status s = pd_bonds_compact(q, b->stencil, b->horizon, &c);
+    if (s != PD_OK || pd_bonds_has_lists(c)) {
+        pd_bonds_free(c);
+        return s == PD_ERR_NOMEM ? s : PD_OK;
+    }
+    memset(c->intact, 0, (size_t)pd_bits_words(c->count) * sizeof(uint64_t));
+    int same = 1;
+    for (int64_t i = 0; i < q->n && same; i++) {
+        pd_bond_iter it, jt;
+        pd_family_start_partners(c, q, i, &jt);
+        for (pd_family_start_partners(b, p, g0 + i, &it); pd_family_next(&it) && same;) {
+            if (it.j < g0 || it.j >= g0 + q->n)
+                continue;
+            same = pd_family_next(&jt) && jt.j == it.j - g0;
+            if (same && pd_bond_intact(intact, it.q))
+                c->intact[jt.q >> 6] |= UINT64_C(1) << (jt.q & 63);
+        }
+        same = same && !pd_family_next(&jt);
+    }
+    if (same)
+        *out = c;
+    else
+        pd_bonds_free(c);
+    return PD_OK;
+}
+
 /* The first block of rank r's piece: the block below its own if that is
  * even, else the one below that (rank 0: block 0). */
 static int64_t piece_first_block(const int64_t *K, int r)
@@ -257,7 +294,12 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
         pc->p = slice_particles(whole->p, pc->first, g1);
         if (!pc->buf || !pc->sum3 || !pc->p)
             st = pd_fail(PD_ERR_NOMEM, "out of memory for a piece of the body");
-        if (st == PD_OK)
+        /* the stencil walks a lattice body's compact families: the piece's
+         * stay compact too; else its lists */
+        if (st == PD_OK && grid && !pd_bonds_has_lists(whole->b) && whole->b->stencil)
+            st = slice_compact(whole->p, whole->b, pd_sim_intact(whole), pc->p, pc->first,
+                               &pc->b);
+        if (st == PD_OK && pc->b == NULL)
             st = slice_bonds(whole->p, whole->b, pd_sim_intact(whole), pc->first, g1, &pc->b);
     }
     free(start);
