@@ -517,6 +517,21 @@ static pd_status ranks_output(const char *path)
     return PD_OK;
 }
 
+/* A file of every rank named `name`, to go under `path` (collective). */
+static pd_status new_on_ranks(const char *name, const char *path, pd_file **out)
+{
+    pd_status s = PD_OK;
+    pd_file *f = file_new(name);
+    if (f == NULL || (f->path = strdup(path)) == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory");
+    if (pd_comm_or(s != PD_OK)) {
+        file_free(f);
+        return s != PD_OK ? s : pd_comm_agree(s);
+    }
+    *out = f;
+    return PD_OK;
+}
+
 /* Undo a parallel open that failed: every rank. */
 static pd_status undo_ranks(pd_file *f, pd_status s)
 {
@@ -537,13 +552,9 @@ pd_status pd_file_create_ranks(const char *path, pd_file **out)
     pd_status s = ranks_output(path);
     if (s != PD_OK)
         return s;
-    pd_file *f = file_new(path);
-    if (f == NULL || (f->path = strdup(path)) == NULL)
-        s = pd_fail(PD_ERR_NOMEM, "out of memory");
-    if (pd_comm_or(s != PD_OK)) {
-        file_free(f);
-        return s != PD_OK ? s : pd_comm_agree(s);
-    }
+    pd_file *f = NULL;
+    if ((s = new_on_ranks(path, path, &f)) != PD_OK)
+        return s;
     if (pd_comm_rank() == 0)
         s = make_temp(path, &f->tmp);
     if ((s = open_on_ranks(f, s, 1)) != PD_OK)
@@ -565,13 +576,9 @@ pd_status pd_file_update_ranks(const char *inpath, const char *outpath, pd_file 
         s = pd_fail(PD_ERR_INVALID, "on several MPI ranks the run to go on from must be a file");
     if (s != PD_OK)
         return s;
-    pd_file *f = file_new(inpath);
-    if (f == NULL || (f->path = strdup(outpath)) == NULL)
-        s = pd_fail(PD_ERR_NOMEM, "out of memory");
-    if (pd_comm_or(s != PD_OK)) {
-        file_free(f);
-        return s != PD_OK ? s : pd_comm_agree(s);
-    }
+    pd_file *f = NULL;
+    if ((s = new_on_ranks(inpath, outpath, &f)) != PD_OK)
+        return s;
     if (pd_comm_rank() == 0) { /* the copy, rank 0's */
         unsigned char *buf = NULL;
         size_t len = 0;
