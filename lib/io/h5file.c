@@ -417,15 +417,62 @@ static pd_status copy_to_temp(const char *outpath, const unsigned char *buf, siz
     return s;
 }
 
+/* The file at inpath (an HDF5 file: its signature checked first) copied
+ * into a new temporary beside outpath (*tmp), a buffer at a time: a run of
+ * any size goes on without being held in memory. */
+static pd_status copy_file_to_temp(const char *inpath, const char *outpath, char **tmp)
+{
+    struct stat st;
+    if (stat(inpath, &st) != 0)
+        return pd_fail(PD_ERR_IO, "cannot open '%s': %s", inpath, strerror(errno));
+    if (S_ISDIR(st.st_mode))
+        return pd_fail(PD_ERR_IO, "cannot open '%s': is a directory", inpath);
+    FILE *in = fopen(inpath, "rb");
+    if (in == NULL)
+        return pd_fail(PD_ERR_IO, "cannot open '%s': %s", inpath, strerror(errno));
+    enum { CHUNK = 8 << 20 };
+    unsigned char *buf = malloc(CHUNK);
+    size_t got = buf ? fread(buf, 1, CHUNK, in) : 0;
+    pd_status s = buf == NULL    ? pd_fail(PD_ERR_NOMEM, "out of memory")
+                  : ferror(in) ? pd_fail(PD_ERR_IO, "cannot read '%s': %s", inpath, strerror(errno))
+                               : check_signature(inpath, buf, got);
+    if (s == PD_OK)
+        s = make_temp(outpath, tmp);
+    FILE *o = s == PD_OK ? fopen(*tmp, "wb") : NULL;
+    int ok = o != NULL;
+    while (ok && got > 0) {
+        ok = fwrite(buf, 1, got, o) == got;
+        got = ok ? fread(buf, 1, CHUNK, in) : 0;
+    }
+    if (s == PD_OK && ferror(in))
+        s = pd_fail(PD_ERR_IO, "cannot read '%s': %s", inpath, strerror(errno));
+    if (o != NULL && fclose(o) != 0)
+        ok = 0;
+    if (s == PD_OK && !ok)
+        s = pd_fail(PD_ERR_IO, "cannot write '%s': %s", outpath, strerror(errno));
+    if (s != PD_OK && *tmp) {
+        unlink(*tmp);
+        temp_forget(*tmp);
+        free(*tmp);
+        *tmp = NULL;
+    }
+    free(buf);
+    fclose(in);
+    return s;
+}
+
 pd_status pd_file_update(const char *inpath, const char *outpath, pd_file **out)
 {
-    unsigned char *buf;
-    size_t len;
+    unsigned char *buf = NULL;
+    size_t len = 0;
     const char *inname = strcmp(inpath, "-") == 0 ? "<stdin>" : inpath;
-    pd_status s = load_bytes(inpath, &buf, &len);
+    /* a file into a file: copied a buffer at a time; else through memory */
+    const int streamed = strcmp(inpath, "-") != 0 && strcmp(outpath, "-") != 0 &&
+                         !is_special(outpath);
+    pd_status s = streamed ? PD_OK : load_bytes(inpath, &buf, &len);
     if (s != PD_OK)
         return s;
-    if ((s = check_signature(inname, buf, len)) != PD_OK) {
+    if (!streamed && (s = check_signature(inname, buf, len)) != PD_OK) {
         free(buf);
         return s;
     }
@@ -449,7 +496,8 @@ pd_status pd_file_update(const char *inpath, const char *outpath, pd_file **out)
         f->image = buf;
         f->fid = open_image(buf, len, H5F_ACC_RDWR);
     } else {
-        s = copy_to_temp(outpath, buf, len, &f->tmp);
+        s = streamed ? copy_file_to_temp(inpath, outpath, &f->tmp)
+                     : copy_to_temp(outpath, buf, len, &f->tmp);
         free(buf);
         if (s != PD_OK) {
             file_free(f);
@@ -579,16 +627,8 @@ pd_status pd_file_update_ranks(const char *inpath, const char *outpath, pd_file 
     pd_file *f = NULL;
     if ((s = new_on_ranks(inpath, outpath, &f)) != PD_OK)
         return s;
-    if (pd_comm_rank() == 0) { /* the copy, rank 0's */
-        unsigned char *buf = NULL;
-        size_t len = 0;
-        s = load_bytes(inpath, &buf, &len);
-        if (s == PD_OK)
-            s = check_signature(inpath, buf, len);
-        if (s == PD_OK)
-            s = copy_to_temp(outpath, buf, len, &f->tmp);
-        free(buf);
-    }
+    if (pd_comm_rank() == 0) /* the copy, rank 0's */
+        s = copy_file_to_temp(inpath, outpath, &f->tmp);
     if ((s = open_on_ranks(f, s, 0)) == PD_OK)
         s = pd_comm_agree(check_header(f));
     if (s != PD_OK)
