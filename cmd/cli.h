@@ -234,11 +234,9 @@ static inline int fail(void)
 }
 
 /* On several MPI ranks (the MPI builds of pd-run and pd-bonds) rank 0
- * speaks for the program: the ranks > 0 print nothing but their own
- * failure that no lower rank shares (stderr is /dev/null until then;
- * cli_real_stderr is the file descriptor of theirs). */
-static int cli_real_stderr = -1;
-static int cli_failure_told; /* 1: a lower rank tells the failure */
+ * speaks for the program: the other ranks' stderr is /dev/null, and a
+ * failure of any rank is told by rank 0 (cli_agreed, cli_failed). */
+static int cli_agreed_failure; /* 1: every rank holds the failure rank 0 tells */
 
 /* MPI started (one rank without it), the other ranks' stderr silenced.
  * Returns 0, or 1 after the error line. */
@@ -246,17 +244,14 @@ static inline int cli_ranks_start(int *argc, char ***argv)
 {
     if (pd_comm_init(argc, argv) != PD_OK)
         return fail();
-    if (pd_comm_rank() > 0) {
-        cli_real_stderr = dup(STDERR_FILENO);
-        if (freopen("/dev/null", "w", stderr) == NULL)
-            return 1;
-    }
+    if (pd_comm_rank() > 0 && freopen("/dev/null", "w", stderr) == NULL)
+        return 1;
     return 0;
 }
 
 /* A failure of any rank is every rank's (collective on several ranks):
- * the lowest rank that failed of its own (not for another, pd_comm_agree)
- * tells it. */
+ * the one of the lowest rank that failed of its own (not for another,
+ * pd_comm_agree), its message on every rank. */
 static inline pd_status cli_agreed(pd_status s)
 {
     if (pd_comm_size() == 1 || !pd_comm_or(s != PD_OK))
@@ -265,20 +260,31 @@ static inline pd_status cli_agreed(pd_status s)
     int64_t first = pd_comm_min(own ? me : INT64_MAX);
     if (first == INT64_MAX)
         first = pd_comm_min(s != PD_OK ? me : INT64_MAX);
-    if (first != me) {
-        cli_failure_told = 1;
-        return s != PD_OK ? s : pd_fail(PD_ERR_IO, "MPI rank %lld failed", (long long)first);
-    }
-    if (me > 0 && cli_real_stderr >= 0) /* its own failure: its own stderr again */
-        dup2(cli_real_stderr, STDERR_FILENO);
-    return s;
+    cli_agreed_failure = 1;
+    return pd_comm_error_from((int)first, s);
 }
 
-/* The exit status of a failure agreed by cli_agreed: 1, with the error
- * line on the rank that tells it. */
+/* The exit status of a failure: 1, with its line on stderr (rank 0's on
+ * several ranks, once agreed). */
 static inline int cli_failed(void)
 {
-    return cli_failure_told ? 1 : fail();
+    if (cli_agreed_failure && pd_comm_rank() > 0)
+        return 1;
+    return fail();
+}
+
+/* The end of a program on MPI ranks: one that failed (every rank, for a
+ * usage error or an agreed failure) waits until every rank has said what
+ * it says, so that mpirun, stopping the job at the first rank's exit,
+ * cuts no line short.  Returns code. */
+static inline int cli_ranks_end(int code)
+{
+    if (code != 0 && pd_comm_size() > 1) {
+        fflush(stderr);
+        pd_comm_barrier();
+    }
+    pd_comm_finalize();
+    return code;
 }
 
 /* On several MPI ranks every rank reads the input and all write the

@@ -195,8 +195,7 @@ int main(int argc, char **argv)
     }
     int rc = bonds_main(argc, argv, cmdline);
     free(cmdline);
-    pd_comm_finalize();
-    return rc;
+    return cli_ranks_end(rc);
 }
 
 static int bonds_main(int argc, char **argv, const char *cmdline)
@@ -219,7 +218,7 @@ static int bonds_main(int argc, char **argv, const char *cmdline)
         pd_file_close(in);
         return cli_failed();
     }
-    if (o.horizon < p->spacing) {
+    if (o.horizon < p->spacing) { /* the same on every rank */
         fprintf(stderr, PROG ": error: horizon %g m is below the lattice spacing %g m\n",
                 o.horizon, p->spacing);
         pd_particles_free(p);

@@ -1169,7 +1169,7 @@ static int start(struct options *o, struct held *h, int64_t *first)
         else if (h->in) /* a restart's copy */
             pd_file_abort(h->in);
         h->in = h->out = NULL;
-        return fail();
+        return cli_failed();
     }
     return 0;
 }
@@ -1290,9 +1290,7 @@ int main(int argc, char **argv)
     settle_threads(argv);
     if (cli_ranks_start(&argc, &argv) != 0)
         return 1;
-    int code = run_main(argc, argv);
-    pd_comm_finalize();
-    return code;
+    return cli_ranks_end(run_main(argc, argv));
 }
 
 static int run_main(int argc, char **argv)
@@ -1347,7 +1345,7 @@ static int run_main(int argc, char **argv)
     const double wall = pd_wtime() - t0 + h.t_setup;
     /* contact partners from beyond a piece, the most of a rank (collective) */
     const int64_t remote = h.piece ? -pd_comm_min(-pd_sim_contact_remote(h.piece)) : 0;
-    s = finish(&h, s);
+    s = cli_agreed(finish(&h, s));
     const double bonds = (double)h.nbonds;
     if (s == PD_OK && tell && o.spec.sc.relax)
         fprintf(stderr, PROG ": %lld load steps, %lld iterations, in %.3f s (%.3g bond "

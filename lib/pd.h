@@ -694,6 +694,11 @@ int64_t pd_comm_below(int64_t v);
  * after it (and 0 once asked), so that the rank that failed tells why. */
 pd_status pd_comm_agree(pd_status s);
 int pd_comm_echo(void);
+/* Rank `from`'s failure (its status s and message) on every rank
+ * (collective): returns it, and pd_errmsg() says it. */
+pd_status pd_comm_error_from(int from, pd_status s);
+/* Every rank waits for every other (collective). */
+void pd_comm_barrier(void);
 
 /* This rank's piece of the run `whole` (a pd_sim_new of the whole body,
  * restored or not, not yet set up), for pd_comm_size() ranks: *piece is a

@@ -383,6 +383,20 @@ with h5py.File('np3.h5') as f:
     run -0 mpirun --oversubscribe --bind-to none ${ASAN_OPTIONS:+-x ASAN_OPTIONS} -np 2 \
         "$MPI_BONDS" --horizon 0.0030001 lat.h5 -o s2.h5
     run -0 "$PY" "$SAME" body.h5 s2.h5
+    # two particles at one place: the serial program's one line, no file
+    "$PY" -c "
+import h5py
+with h5py.File('plat.h5', 'r+') as f:
+    x = f['particles/position']; x[1000] = x[3000]"
+    run -1 --separate-stderr pd-bonds --horizon 0.0030001 plat.h5 -o dup.h5
+    local line=$stderr
+    for np in 2 3; do
+        run -1 --separate-stderr mpirun --oversubscribe --bind-to none \
+            ${ASAN_OPTIONS:+-x ASAN_OPTIONS} -np "$np" "$MPI_BONDS" --horizon 0.0030001 plat.h5 -o dup.h5
+        [ "$(grep -c 'pd-bonds: error' <<<"$stderr")" -eq 1 ]
+        grep -qxF "$line" <<<"$stderr"
+    done
+    [ ! -e dup.h5 ] && ! ls .dup.h5.* 2>/dev/null
     # files, not pipes, on several ranks
     run -2 mpirun --oversubscribe --bind-to none -np 2 "$MPI_BONDS" --horizon 0.003 plat.h5
     assert_output --partial "on several MPI ranks the output must be a regular file"

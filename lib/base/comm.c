@@ -164,6 +164,29 @@ void pd_comm_bcast(void *buf, int64_t bytes)
         MPI_Bcast(buf, (int)bytes, MPI_BYTE, 0, MPI_COMM_WORLD);
 }
 
+pd_status pd_comm_error_from(int from, pd_status s)
+{
+    if (pd_comm_size() == 1)
+        return s;
+    struct {
+        int code;
+        char text[1024];
+    } e;
+    memset(&e, 0, sizeof e);
+    if (pd_comm_rank() == from) {
+        e.code = (int)s;
+        strncpy(e.text, pd_errmsg(), sizeof e.text - 1);
+    }
+    MPI_Bcast(&e, (int)sizeof e, MPI_BYTE, from, MPI_COMM_WORLD);
+    return pd_fail((pd_status)e.code, "%s", e.text);
+}
+
+void pd_comm_barrier(void)
+{
+    if (pd_comm_size() > 1)
+        MPI_Barrier(MPI_COMM_WORLD);
+}
+
 double pd_comm_chain_in(void)
 {
     const int me = pd_comm_rank();
@@ -307,6 +330,16 @@ void pd_comm_box(double lo[3], double hi[3])
 {
     (void)lo;
     (void)hi;
+}
+
+pd_status pd_comm_error_from(int from, pd_status s)
+{
+    (void)from;
+    return s;
+}
+
+void pd_comm_barrier(void)
+{
 }
 
 double pd_comm_chain_in(void)
