@@ -23,11 +23,25 @@ int pd_comm_mpi(void)
     return 1;
 }
 
+/* Was this process started by an MPI launcher (mpirun, mpiexec, srun)?
+ * Each sets its ranks' environment; a program started alone runs as one
+ * rank without MPI_Init, whose singleton start (about 0.4 s with Open
+ * MPI) would slow every pipe of pd's programs. */
+static int launched(void)
+{
+    static const char *const vars[] = {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK",
+                                       "PMI_SIZE", "MPI_LOCALNRANKS", "MV2_COMM_WORLD_SIZE"};
+    for (size_t k = 0; k < sizeof vars / sizeof vars[0]; k++)
+        if (getenv(vars[k]))
+            return 1;
+    return 0;
+}
+
 pd_status pd_comm_init(int *argc, char ***argv)
 {
     int on = 0, level = 0;
     MPI_Initialized(&on);
-    if (on)
+    if (on || !launched())
         return PD_OK;
     if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &level) != MPI_SUCCESS)
         return pd_fail(PD_ERR_IO, "MPI could not start");
