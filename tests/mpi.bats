@@ -90,6 +90,11 @@ same_on_ranks() {
     assert_line --partial "pd-run: 1 MPI rank x 1 thread"
     pd-run --threads 1 -q --scene impact.scene body.h5 -o one.h5
     run -0 "$PY" "$SAME" one.h5 m.h5
+    # in a pipe, as the serial programs (MPI is not started without a launcher)
+    pd-lattice --spacing 0.001 --cylinder y,0,0,0.02,-0.0025,0 --density 2200 -q -o - |
+        "$BATS_TEST_DIRNAME/../mpi/bin/pd-bonds" --horizon 0.0030001 -q - |
+        "$MPI_RUN" --threads 1 -q --scene impact.scene - -o pipe.h5
+    run -0 "$PY" "$SAME" one.h5 pipe.h5
 }
 
 @test "mpi: the stencil on 1 to 4 ranks, bit for bit the serial run's, fracture and all" {
