@@ -145,6 +145,19 @@ static void file_free(pd_file *f)
     free(f);
 }
 
+/* A path (not a directory) opened to read. */
+static pd_status open_path(const char *path, FILE **in)
+{
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+    if (S_ISDIR(st.st_mode))
+        return pd_fail(PD_ERR_IO, "cannot open '%s': is a directory", path);
+    if ((*in = fopen(path, "rb")) == NULL)
+        return pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+    return PD_OK;
+}
+
 static pd_status load_bytes(const char *path, unsigned char **buf, size_t *len)
 {
     if (strcmp(path, "-") == 0) {
@@ -153,15 +166,11 @@ static pd_status load_bytes(const char *path, unsigned char **buf, size_t *len)
                                       "or a pipe)");
         return slurp(stdin, "stdin", buf, len);
     }
-    struct stat st;
-    if (stat(path, &st) != 0)
-        return pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
-    if (S_ISDIR(st.st_mode))
-        return pd_fail(PD_ERR_IO, "cannot open '%s': is a directory", path);
-    FILE *in = fopen(path, "rb");
-    if (in == NULL)
-        return pd_fail(PD_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
-    pd_status s = slurp(in, path, buf, len);
+    FILE *in = NULL;
+    pd_status s = open_path(path, &in);
+    if (s != PD_OK)
+        return s;
+    s = slurp(in, path, buf, len);
     fclose(in);
     return s;
 }
@@ -422,18 +431,14 @@ static pd_status copy_to_temp(const char *outpath, const unsigned char *buf, siz
  * any size goes on without being held in memory. */
 static pd_status copy_file_to_temp(const char *inpath, const char *outpath, char **tmp)
 {
-    struct stat st;
-    if (stat(inpath, &st) != 0)
-        return pd_fail(PD_ERR_IO, "cannot open '%s': %s", inpath, strerror(errno));
-    if (S_ISDIR(st.st_mode))
-        return pd_fail(PD_ERR_IO, "cannot open '%s': is a directory", inpath);
-    FILE *in = fopen(inpath, "rb");
-    if (in == NULL)
-        return pd_fail(PD_ERR_IO, "cannot open '%s': %s", inpath, strerror(errno));
+    FILE *in = NULL;
+    pd_status s = open_path(inpath, &in);
+    if (s != PD_OK)
+        return s;
     enum { CHUNK = 8 << 20 };
     unsigned char *buf = malloc(CHUNK);
     size_t got = buf ? fread(buf, 1, CHUNK, in) : 0;
-    pd_status s = buf == NULL    ? pd_fail(PD_ERR_NOMEM, "out of memory")
+    s = buf == NULL              ? pd_fail(PD_ERR_NOMEM, "out of memory")
                   : ferror(in) ? pd_fail(PD_ERR_IO, "cannot read '%s': %s", inpath, strerror(errno))
                                : check_signature(inpath, buf, got);
     if (s == PD_OK)
