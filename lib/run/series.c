@@ -218,9 +218,12 @@ pd_status pd_sim_series_row(const pd_sim *sim, const pd_energy *e, double *row)
     double P[3];
     if (s == PD_OK)
         s = momentum(sim, P);
-    double *r[3];
+    double *r[3] = {NULL, NULL, NULL};
     if (s == PD_OK)
         s = reactions(sim, r);
+    if (sim->piece && (s = pd_comm_agree(s)) != PD_OK && r[0] != NULL)
+        for (int d = 0; d < 3; d++) /* another rank's failure */
+            free(r[d]);
     if (s != PD_OK)
         return s;
     row[k++] = pd_energy_total(e);
