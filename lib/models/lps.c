@@ -887,6 +887,10 @@ static void lps_stress(const pd_sim *sim, void *state, double *out)
     const double dil = PD_LPS_PAIR_FACTOR(K, G);
     double *const *x = sim->p->x;
     double *theta = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
+    if (sim->piece && pd_comm_or(theta == NULL)) { /* every rank, or none, goes on */
+        free(theta);
+        theta = NULL;
+    }
     if (theta == NULL) /* no stress rather than a wrong one */
         return;
 #pragma omp parallel for schedule(static)

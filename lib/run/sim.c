@@ -687,6 +687,10 @@ static void kinetic_each(const pd_sim *sim, double *e)
 double pd_sim_kinetic(const pd_sim *sim)
 {
     double *buf = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
+    if (sim->piece && pd_comm_or(buf == NULL)) { /* every rank, or none, goes on */
+        free(buf);
+        buf = NULL;
+    }
     if (buf == NULL)
         return NAN;
     kinetic_each(sim, buf);
@@ -700,6 +704,10 @@ pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density)
 {
     memset(e, 0, sizeof *e);
     double *buf = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
+    if (sim->piece && pd_comm_or(buf == NULL)) { /* every rank, or none, goes on */
+        free(buf);
+        buf = NULL;
+    }
     if (buf == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the energies");
     kinetic_each(sim, buf);
