@@ -40,7 +40,7 @@ setup() {
     assert_output --partial "usage"
 }
 
-@test "bench.sh: bad BENCH_SKIP, BENCH_SIZES, BENCH_STEPS and BENCH_THREADS are one-line errors" {
+@test "bench.sh: bad BENCH_SKIP, BENCH_SIZES, BENCH_STEPS, BENCH_THREADS and BENCH_MPI_PAIRS are one-line errors" {
     BENCH_SKIP=lammps,foo run sh "$BENCH"
     assert_failure 1
     assert_output "bench.sh: error: BENCH_SKIP: unknown part 'foo' (lammps, lps, effects, roofline, scaling, threads, kernels, files, sweep, plate, frames, shattered, mesh, perturbed, mpi)"
@@ -59,6 +59,9 @@ setup() {
     BENCH_THREADS=two run sh "$BENCH"
     assert_failure 1
     assert_output --partial "BENCH_THREADS must be a positive integer"
+    BENCH_MPI_PAIRS=0 run sh "$BENCH"
+    assert_failure 1
+    assert_output --partial "BENCH_MPI_PAIRS must be a positive integer"
 }
 
 @test "pd-run --timing: a failure row, and the rows' shares add up to at most the wall time" {
