@@ -996,6 +996,10 @@ double pd_sim_max_damage(const pd_sim *sim);
  * masks, in parallel). */
 pd_status pd_sim_damage_stats(const pd_sim *sim, double threshold, double *max_damage,
                               int64_t *above);
+/* The same from the damage of the run's particles, already taken
+ * (pd_damage of the current state; a piece's own rows' on MPI ranks). */
+pd_status pd_sim_damage_stats_of(const pd_sim *sim, const double *damage, double threshold,
+                                 double *max_damage, int64_t *above);
 
 /* The time series of a run (lib/run/series.c; pd-run --series, /series of
  * the run file, man 5 pd-h5): one row per sampled step of
@@ -1022,6 +1026,10 @@ int pd_series_columns(const pd_scene *sc, char (*names)[PD_SERIES_NAME]);
 /* The row of the current state, pd_series_columns(&scene) values; e: the
  * energies of the current state (pd_sim_energy). */
 pd_status pd_sim_series_row(const pd_sim *sim, const pd_energy *e, double *row);
+/* The same with the damage of the current state already taken (NULL: the
+ * row takes it). */
+pd_status pd_sim_series_row_damage(const pd_sim *sim, const pd_energy *e, const double *damage,
+                                   double *row);
 int64_t pd_sim_contact_builds(const pd_sim *sim);
 /* A piece on MPI ranks: the most contact partners one of its list builds
  * took from beyond the piece (fragments that crossed to another rank's
@@ -1405,6 +1413,10 @@ pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds 
  * before the frame, so that a restart from a frame finds the row of its
  * step.  pd_run_file_sample_due: is step one of those still to write? */
 pd_status pd_run_file_sample(pd_file *out, const pd_sim *sim, const pd_energy *e);
+/* The same with the damage of the step already taken (a frame's; NULL: the
+ * row takes it). */
+pd_status pd_run_file_sample_damage(pd_file *out, const pd_sim *sim, const pd_energy *e,
+                                    const double *damage);
 int pd_run_file_sample_due(const pd_file *out, int64_t step);
 /* A run's time series as read (pd_read_series; pd_series_free). */
 typedef struct {

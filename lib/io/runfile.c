@@ -149,18 +149,18 @@ pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds 
         s = pd_comm_agree(s);
     if (s == PD_OK)
         s = pd_sim_energy(sim, &fi.energy, density);
-    if (s == PD_OK) /* the series' row of the step before the frame: a
-                       restart from the frame finds it */
-        s = pd_run_file_sample(out, sim, &fi.energy);
+    /* the frame's damage from its bond states, as pd-damage computes it */
+    const uint64_t *intact = pd_sim_intact(sim);
+    if (s == PD_OK)
+        pd_damage(q, pd_sim_bonds(sim), intact, damage);
+    if (s == PD_OK) /* the series' row of the step before the frame (a
+                       restart from the frame finds it), with its damage */
+        s = pd_run_file_sample_damage(out, sim, &fi.energy, damage);
     if (s == PD_OK && stress) {
         s = pd_sim_stress(sim, stress);
         for (int64_t i = pt.lo; i < pt.lo + pt.rows; i++)
             mises[i] = pd_von_mises(stress + 9 * i);
     }
-    /* the frame's damage from its bond states, as pd-damage computes it */
-    const uint64_t *intact = pd_sim_intact(sim);
-    if (s == PD_OK)
-        pd_damage(q, pd_sim_bonds(sim), intact, damage);
     pd_frame_fields ff = {damage, density, stress, mises};
     /* what a restart needs, then the frame (marked complete last) */
     pd_restart r;

@@ -229,13 +229,19 @@ int pd_run_file_sample_due(const pd_file *out, int64_t step)
 
 pd_status pd_run_file_sample(pd_file *out, const pd_sim *sim, const pd_energy *e)
 {
+    return pd_run_file_sample_damage(out, sim, e, NULL);
+}
+
+pd_status pd_run_file_sample_damage(pd_file *out, const pd_sim *sim, const pd_energy *e,
+                                    const double *damage)
+{
     struct pd_series_plan *plan = out->series;
     if (!pd_run_file_sample_due(out, pd_sim_stepno(sim)))
         return PD_OK;
     double *row = malloc((size_t)plan->ncols * sizeof(double));
     if (row == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the time series");
-    pd_status s = pd_sim_series_row(sim, e, row); /* collective on MPI ranks */
+    pd_status s = pd_sim_series_row_damage(sim, e, damage, row); /* collective on MPI ranks */
     if (out->ranks > 1)
         s = pd_comm_agree(s);
     const int64_t at = plan->base + plan->next;

@@ -198,6 +198,12 @@ static int sphere(double *row, int k, const double x[3], const double v[3], cons
 
 pd_status pd_sim_series_row(const pd_sim *sim, const pd_energy *e, double *row)
 {
+    return pd_sim_series_row_damage(sim, e, NULL, row);
+}
+
+pd_status pd_sim_series_row_damage(const pd_sim *sim, const pd_energy *e, const double *damage,
+                                   double *row)
+{
     const pd_scene *sc = &sim->sc;
     int k = 0;
     row[k++] = (double)sim->step;
@@ -214,7 +220,9 @@ pd_status pd_sim_series_row(const pd_sim *sim, const pd_energy *e, double *row)
         row[k++] = e->damped;
     double maxd;
     int64_t damaged;
-    pd_status s = pd_sim_damage_stats(sim, PD_DAMAGE_THRESHOLD, &maxd, &damaged);
+    pd_status s = damage ? pd_sim_damage_stats_of(sim, damage, PD_DAMAGE_THRESHOLD, &maxd,
+                                                  &damaged)
+                         : pd_sim_damage_stats(sim, PD_DAMAGE_THRESHOLD, &maxd, &damaged);
     double P[3];
     if (s == PD_OK)
         s = momentum(sim, P);

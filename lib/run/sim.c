@@ -785,6 +785,21 @@ void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
             sim->effects[k]->save(sim, sim->state[k], r);
 }
 
+pd_status pd_sim_damage_stats_of(const pd_sim *sim, const double *damage, double threshold,
+                                 double *max_damage, int64_t *above)
+{
+    const pd_piece *pc = sim->piece;
+    double m = 0;
+    int64_t count = 0;
+    for (int64_t i = pc ? pc->own_lo : 0; i < (pc ? pc->own_hi : sim->n); i++) {
+        m = fmax(m, damage[i]);
+        count += damage[i] > threshold;
+    }
+    *max_damage = pc ? pd_comm_max(m) : m;
+    *above = pc ? pd_comm_total(count) : count;
+    return PD_OK;
+}
+
 pd_status pd_sim_damage_stats(const pd_sim *sim, double threshold, double *max_damage,
                               int64_t *above)
 {
@@ -793,27 +808,16 @@ pd_status pd_sim_damage_stats(const pd_sim *sim, double threshold, double *max_d
         return PD_OK;
     /* a piece: its own rows (whole families), then over the ranks */
     double *dmg = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
-    if (pc) { /* every rank takes part */
-        if (!pd_comm_or(dmg == NULL))
-            pd_damage(sim->p, sim->b, pd_sim_intact(sim), dmg);
-        else {
-            free(dmg);
-            dmg = NULL;
-        }
-    } else if (dmg)
-        pd_damage(sim->p, sim->b, pd_sim_intact(sim), dmg);
+    if (pc && pd_comm_or(dmg == NULL)) { /* every rank, or none, goes on */
+        free(dmg);
+        dmg = NULL;
+    }
     if (dmg == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the damage");
-    double m = 0;
-    int64_t count = 0;
-    for (int64_t i = pc ? pc->own_lo : 0; i < (pc ? pc->own_hi : sim->n); i++) {
-        m = fmax(m, dmg[i]);
-        count += dmg[i] > threshold;
-    }
+    pd_damage(sim->p, sim->b, pd_sim_intact(sim), dmg);
+    pd_status s = pd_sim_damage_stats_of(sim, dmg, threshold, max_damage, above);
     free(dmg);
-    *max_damage = pc ? pd_comm_max(m) : m;
-    *above = pc ? pd_comm_total(count) : count;
-    return PD_OK;
+    return s;
 }
 
 double pd_sim_max_damage(const pd_sim *sim)
