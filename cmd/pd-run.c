@@ -922,10 +922,9 @@ struct held {
     pd_file *in, *out;
     pd_particles *p;
     pd_bonds *b;
-    pd_sim *sim;   /* the whole body's run (on several MPI ranks, rank 0's
-                      frames and status lines come from it)            */
+    pd_sim *sim;   /* the whole body's run (NULL on several MPI ranks)  */
     pd_sim *piece; /* NULL, or on several MPI ranks this rank's piece of
-                      it, which steps (pd_sim_piece)                   */
+                      the body, which steps (pd_sim_piece_new)         */
     pd_sets *sets;
     pd_restart r;
     double *v0[3];
@@ -936,6 +935,7 @@ struct held {
     double t_setup;          /* its step 0 (pd_sim_setup), s */
     int64_t nbonds;          /* the whole body's directed bonds */
     int64_t iterations;      /* --relax: the iterations of its load steps */
+    int64_t nofail;          /* particles of the --no-failure sets */
 };
 
 static void release(struct held *h)
@@ -986,7 +986,7 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
 {
     const pd_particles *p = h->p;
     const pd_scene *sc = &o->spec.sc;
-    const pd_sim *sim = h->sim;
+    const pd_sim *sim = h->piece ? h->piece : h->sim; /* what the whole body's run would be */
     fprintf(stderr,
             PROG ": %lld particles, %lld bonds; effects: %s\n" PROG
                  ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
@@ -1022,7 +1022,7 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
         for (int k = 0; k < sc->nno_failure; k++)
             fprintf(stderr, " %s", sc->no_failure[k]);
         fprintf(stderr, ": no bond of their %lld particles breaks\n",
-                (long long)pd_sim_no_failure(sim));
+                (long long)h->nofail);
     }
     if (sc->damping > 0 && sc->relax)
         fprintf(stderr, PROG ": --damping %g 1/s: the relaxation's damping\n", sc->damping);
@@ -1066,15 +1066,21 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
                 h->report.frames == 1 ? "" : "s");
 }
 
-/* The whole body, once a rank steps its piece. */
+/* The whole body and its restart data, once a rank steps its piece. */
 static void drop_whole(struct held *h)
 {
-    pd_sim_free(h->sim);
     pd_bonds_free(h->b);
     pd_particles_free(h->p);
-    h->sim = NULL;
+    pd_restart_free(&h->r);
+    memset(&h->r, 0, sizeof h->r);
+    for (int d = 0; d < 3; d++) {
+        free(h->v0[d]);
+        h->v0[d] = NULL;
+    }
+    free(h->bits0);
     h->b = NULL;
     h->p = NULL;
+    h->bits0 = NULL;
 }
 
 /* A fresh run's step 0 (pd_sim_setup), before its file is made: a start
@@ -1130,12 +1136,15 @@ static int start(struct options *o, struct held *h, int64_t *first)
     /* a row of the series every --series N steps, by default the status
      * interval (not a line of the scene's text: a restart takes its own) */
     sc->series = o->series_every > 0 ? o->series_every : status_interval(o, sc->steps - *first);
-    if (s == PD_OK)
+    if (s == PD_OK && !ranks)
         s = pd_sim_new(h->p, h->b, sc, &h->sim);
-    if (s == PD_OK && restart)
+    if (s == PD_OK && restart && !ranks)
         s = pd_sim_restore(h->sim, *first, &h->r, h->v0, h->bits0);
-    if (s == PD_OK && ranks) /* this rank's piece of the body */
-        s = pd_sim_piece(h->sim, &h->piece);
+    if (ranks) /* this rank's piece of the body, without the whole body's run */
+        s = cli_agreed(s);
+    if (s == PD_OK && ranks)
+        s = pd_sim_piece_new(h->p, h->b, sc, *first, restart ? &h->r : NULL, h->v0,
+                             restart ? h->bits0 : NULL, &h->piece);
     s = cli_agreed(s);
     if (s == PD_OK && !restart) /* step 0's forces, and the check of its energy */
         s = start_energy(h);
@@ -1153,7 +1162,8 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_file_create_ranks(o->output, &h->out);
     if (s == PD_OK)
         s = pd_run_file_start(h->out, restart, restart ? h->out : h->in, h->p, h->b, h->sets,
-                              sc, pd_sim_effects(h->sim), h->cmdline ? h->cmdline : PROG,
+                              sc, pd_sim_effects(h->piece ? h->piece : h->sim),
+                              h->cmdline ? h->cmdline : PROG,
                               h->text, *first);
     s = cli_agreed(s);
     if (!restart || ranks) { /* read only (one rank's restart: the copy that goes on) */
@@ -1161,6 +1171,9 @@ static int start(struct options *o, struct held *h, int64_t *first)
         h->in = NULL;
     }
     h->nbonds = h->b ? h->b->count : 0;
+    if (s == PD_OK && sc->nno_failure > 0) /* collective */
+        h->nofail = h->piece ? pd_comm_total(pd_sim_no_failure(h->piece))
+                             : pd_sim_no_failure(h->sim);
     if (s == PD_OK && h->piece && pd_comm_rank() > 0)
         drop_whole(h); /* rank 0's tells the run's set-up, then goes too */
     if (s != PD_OK) {
@@ -1337,7 +1350,7 @@ static int run_main(int argc, char **argv)
                      "its ghosts; halo of at most %.3g MB a rank a step; every rank writes "
                      "its rows of '%s' (parallel HDF5)\n",
                 pd_comm_size(), (long long)rows, (double)halo / 1e6, o.output);
-    if (h.piece && h.sim)
+    if (h.piece)
         drop_whole(&h);
     const pd_sim *sim = h.piece ? h.piece : h.sim;
     double t_output = 0, t0 = pd_wtime();

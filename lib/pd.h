@@ -700,13 +700,7 @@ pd_status pd_comm_error_from(int from, pd_status s);
 /* Every rank waits for every other (collective). */
 void pd_comm_barrier(void);
 
-/* This rank's piece of the run `whole` (a pd_sim_new of the whole body,
- * restored or not, not yet set up), for pd_comm_size() ranks: *piece is a
- * run of its own (its own particles and bonds, freed with it), stepped with
- * pd_sim_setup, pd_sim_step or pd_sim_relax by every rank together.  A body
- * the rank count cannot share (fewer than two blocks a rank) is refused
- * with PD_ERR_INVALID. */
-pd_status pd_sim_piece(const pd_sim *whole, pd_sim **piece);
+/* This rank's piece of a run: pd_sim_piece_new (below, with pd_restart). */
 /* The rows [*lo, *hi) of the whole body that this piece owns. */
 void pd_sim_owned(const pd_sim *piece, int64_t *lo, int64_t *hi);
 /* What one process writes of a run into its run file: its own rows of
@@ -1380,6 +1374,20 @@ pd_status pd_plan_restart_damping(pd_file *f);
  * directed bonds, in the restart slots (nothing when it is there). */
 pd_status pd_plan_restart_history(pd_file *f, int64_t nbonds, int width);
 void pd_restart_free(pd_restart *r);
+
+/* This rank's piece of a run of the scene sc on the body p, b, for
+ * pd_comm_size() ranks (collective), cut as pd_sim_new would cut the whole
+ * body's kernel but without building the whole body's run: *piece is a run
+ * of its own (its own particles and bonds, freed with it), not yet set up,
+ * stepped with pd_sim_setup, pd_sim_step or pd_sim_relax by every rank
+ * together.  A fresh run: r NULL, intact NULL (b's states).  Going on from
+ * restart data (pd_run_file_load: the whole body's r, v and directed bond
+ * states intact) at `step`: the piece takes its rows and bonds of them.  A
+ * body the rank count cannot share (fewer than two blocks a rank) is
+ * refused with PD_ERR_INVALID. */
+pd_status pd_sim_piece_new(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
+                           int64_t step, const pd_restart *r, double *const v[3],
+                           const uint64_t *intact, pd_sim **piece);
 /* A model file: the header (history from `from`, may be NULL, and
  * `cmdline`), the particles, the bonds (b may be NULL: a lattice before
  * pd-bonds) and the sets (may be NULL). */

@@ -308,6 +308,13 @@ with h5py.File('k.h5') as f:
     same_on_ranks "2 3" 1 --scene impact.scene --damping 3e4 bodys.h5
     same_on_ranks "3" 1 --scene impact.scene --damping 3e4,rim bodys.h5
     same_on_ranks "2 3" 1 --scene impact.scene --no-failure rim --damping 1e4,core bodys.h5
+    # the log counts the set's particles over the pieces, each once
+    run -0 pd-run --threads 1 --scene impact.scene --no-failure rim --steps 1 bodys.h5 -o l1.h5
+    local line
+    line=$(printf '%s\n' "${lines[@]}" | grep -- "--no-failure rim: no bond of their")
+    [ -n "$line" ]
+    run -0 mpi 3 --threads 1 --scene impact.scene --no-failure rim --steps 1 bodys.h5 -o l3.h5
+    assert_line "$line"
     run -0 "$PY" -c "
 import h5py
 with h5py.File('np3.h5') as f:

@@ -68,6 +68,33 @@ static void row_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intac
         __atomic_fetch_or(&h->intact[(q - 1) >> 6], word, __ATOMIC_RELAXED);
 }
 
+int64_t pd_half_block_of(int64_t n, int64_t span, int64_t *nblocks)
+{
+    /* blocks of at least `span` rows (a block writes only to itself and
+     * the next), as many as fit rounded down to a multiple of 4, so that
+     * each of the two phases has an even count: two threads share a phase
+     * evenly (a rule of the body alone: the sums' order, hence every bit,
+     * is the same at any thread count) */
+    int64_t nb = span > 0 ? n / span : n;
+    nb = nb >= 4 ? nb - nb % 4 : nb > 0 ? nb : 1;
+    int64_t block = (n + nb - 1) / nb;
+    block = block > span ? block : span;
+    *nblocks = block > 0 ? (n + block - 1) / block : 0;
+    return block;
+}
+
+int64_t pd_half_span(const pd_bonds *b)
+{
+    int64_t span = 1;
+#pragma omp parallel for schedule(static) reduction(max : span)
+    for (int64_t i = 0; i < b->n; i++) {
+        pd_bond_iter it;
+        for (pd_family_start_partners(b, NULL, i, &it); pd_family_next(&it);)
+            span = it.j - i > span ? it.j - i : span;
+    }
+    return span;
+}
+
 pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
 {
     int64_t n = b->n, count = 0;
@@ -103,16 +130,7 @@ pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++)
         row_state(h, b, b->intact, i, 1);
-    /* blocks of at least `span` rows (a block writes only to itself and
-     * the next), as many as fit rounded down to a multiple of 4, so that
-     * each of the two phases has an even count: two threads share a phase
-     * evenly (a rule of the body alone: the sums' order, hence every bit,
-     * is the same at any thread count) */
-    int64_t nb = span > 0 ? n / span : n;
-    nb = nb >= 4 ? nb - nb % 4 : nb > 0 ? nb : 1;
-    h->block = (n + nb - 1) / nb;
-    h->block = h->block > span ? h->block : span;
-    h->nblocks = h->block > 0 ? (n + h->block - 1) / h->block : 0;
+    h->block = pd_half_block_of(n, span, &h->nblocks);
     h->walk = h->nblocks;
     h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
     if (h->released == NULL)

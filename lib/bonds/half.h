@@ -50,6 +50,11 @@ typedef struct {
  * lib/models/pmb.c's pd_half_weights adds the lengths and the weights
  * c V nu that its bond list walks. */
 pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h);
+/* The largest span j - i of a bond of b (at least 1), and the rows of
+ * pd_half_build's blocks for n rows of that span (*nblocks of them): what
+ * the half bonds of b would be cut into, without building them. */
+int64_t pd_half_span(const pd_bonds *b);
+int64_t pd_half_block_of(int64_t n, int64_t span, int64_t *nblocks);
 void pd_half_free(pd_half_bonds *h);
 /* Blocks of `block` rows (a piece of a body cut as the whole body is,
  * lib/run/piece.c), in place of pd_half_build's own: at least every

@@ -1127,26 +1127,3 @@ const pd_model pd_model_eps = {
     .stencil = no_stencil, .dissipative = 1, .history_width = 1, .needs = eps_needs, .takes = lps_takes,
     .fields = PD_FIELD_ENERGY | PD_FIELD_STRESS, .params = eps_params,
     .describe = eps_describe};
-
-void pd_lps_copy_history(const pd_sim *whole, pd_sim *piece)
-{
-    int w = 0, ww = 0;
-    double *h = pd_sim_bond_history(piece, &w);
-    const double *hw = pd_sim_bond_history(whole, &ww);
-    if (h == NULL || hw == NULL || w != ww)
-        return;
-    const pd_bonds *b = piece->b, *bw = whole->b;
-    const int64_t first = piece->piece->first;
-    for (int64_t i = 0; i < piece->n; i++) {
-        /* a piece's family is the whole one's, in order, less the partners
-         * beyond the piece */
-        int64_t kw = bw->offset[first + i];
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            const int32_t j = (int32_t)(b->neighbor[k] + first);
-            while (kw < bw->offset[first + i + 1] && bw->neighbor[kw] != j)
-                kw++;
-            if (kw < bw->offset[first + i + 1])
-                memcpy(h + k * w, hw + kw * w, (size_t)w * sizeof(double));
-        }
-    }
-}

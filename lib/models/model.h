@@ -74,9 +74,10 @@ pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd
  * i's family (lib/models/pmb.c). */
 void pd_half_contact_energy(const pd_sim *sim, double *e);
 
-/* A body on MPI ranks (lib/run/piece.c): the whole run's bond history of
- * VES and EPS into a piece (a restart's). */
-void pd_lps_copy_history(const pd_sim *whole, pd_sim *piece);
+/* The AVX-512 rows' contact cap over the particles p (the whole body's,
+ * also for a piece of it): 1.35 (r_i + r_j) when every node radius is the
+ * same, else +inf, m. */
+double pd_half_contact_cap(const pd_particles *p);
 
 /* The models' forces in the step's effect table. */
 extern const pd_effect pd_effect_pmb;

@@ -502,6 +502,16 @@ void pd_half_contact_energy(const pd_sim *sim, double *e)
     }
 }
 
+double pd_half_contact_cap(const pd_particles *p)
+{
+    double rmin = INFINITY, rmax = 0;
+    for (int64_t i = 0; i < p->n; i++) {
+        rmin = fmin(rmin, p->radius[i]);
+        rmax = fmax(rmax, p->radius[i]);
+    }
+    return rmin == rmax ? PD_CONTACT_RADIUS_FAC * (rmax + rmax) : INFINITY;
+}
+
 /* Does this run take the AVX-512 rows?  Then h->pack is there. */
 static pd_status pmb_rows_init(pd_sim *sim)
 {
@@ -521,12 +531,7 @@ static pd_status pmb_rows_init(pd_sim *sim)
     pd_status s = pd_half_gap(h, sim->b, sim->p, &h->gap);
     if (s != PD_OK)
         return s;
-    double rmin = INFINITY, rmax = 0;
-    for (int64_t i = 0; i < sim->n; i++) {
-        rmin = fmin(rmin, sim->p->radius[i]);
-        rmax = fmax(rmax, sim->p->radius[i]);
-    }
-    h->contact_cap = rmin == rmax ? PD_CONTACT_RADIUS_FAC * (rmax + rmax) : INFINITY;
+    h->contact_cap = pd_half_contact_cap(sim->p);
     h->contact = 1;
 #else
     (void)sim;

@@ -137,87 +137,102 @@ static int64_t piece_first_block(const int64_t *K, int r)
     return r == 0 ? 0 : (K[r] - 1) - ((K[r] - 1) & 1);
 }
 
-/* The run's step, time and sums over the body (the same on every rank):
- * the energies' terms, the indenter's force, the projectile (which every
- * rank moves alike). */
-static void copy_sums(const pd_sim *from, pd_sim *to)
+/* The piece's bond history (VES, EPS) from the whole body's hw, w values
+ * for each directed bond of b in its families' order: NULL out of memory,
+ * or (*bad) when a piece's family is not the whole one's less the partners
+ * beyond the piece, in order. */
+static double *slice_history(const pd_particles *p, const pd_bonds *b, const double *hw, int w,
+                             const pd_piece *pc, int *bad)
 {
-    to->step = from->step;
-    to->time = from->time;
-    to->power = from->power;
-    to->work = from->work;
-    to->released = from->released;
-    to->energy0 = from->energy0;
-    to->penalty0 = from->penalty0;
-    to->damped = from->damped;
-    to->damp_power = from->damp_power;
-    to->lost_energy = from->lost_energy;
-    memcpy(to->ind_f, from->ind_f, sizeof to->ind_f);
-    memcpy(to->proj_x, from->proj_x, sizeof to->proj_x);
-    memcpy(to->proj_v, from->proj_v, sizeof to->proj_v);
-    memcpy(to->proj_f, from->proj_f, sizeof to->proj_f);
-    to->relaxed = from->relaxed; /* the last load step's relaxation */
-}
-
-/* The whole body's state into the piece: its rows', the run's sums. */
-static void copy_state(const pd_sim *whole, pd_sim *sim)
-{
-    const pd_piece *pc = sim->piece;
-    const size_t bytes = (size_t)sim->n * sizeof(double);
-    for (int d = 0; d < 3; d++) {
-        memcpy(sim->y[d], whole->y[d] + pc->first, bytes);
-        memcpy(sim->v[d], whole->v[d] + pc->first, bytes);
-        memcpy(sim->f[d], whole->f[d] + pc->first, bytes);
-    }
-    if (whole->s0) {
-        memcpy(sim->s0, whole->s0 + pc->first, bytes);
-        memcpy(sim->s0_new, whole->s0_new + pc->first, bytes);
-    }
-    if (whole->lost) {
-        sim->lost = malloc((size_t)sim->n); /* checked by the caller */
-        if (sim->lost) {
-            memcpy(sim->lost, whole->lost + pc->first, (size_t)sim->n);
-            for (int64_t i = 0; i < sim->n; i++)
-                sim->nlost += sim->lost[i] != 0;
+    const pd_bonds *q = pc->b;
+    double *h = malloc((size_t)(q->count > 0 ? q->count : 1) * (size_t)w * sizeof(double));
+    *bad = 0;
+    for (int64_t i = 0; h && i < pc->p->n && !*bad; i++) {
+        pd_bond_iter it, jt;
+        pd_family_start_partners(b, p, pc->first + i, &it);
+        for (pd_family_start_partners(q, pc->p, i, &jt); pd_family_next(&jt) && !*bad;) {
+            int found = 0;
+            while (!found && pd_family_next(&it))
+                found = it.j == jt.j + pc->first;
+            if (found)
+                memcpy(h + jt.q * w, hw + it.q * w, (size_t)w * sizeof(double));
+            *bad = !found;
         }
     }
-    copy_sums(whole, sim);
-    memcpy(sim->box_lo, whole->box_lo, sizeof sim->box_lo);
-    memcpy(sim->box_hi, whole->box_hi, sizeof sim->box_hi);
-    sim->half.gap = whole->half.gap; /* the whole body's (the bond list's rows' contact) */
-    sim->half.contact_cap = whole->half.contact_cap;
-    pd_piece_ghosts_rest(sim);
+    return h;
 }
 
-/* A run gone on from a restart has a contact list built from the positions
- * of its last build: the piece builds its own from them (collective). */
-static pd_status copy_contact(const pd_sim *whole, pd_sim *sim)
+/* The piece goes on from the whole body's restart data r (its rows', and
+ * its bonds' history), at `step`, with velocities v; its bond states are
+ * its bonds' (sliced from the restart's).  Collective (the contact list's
+ * build). */
+static pd_status piece_restore(const pd_particles *p, const pd_bonds *b, pd_sim *sim,
+                               int64_t step, const pd_restart *r, double *const v[3])
 {
-    pd_restart r, mine;
-    memset(&r, 0, sizeof r);
-    pd_sim_accumulated(whole, &r);
-    if (r.contact_builds <= 0 || r.contact_position[0] == NULL)
-        return PD_OK;
-    memset(&mine, 0, sizeof mine);
-    mine.contact_builds = r.contact_builds;
-    for (int d = 0; d < 3; d++)
-        mine.contact_position[d] = r.contact_position[d] + sim->piece->first;
-    for (int k = 0; k < sim->neffects; k++)
-        if (sim->effects[k] == &pd_effect_contact)
-            return sim->effects[k]->restore(sim, sim->state[k], &mine);
-    return PD_OK;
+    const pd_piece *pc = sim->piece;
+    const int64_t g = pc->first;
+    pd_restart mine = *r;
+    double *vel[3];
+    for (int d = 0; d < 3; d++) {
+        mine.position[d] = r->position[d] + g;
+        mine.force[d] = r->force[d] + g;
+        mine.contact_position[d] = r->contact_position[d] ? r->contact_position[d] + g : NULL;
+        vel[d] = v[d] + g;
+    }
+    mine.s0 = r->s0 ? r->s0 + g : NULL;
+    mine.lost = r->lost ? r->lost + g : NULL;
+    mine.bond_history = NULL;
+    mine.history_bonds = 0;
+    int bad = 0;
+    const int history = r->bond_history != NULL && r->history_bonds == b->count;
+    if (history) {
+        mine.bond_history = slice_history(p, b, r->bond_history, r->history_width, pc, &bad);
+        mine.history_bonds = pc->b->count;
+    }
+    pd_status s = PD_OK;
+    if (r->bond_history && !history)
+        s = pd_fail(PD_ERR_FORMAT, "the restart data have a bond history of %lld directed "
+                                   "bonds, the body %lld",
+                    (long long)r->history_bonds, (long long)b->count);
+    else if (history && mine.bond_history == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the bond history of a piece");
+    else if (bad)
+        s = pd_fail(PD_ERR_INVALID, "a piece's families are not the whole body's");
+    s = pd_comm_agree(s); /* the contact list's build below is collective */
+    if (s == PD_OK)
+        s = pd_sim_restore(sim, step, &mine, vel, pc->b->intact);
+    free(mine.bond_history);
+    return s;
 }
 
-pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
+/* This rank's piece of the body p, b (bond states `intact`) under the
+ * scene sc, at rest at step 0, with the whole body's figures. */
+static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
+                           const uint64_t *intact, pd_sim **out)
 {
     *out = NULL;
     const int P = pd_comm_size(), me = pd_comm_rank();
-    /* the whole body's blocks: the first row of each, and the end */
-    const int grid = whole->grid != NULL;
-    int64_t nb = grid ? pd_grid_blocks(whole->grid, NULL, NULL, NULL) : whole->half.nblocks;
-    if (grid && nb == 0)
+    const pd_model *model = pd_model_of(sc->model);
+    if (model == NULL)
+        return pd_fail(PD_ERR_INVALID, "unknown model %d", (int)sc->model);
+    /* how the whole body's kernel cuts it, as pd_sim_new would (the
+     * lattice stencil's blocks, else the bond list's), without its run:
+     * the first row of each block, and the end */
+    pd_grid *plan = NULL;
+    pd_status st = pd_grid_plan(p, b, sc, model->stencil(sc), &plan);
+    if (st != PD_OK)
+        return st;
+    const int grid = plan != NULL;
+    int64_t nb = 0, block = 0;
+    if (grid)
+        nb = pd_grid_blocks(plan, NULL, NULL, NULL);
+    else
+        block = pd_half_block_of(p->n, pd_half_span(b), &nb);
+    if (grid && nb == 0) {
+        pd_grid_free(plan);
         return pd_fail(PD_ERR_INVALID, "on MPI ranks the particles must be in lattice order, as "
                                        "pd-bonds writes them");
+    }
     pd_piece *pc = calloc(1, sizeof *pc);
     int64_t *start = malloc((size_t)(nb + 1) * sizeof(int64_t));
     int64_t *K = malloc((size_t)(P + 1) * sizeof(int64_t));
@@ -231,21 +246,21 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
         free(start);
         free(K);
         pd_piece_free(pc);
+        pd_grid_free(plan);
         return pd_fail(PD_ERR_NOMEM, "out of memory for the pieces of the body");
     }
-    const int64_t n = whole->n;
+    const int64_t n = p->n;
     if (grid) {
         int thick;
-        pd_grid_blocks(whole->grid, start, pc->axis, &thick);
-        pc->table = whole->grid;
+        pd_grid_blocks(plan, start, pc->axis, &thick);
+        pc->table = plan;
         double hi[3];
-        pd_particles_bounds(whole->p, pc->origin, hi);
+        pd_particles_bounds(p, pc->origin, hi);
     } else {
-        pc->half_block = whole->half.block;
+        pc->half_block = block;
         for (int64_t k = 0; k <= nb; k++)
             start[k] = k * pc->half_block < n ? k * pc->half_block : n;
     }
-    pd_status st = PD_OK;
     if (nb < 2 * (int64_t)P)
         st = pd_fail(PD_ERR_INVALID,
                      "the body is cut into %lld blocks and each of the %d MPI ranks needs two: "
@@ -291,42 +306,64 @@ pd_status pd_sim_piece(const pd_sim *whole, pd_sim **out)
         const int64_t halo = rows - (pc->own_hi - pc->own_lo) + pc->send_down + pc->send_up;
         pc->buf = malloc((size_t)(halo > 0 ? halo : 1) * 4 * sizeof(double));
         pc->sum3 = malloc((size_t)(rows > 0 ? rows : 1) * 3 * sizeof(double));
-        pc->p = slice_particles(whole->p, pc->first, g1);
+        pc->p = slice_particles(p, pc->first, g1);
         if (!pc->buf || !pc->sum3 || !pc->p)
             st = pd_fail(PD_ERR_NOMEM, "out of memory for a piece of the body");
         /* the stencil walks a lattice body's compact families: the piece's
          * stay compact too; else its lists */
-        if (st == PD_OK && grid && !pd_bonds_has_lists(whole->b) && whole->b->stencil)
-            st = slice_compact(whole->p, whole->b, pd_sim_intact(whole), pc->p, pc->first,
-                               &pc->b);
+        if (st == PD_OK && grid && !pd_bonds_has_lists(b) && b->stencil)
+            st = slice_compact(p, b, intact, pc->p, pc->first, &pc->b);
         if (st == PD_OK && pc->b == NULL)
-            st = slice_bonds(whole->p, whole->b, pd_sim_intact(whole), pc->first, g1, &pc->b);
+            st = slice_bonds(p, b, intact, pc->first, g1, &pc->b);
     }
     free(start);
     free(K);
-    pd_scene sc = whole->sc; /* its sets: their members in the piece */
-    pd_sim *sim = NULL;
+    pd_sim *sim = NULL; /* its sets: their members in the piece */
     if (st == PD_OK)
-        st = pd_sim_new_cut(pc->p, pc->b, &sc, pc, &sim);
+        st = pd_sim_new_cut(pc->p, pc->b, sc, pc, &sim);
     if (st == PD_OK && grid && pd_grid_blocks(sim->grid, NULL, NULL, NULL) < pc->own_blk_hi)
         st = pd_fail(PD_ERR_INVALID, "a piece of the body is not cut as the whole body is");
+    pc->table = NULL; /* the piece's stencil has its lengths and volumes */
+    pd_grid_free(plan);
     if (st != PD_OK) {
         pd_sim_free(sim);
         pd_piece_free(pc);
         return st;
     }
     sim->piece_owned = 1;
-    copy_state(whole, sim);
-    pd_lps_copy_history(whole, sim);
-    st = copy_contact(whole, sim);
+    /* the whole body's figures: the box outside which a particle is lost,
+     * and the AVX-512 rows' contact gap and cap */
+    pd_lost_box(p, sc->lost_margin, sim->box_lo, sim->box_hi);
+    if (sim->half.contact) {
+        pd_half_bonds h;
+        memset(&h, 0, sizeof h);
+        st = pd_half_build(b, &h);
+        if (st == PD_OK)
+            st = pd_half_gap(&h, b, p, &sim->half.gap);
+        pd_half_free(&h);
+        sim->half.contact_cap = pd_half_contact_cap(p);
+    }
     if (st != PD_OK) {
         pd_sim_free(sim);
         return st;
     }
-    if (whole->lost && sim->lost == NULL) {
+    *out = sim;
+    return PD_OK;
+}
+
+pd_status pd_sim_piece_new(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
+                           int64_t step, const pd_restart *r, double *const v[3],
+                           const uint64_t *intact, pd_sim **out)
+{
+    pd_sim *sim = NULL;
+    pd_status s = pd_comm_agree(piece_cut(p, b, sc, intact ? intact : b->intact, &sim));
+    if (s == PD_OK && r)
+        s = piece_restore(p, b, sim, step, r, v);
+    if (s != PD_OK) {
         pd_sim_free(sim);
-        return pd_fail(PD_ERR_NOMEM, "out of memory for lost particles");
+        return s;
     }
+    pd_piece_ghosts_rest(sim);
     *out = sim;
     return PD_OK;
 }

@@ -47,15 +47,13 @@ double pd_lost_margin_default(const pd_particles *p)
     return PD_LOST_MARGIN_FAC * edge;
 }
 
-/* The box outside which a particle is lost: the reference bounding box
- * grown by the margin on every side. */
-static void lost_box(pd_sim *sim)
+void pd_lost_box(const pd_particles *p, double lost_margin, double lo[3], double hi[3])
 {
-    double margin = sim->sc.lost_margin > 0 ? sim->sc.lost_margin : pd_lost_margin_default(sim->p);
-    pd_particles_bounds(sim->p, sim->box_lo, sim->box_hi);
+    double margin = lost_margin > 0 ? lost_margin : pd_lost_margin_default(p);
+    pd_particles_bounds(p, lo, hi);
     for (int d = 0; d < 3; d++) {
-        sim->box_lo[d] -= margin;
-        sim->box_hi[d] += margin;
+        lo[d] -= margin;
+        hi[d] += margin;
     }
 }
 
@@ -194,7 +192,7 @@ pd_status pd_sim_new_cut(const pd_particles *p, const pd_bonds *b, const pd_scen
     if (s->has_failure)
         for (size_t i = 0; i < n; i++)
             sim->s0[i] = sim->s0_new[i] = DBL_MAX;
-    lost_box(sim);
+    pd_lost_box(p, s->lost_margin, sim->box_lo, sim->box_hi);
     st = set_rows(sim);
     if (st != PD_OK) {
         pd_sim_free(sim);
@@ -874,8 +872,11 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
 
 int64_t pd_sim_no_failure(const pd_sim *sim)
 {
-    int64_t n = 0;
-    for (int64_t i = 0; sim->nofail && i < sim->n; i++)
+    int64_t n = 0, lo, hi; /* a piece: its own rows' */
+    pd_sim_owned(sim, &lo, &hi);
+    lo -= sim->piece ? sim->piece->first : 0;
+    hi -= sim->piece ? sim->piece->first : 0;
+    for (int64_t i = lo; sim->nofail && i < hi; i++)
         n += sim->nofail[i];
     return n;
 }

@@ -238,8 +238,6 @@ void pd_sim_add_released(pd_sim *sim, const double *released, int64_t nblocks);
  * takes them over the whole body: over the ranks, of the rows each piece
  * owns.  Every rank calls it and gets the same sums. */
 void pd_sim_sum(const pd_sim *sim, const double *const *x, int m, double *sums);
-/* lib/run/sim.c, for lib/run/piece.c: pd_sim_new with the cut of a piece's
- * kernel taken from `piece` (NULL: its own). */
 /* lib/state/halo.c: a piece freed; for the step: the ghosts' positions (and s0, with
  * failure) from their owners; the ghosts' forces and velocities zeroed; n
  * values of each rank's (its own rows', in row order) added to *sum in
@@ -251,8 +249,13 @@ void pd_piece_exchange(pd_sim *sim, double *const *a, int m);
 void pd_piece_ghosts_rest(pd_sim *sim);
 pd_status pd_piece_add_in_order(const pd_sim *sim, const double *v, int64_t n, double *sum);
 void pd_piece_free(pd_piece *pc);
+/* lib/run/sim.c, for lib/run/piece.c: pd_sim_new with the cut of a piece's
+ * kernel taken from `piece` (NULL: its own); the box outside which a
+ * particle of the body p is lost (its bounding box grown by lost_margin,
+ * or when 0 by pd_lost_margin_default, on every side). */
 pd_status pd_sim_new_cut(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
                          pd_piece *piece, pd_sim **out);
+void pd_lost_box(const pd_particles *p, double lost_margin, double lo[3], double hi[3]);
 void pd_sim_indenter_centre(const pd_sim *sim, double c[3]);
 
 

@@ -556,24 +556,26 @@ void pd_grid_sync(pd_sim *sim, pd_grid *G)
     G->epoch = h->epoch;
 }
 
-pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
+/* May the model's stencil `kind` walk the body p, b at all?  PMB with one
+ * c and s00 for every bond, or LPS with an influence function of |xi|
+ * alone; equal volumes and radii. */
+static int grid_candidate(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
+                          pd_stencil_kind kind, const double *kfail)
 {
-    *out = NULL;
-    const pd_particles *p = sim->p;
-    const pd_bonds *b = sim->b;
-    const pd_scene *sc = &sim->sc;
-    /* the model's stencil (PMB with one c and s00 for every bond, or LPS
-     * with an influence function of |xi| alone); equal volumes and radii */
-    const int lps = kind == PD_STENCIL_LPS;
-    if (kind == PD_STENCIL_NONE || sc->bond_list || sim->half.kfail || p->n < 2 ||
-        b->count == 0)
-        return PD_OK;
+    if (kind == PD_STENCIL_NONE || sc->bond_list || kfail || p->n < 2 || b->count == 0)
+        return 0;
     for (int64_t i = 1; i < p->n; i++)
         if (p->volume[i] != p->volume[0] || p->radius[i] != p->radius[0])
-            return PD_OK;
-    pd_grid *G = calloc(1, sizeof *G);
-    if (G == NULL)
-        return pd_fail(PD_ERR_NOMEM, "out of memory for the lattice bonds");
+            return 0;
+    return 1;
+}
+
+/* G's lattice, stencil, gap, segments and blocks for the body p, b (a
+ * piece: the whole body's axes, lattice and table): 1 when b's bonds are
+ * the stencil, 0 when they are not, -1 out of memory. */
+static int grid_lay(pd_grid *G, const pd_particles *p, const pd_bonds *b, const pd_piece *piece,
+                    int lps)
+{
     const int64_t n = p->n;
     G->n = n;
     for (int d = 0; d < 3; d++)
@@ -581,12 +583,12 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
     int64_t *order = NULL, *inv = NULL;
     int ok = G->lc[0] && G->lc[1] && G->lc[2] ? 1 : -1;
     G->blk0 = -1;
-    if (ok > 0 && sim->piece) { /* a piece: the whole body's axes and lattice */
+    if (ok > 0 && piece) { /* a piece: the whole body's axes and lattice */
         int32_t *c[3];
         for (int a = 0; a < 3; a++)
-            c[G->axis[a] = sim->piece->axis[a]] = G->lc[a];
-        ok = pd_lattice_sites(p, sim->piece->origin, p->spacing, c);
-        G->blk0 = sim->piece->blk0;
+            c[G->axis[a] = piece->axis[a]] = G->lc[a];
+        ok = pd_lattice_sites(p, piece->origin, p->spacing, c);
+        G->blk0 = piece->blk0;
     } else if (ok > 0)
         ok = pd_lattice_coords(p, G->axis, G->lc);
     if (ok > 0 && (order = pd_lattice_sort(n, G->lc)) == NULL)
@@ -610,8 +612,8 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
     free(order);
     if (ok > 0)
         ok = build_stencil(G, p, b);
-    if (ok > 0 && sim->piece && sim->piece->table) { /* the whole body's table */
-        const pd_grid *W = sim->piece->table;
+    if (ok > 0 && piece && piece->table) { /* the whole body's table */
+        const pd_grid *W = piece->table;
         ok = W->nk == G->nk && W->reach == G->reach &&
              memcmp(W->off, G->off, (size_t)G->nk * sizeof *G->off) == 0;
         for (int k = 0; k < G->nk && ok; k++) {
@@ -643,6 +645,40 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
             pairs += G->seg[s].hi - G->seg[s].lo;
         ok = 2 * pairs == b->count;
     }
+    free(inv);
+    return ok;
+}
+
+pd_status pd_grid_plan(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
+                       pd_stencil_kind kind, pd_grid **out)
+{
+    *out = NULL;
+    if (!grid_candidate(p, b, sc, kind, NULL))
+        return PD_OK;
+    pd_grid *G = calloc(1, sizeof *G);
+    const int ok = G ? grid_lay(G, p, b, NULL, kind == PD_STENCIL_LPS) : -1;
+    if (ok <= 0) {
+        pd_grid_free(G);
+        return ok < 0 ? pd_fail(PD_ERR_NOMEM, "out of memory for the lattice bonds") : PD_OK;
+    }
+    *out = G;
+    return PD_OK;
+}
+
+pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
+{
+    *out = NULL;
+    const pd_particles *p = sim->p;
+    const pd_bonds *b = sim->b;
+    const pd_scene *sc = &sim->sc;
+    const int lps = kind == PD_STENCIL_LPS;
+    if (!grid_candidate(p, b, sc, kind, sim->half.kfail))
+        return PD_OK;
+    pd_grid *G = calloc(1, sizeof *G);
+    if (G == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the lattice bonds");
+    const int64_t n = p->n;
+    int ok = grid_lay(G, p, b, sim->piece, lps);
     if (ok > 0) {
         const double V = p->volume[0];
         G->omega = malloc((size_t)G->nk * sizeof(double));
@@ -684,7 +720,6 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
             }
         }
     }
-    free(inv);
     if (ok <= 0) {
         pd_grid_free(G);
         return ok < 0 ? pd_fail(PD_ERR_NOMEM, "out of memory for the lattice bonds") : PD_OK;

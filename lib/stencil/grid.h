@@ -19,6 +19,13 @@ typedef enum {
  * leaves *out NULL when the body or the scene (--bond-list) does not allow
  * it (then the model's bond list serves). */
 pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out);
+/* The lattice, stencil and blocks alone that pd_grid_new would find for a
+ * run of the scene sc on the whole body p, b (no state: no masks, tiles or
+ * scratch): what a piece of the body is cut from and takes its stencil's
+ * table from (lib/run/piece.c), without the whole body's run.  *out NULL
+ * when pd_grid_new would find none. */
+pd_status pd_grid_plan(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
+                       pd_stencil_kind kind, pd_grid **out);
 void pd_grid_free(pd_grid *g);
 /* The PMB forces (and with `failure` the breaking test and s0), and the
  * contact forces of the stencil pairs when the scene has contact. */
