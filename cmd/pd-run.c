@@ -936,6 +936,7 @@ struct held {
     int64_t nbonds;          /* the whole body's directed bonds */
     int64_t iterations;      /* --relax: the iterations of its load steps */
     int64_t nofail;          /* particles of the --no-failure sets */
+    int rows;                /* on MPI ranks each read its own rows' bonds */
 };
 
 static void release(struct held *h)
@@ -990,7 +991,7 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
     fprintf(stderr,
             PROG ": %lld particles, %lld bonds; effects: %s\n" PROG
                  ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
-            (long long)p->n, (long long)(h->b->count / 2), pd_sim_effects(sim), sc->dt,
+            (long long)p->n, (long long)(h->nbonds / 2), pd_sim_effects(sim), sc->dt,
             sc->dt_stable, (long long)nsteps, o->restart ? " more" : "");
     const char *wait = getenv("OMP_WAIT_POLICY"), *spin = getenv("GOMP_SPINCOUNT");
     if (pd_comm_mpi()) /* the MPI build: ranks x threads */
@@ -1117,8 +1118,18 @@ static int start(struct options *o, struct held *h, int64_t *first)
                                     : pd_file_open(restart ? o->restart : o->input, &h->in);
     if (s == PD_OK)
         s = pd_read_particles(h->in, &h->p);
-    if (s == PD_OK)
+    /* on MPI ranks a body of bond lists off any lattice: each rank its
+     * piece's rows (collective; a restart reads the whole body's) */
+    int rows = 0;
+    if (ranks)
+        s = cli_agreed(s);
+    if (s == PD_OK && ranks && !restart)
+        s = pd_read_bonds_run(h->in, h->p, &o->spec.sc, &h->b, &rows);
+    else if (s == PD_OK)
         s = pd_read_bonds_compact(h->in, h->p, &h->b);
+    h->rows = rows;
+    if (ranks) /* the scene's figures below are taken over the ranks */
+        s = cli_agreed(s);
     if (s == PD_OK)
         s = pd_read_sets(h->in, h->p, &h->sets);
     pd_scene *sc = &o->spec.sc;
@@ -1160,17 +1171,31 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_file_update_ranks(o->restart, o->output, &h->out);
     else if (s == PD_OK)
         s = pd_file_create_ranks(o->output, &h->out);
-    if (s == PD_OK)
+    /* the whole body's bonds: a piece that read its own rows' writes them */
+    pd_part part = {0};
+    if (rows) { /* (collective) */
+        s = cli_agreed(s);
+        int64_t lo = 0, hi = 0;
+        if (s == PD_OK)
+            pd_sim_owned(h->piece, &lo, &hi);
+        part = (pd_part){lo, lo, hi - lo, h->p->n, s == PD_OK ? h->b->offset[lo] : 0, 0,
+                         s == PD_OK ? h->b->offset[hi] - h->b->offset[lo] : 0, 0};
+        part.bond0 = pd_comm_below(part.bonds);
+        part.nbonds = pd_comm_total(part.bonds);
+    }
+    h->nbonds = rows ? part.nbonds : h->b ? h->b->count : 0;
+    const char *effects = pd_sim_effects(h->piece ? h->piece : h->sim);
+    if (s == PD_OK && rows)
+        s = pd_run_file_start_part(h->out, h->in, h->p, h->b, &part, h->sets, sc, effects,
+                                   h->cmdline ? h->cmdline : PROG, h->text);
+    else if (s == PD_OK)
         s = pd_run_file_start(h->out, restart, restart ? h->out : h->in, h->p, h->b, h->sets,
-                              sc, pd_sim_effects(h->piece ? h->piece : h->sim),
-                              h->cmdline ? h->cmdline : PROG,
-                              h->text, *first);
+                              sc, effects, h->cmdline ? h->cmdline : PROG, h->text, *first);
     s = cli_agreed(s);
     if (!restart || ranks) { /* read only (one rank's restart: the copy that goes on) */
         pd_file_close(h->in);
         h->in = NULL;
     }
-    h->nbonds = h->b ? h->b->count : 0;
     if (s == PD_OK && sc->nno_failure > 0) /* collective */
         h->nofail = h->piece ? pd_comm_total(pd_sim_no_failure(h->piece))
                              : pd_sim_no_failure(h->sim);
@@ -1347,9 +1372,11 @@ static int run_main(int argc, char **argv)
     if (tell && h.piece)
         fprintf(stderr,
                 PROG ": the body in %d pieces of at most %lld particles, each stepped with "
-                     "its ghosts; halo of at most %.3g MB a rank a step; every rank writes "
+                     "its ghosts%s; halo of at most %.3g MB a rank a step; every rank writes "
                      "its rows of '%s' (parallel HDF5)\n",
-                pd_comm_size(), (long long)rows, (double)halo / 1e6, o.output);
+                pd_comm_size(), (long long)rows,
+                h.rows ? ", each read with its own rows' bonds alone" : "", (double)halo / 1e6,
+                o.output);
     if (h.piece)
         drop_whole(&h);
     const pd_sim *sim = h.piece ? h.piece : h.sim;

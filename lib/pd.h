@@ -700,7 +700,16 @@ pd_status pd_comm_error_from(int from, pd_status s);
 /* Every rank waits for every other (collective). */
 void pd_comm_barrier(void);
 
-/* This rank's piece of a run: pd_sim_piece_new (below, with pd_restart). */
+/* This rank's piece of a run: pd_sim_piece_new (below, with pd_restart).
+ * The rows [*g0, *g1) of this rank's piece of a body of n rows walked as a
+ * bond list whose bonds span at most `span` rows (the body's, over every
+ * rank: pd_read_bonds_span), as pd_sim_piece_new cuts it: the rows whose
+ * bonds it reads (pd_read_bonds_rows). */
+pd_status pd_piece_rows(int64_t n, int64_t span, int64_t *g0, int64_t *g1);
+/* On several ranks, is the body p walked as a bond list under the scene sc
+ * whatever its bonds (off any lattice), so that each rank may read its own
+ * rows' bonds alone? */
+int pd_piece_reads_rows(const pd_particles *p, const pd_scene *sc);
 /* The rows [*lo, *hi) of the whole body that this piece owns. */
 void pd_sim_owned(const pd_sim *piece, int64_t *lo, int64_t *hi);
 /* What one process writes of a run into its run file: its own rows of
@@ -1298,6 +1307,25 @@ pd_status pd_read_bonds(const pd_file *f, const pd_particles *p, pd_bonds **out)
 /* The same, a stencil's families kept compact (pd_bonds_compact): no
  * per-bond arrays but the bits.  A file of lists reads as lists. */
 pd_status pd_read_bonds_compact(const pd_file *f, const pd_particles *p, pd_bonds **out);
+/* A piece of a body on MPI ranks reads the lists of its own rows alone
+ * (lib/run/piece.c).  pd_file_bonds_listed: 1 when the file's /bonds are
+ * lists (CSR), 0 for a stencil or none.  pd_read_bonds_span: the largest
+ * span j - i of a bond of rows [r0, r1) (at least 1), the partners read a
+ * million at a time.  pd_read_bonds_rows: the body's bonds as a pd_bonds
+ * of all its n rows in which only rows [g0, g1) have their families (the
+ * others none), checked as pd_read_bonds checks a body: each bond, and the
+ * symmetry of the bonds between two of these rows (a piece's rows hold
+ * both ends of each bond of the rows it owns). */
+int pd_file_bonds_listed(const pd_file *f);
+pd_status pd_read_bonds_span(const pd_file *f, int64_t n, int64_t r0, int64_t r1, int64_t *span);
+pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0, int64_t g1,
+                             pd_bonds **out);
+/* The bonds a run of the scene sc on the body p reads (lib/io/runfile.c):
+ * pd_read_bonds_compact's, or on several MPI ranks, where the body's bonds
+ * are lists walked as a bond list (pd_piece_reads_rows), those of this
+ * rank's piece alone (pd_read_bonds_rows; collective), *rows then 1. */
+pd_status pd_read_bonds_run(const pd_file *f, const pd_particles *p, const pd_scene *sc,
+                            pd_bonds **out, int *rows);
 pd_status pd_write_bonds(pd_file *f, const pd_bonds *b);
 /* The bond lists of a part of the body (pd_part: rows [first, first +
  * rows), whose bonds are the body's [bond0, bond0 + bonds)) from b, a
@@ -1404,6 +1432,13 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
                             const pd_particles *p, const pd_bonds *b, const pd_sets *sets,
                             const pd_scene *sc, const char *effects, const char *cmdline,
                             const char *text, int64_t first);
+/* The same on MPI ranks whose b holds the families of their own rows alone
+ * (pd_read_bonds_run): each writes its part's bonds (pd_part: its own
+ * rows, whole-body row indices in b; collective). */
+pd_status pd_run_file_start_part(pd_file *out, const pd_file *from, const pd_particles *p,
+                                 const pd_bonds *b, const pd_part *part, const pd_sets *sets,
+                                 const pd_scene *sc, const char *effects, const char *cmdline,
+                                 const char *text);
 /* The state at the last complete frame of a run: its step, the restart
  * slot (pd_restart_free), the frame's velocities and bond states
  * (malloc'ed), for pd_sim_restore. */

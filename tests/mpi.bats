@@ -128,6 +128,35 @@ with h5py.File('np4.h5') as f:
         --interface 1,2,K=14.9e9,s00=0.0002 bodym.h5
 }
 
+@test "mpi: a body of bond lists off any lattice: each rank reads its own rows' bonds alone, checked as one rank checks them" {
+    impact_body perturbed
+    run -0 mpi 3 --threads 1 --scene impact.scene --steps 60 body.h5 -o rows.h5
+    assert_line --partial "each read with its own rows' bonds alone"
+    pd-run --threads 1 -q --scene impact.scene --steps 60 body.h5 -o one.h5
+    run -0 "$PY" "$SAME" one.h5 rows.h5
+    # a lattice's stencil is read whole (small), as the serial program does
+    impact_body
+    run -0 mpi 2 --threads 1 --scene impact.scene --steps 1 body.h5 -o grid.h5
+    refute_line --partial "own rows' bonds alone"
+    # a bond broken on one side only, in the rows of the middle rank: the
+    # serial program's one error line, exit 1 and no run file
+    impact_body perturbed
+    "$PY" -c "
+import h5py
+with h5py.File('body.h5', 'r+') as f:
+    off = f['bonds/offset'][:]
+    k = int(off[len(off) // 2])
+    s = f['bonds/state']
+    b = s[k // 8]
+    s[k // 8] = b ^ (1 << (k % 8))"
+    run -1 pd-run --threads 1 -q --scene impact.scene --steps 1 body.h5 -o bad.h5
+    local line=${lines[0]}
+    [[ "$line" == *"broken on one side only"* ]]
+    run -1 mpi 3 --threads 1 -q --scene impact.scene --steps 1 body.h5 -o bad.h5
+    assert_line "$line"
+    [ ! -e bad.h5 ]
+}
+
 @test "mpi: lost particles, taken on whichever rank owns them, the same bits" {
     impact_body
     same_on_ranks "2 4" 1 --scene impact.scene --lost-margin 0.002 body.h5

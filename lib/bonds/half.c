@@ -12,6 +12,7 @@
 #endif
 
 #include "bonds/half.h"
+#include "base/comm.h"
 
 static int64_t lower_bound(const int32_t *v, int64_t lo, int64_t hi, int32_t key)
 {
@@ -188,11 +189,11 @@ static int64_t within(const pd_cells *c, const pd_particles *p, int64_t i, doubl
 
 /* The closest pair that is not a half bond, searched pair by pair. */
 static double closest_unbonded(const pd_cells *c, const pd_half_bonds *h, const pd_particles *p,
-                               double radius)
+                               double radius, int64_t lo_row, int64_t hi_row)
 {
     double best = radius; /* a min in any order is exact */
 #pragma omp parallel for schedule(static) reduction(min : best)
-    for (int64_t i = 0; i < p->n; i++) {
+    for (int64_t i = lo_row; i < hi_row; i++) {
         const double xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
         int64_t lo[9], hi[9];
         const int rows = pd_cells_adjacent_rows(c, xi, lo, hi);
@@ -212,6 +213,12 @@ static double closest_unbonded(const pd_cells *c, const pd_half_bonds *h, const 
 pd_status pd_half_gap(const pd_half_bonds *h, const pd_bonds *b, const pd_particles *p,
                       double *gap)
 {
+    return pd_half_gap_rows(h, b, p, 0, p->n, 0, gap);
+}
+
+pd_status pd_half_gap_rows(const pd_half_bonds *h, const pd_bonds *b, const pd_particles *p,
+                           int64_t lo, int64_t hi, int ranks, double *gap)
+{
     const double radius = b->horizon, cut2 = radius * radius;
     pd_cells c;
     pd_status s = pd_cells_build(&c, p->n, p->x, radius);
@@ -222,7 +229,7 @@ pd_status pd_half_gap(const pd_half_bonds *h, const pd_bonds *b, const pd_partic
      * that is not a bond is closer than the horizon */
     int64_t odd = 0;
 #pragma omp parallel for schedule(static) reduction(+ : odd)
-    for (int64_t i = 0; i < p->n; i++) {
+    for (int64_t i = lo; i < hi; i++) {
         for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
             const int32_t j = h->neighbor[q];
             const double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
@@ -231,7 +238,11 @@ pd_status pd_half_gap(const pd_half_bonds *h, const pd_bonds *b, const pd_partic
         }
         odd += within(&c, p, i, cut2) != b->offset[i + 1] - b->offset[i];
     }
-    *gap = odd == 0 ? radius : closest_unbonded(&c, h, p, radius);
+    if (ranks) /* a piece's rows: the whole body's answer */
+        odd = pd_comm_total(odd);
+    *gap = odd == 0 ? radius : closest_unbonded(&c, h, p, radius, lo, hi);
+    if (ranks && odd != 0)
+        *gap = -pd_comm_max(-*gap);
     pd_cells_free(&c);
     return PD_OK;
 }

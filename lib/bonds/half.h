@@ -74,5 +74,11 @@ int64_t pd_half_find(const pd_half_bonds *h, int64_t i, int64_t j);
  * finds, the horizon at once; else pair by pair). */
 pd_status pd_half_gap(const pd_half_bonds *h, const pd_bonds *b, const pd_particles *p,
                       double *gap);
+/* The same over the pairs of rows [lo, hi) (each pair from its lower end,
+ * within b's families of those rows, which must be whole); with `ranks`,
+ * the rows of a piece of the body on MPI ranks, whose owned rows together
+ * are the body: the whole body's answer on every rank (collective). */
+pd_status pd_half_gap_rows(const pd_half_bonds *h, const pd_bonds *b, const pd_particles *p,
+                           int64_t lo, int64_t hi, int ranks, double *gap);
 
 #endif

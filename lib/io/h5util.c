@@ -400,3 +400,40 @@ pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const p
     H5Dclose(d);
     return s;
 }
+
+pd_status pd_h5_read_rows(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
+                          hid_t memtype, void *buf, int64_t row0, int64_t rows)
+{
+    if (!pd_h5_has_link(loc, name))
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no dataset '%s'", file, name);
+    hid_t d = H5Dopen2(loc, name, H5P_DEFAULT);
+    if (d < 0)
+        return pd_fail(PD_ERR_FORMAT, "'%s': '%s' is not a dataset", file, name);
+    hid_t t = H5Dget_type(d), fs = H5Dget_space(d);
+    pd_status s = PD_OK;
+    hsize_t dims[1] = {0};
+    const H5T_class_t cls = H5Tget_class(t);
+    const size_t size = H5Tget_size(t);
+    if (cls != form->cls || size != form->size)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' is %s, expected %s", file, name,
+                    class_name(cls, size), class_name(form->cls, form->size));
+    else if (H5Sget_simple_extent_ndims(fs) != 1)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has rank %d, expected 1", file, name,
+                    H5Sget_simple_extent_ndims(fs));
+    else if (H5Sget_simple_extent_dims(fs, dims, NULL) < 0 || row0 < 0 || rows < 0 ||
+             (uint64_t)(row0 + rows) > (uint64_t)dims[0])
+        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has %llu entries, rows up to %lld wanted",
+                    file, name, (unsigned long long)dims[0], (long long)(row0 + rows));
+    if (s == PD_OK && rows > 0) {
+        hsize_t start[1] = {(hsize_t)row0}, count[1] = {(hsize_t)rows};
+        hid_t ms = H5Screate_simple(1, count, NULL);
+        if (H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, count, NULL) < 0 ||
+            H5Dread(d, memtype, ms, fs, H5P_DEFAULT, buf) < 0)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': cannot read dataset '%s'", file, name);
+        H5Sclose(ms);
+    }
+    H5Sclose(fs);
+    H5Tclose(t);
+    H5Dclose(d);
+    return s;
+}

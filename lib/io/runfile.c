@@ -14,9 +14,34 @@
 #include "io/h5util.h"
 #include "pd.h"
 
+pd_status pd_read_bonds_run(const pd_file *f, const pd_particles *p, const pd_scene *sc,
+                            pd_bonds **out, int *rows)
+{
+    *out = NULL;
+    *rows = pd_file_bonds_listed(f) && pd_piece_reads_rows(p, sc);
+    if (!*rows)
+        return pd_read_bonds_compact(f, p, out);
+    /* the largest span of a bond, each rank over its share of the rows,
+     * then this rank's piece and its rows' bonds (collective) */
+    const int64_t n = p->n, P = pd_comm_size(), me = pd_comm_rank();
+    int64_t span = 1, g0 = 0, g1 = 0;
+    pd_status s = pd_file_has_bonds(f) ? PD_OK
+                                       : pd_fail(PD_ERR_FORMAT, "'%s' has no /bonds (run "
+                                                                "pd-bonds first)", f->name);
+    if (s == PD_OK)
+        s = pd_read_bonds_span(f, n, n * me / P, n * (me + 1) / P, &span);
+    s = pd_comm_agree(s);
+    span = -pd_comm_min(-span);
+    if (s == PD_OK)
+        s = pd_piece_rows(n, span, &g0, &g1);
+    if (s == PD_OK)
+        s = pd_read_bonds_rows(f, p, g0, g1, out);
+    return s;
+}
+
 /* Every frame of the run laid out (pd_frame_steps: the steps after `first`
  * that get one, and step 0 itself in a new run, `fresh`). */
-static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds *b,
+static pd_status plan_frames(pd_file *out, const pd_particles *p, int64_t nbonds,
                              const pd_scene *sc, unsigned fields, int64_t first, int fresh)
 {
     const int64_t m = pd_frame_steps(sc, first, fresh, NULL);
@@ -30,7 +55,7 @@ static pd_status plan_frames(pd_file *out, const pd_particles *p, const pd_bonds
     pd_frame_steps(sc, first, fresh, steps);
     for (int64_t k = 0; k < m; k++)
         times[k] = (double)steps[k] * sc->dt;
-    pd_status s = pd_plan_frames(out, p->n, b->count, m, steps, times, fields);
+    pd_status s = pd_plan_frames(out, p->n, nbonds, m, steps, times, fields);
     free(steps);
     free(times);
     return s;
@@ -80,18 +105,29 @@ pd_status pd_write_model(pd_file *out, const pd_file *from, const char *cmdline,
     return s;
 }
 
-pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
-                            const pd_particles *p, const pd_bonds *b, const pd_sets *sets,
-                            const pd_scene *sc, const char *effects, const char *cmdline,
-                            const char *text, int64_t first)
+/* pd_run_file_start, and on MPI ranks whose b holds their own rows alone
+ * its part (NULL: b is the whole body's). */
+static pd_status run_file_start(pd_file *out, int restart, const pd_file *from,
+                                const pd_particles *p, const pd_bonds *b, const pd_part *part,
+                                const pd_sets *sets, const pd_scene *sc, const char *effects,
+                                const char *cmdline, const char *text, int64_t first)
 {
     pd_status s;
+    const int64_t nbonds = part ? part->nbonds : b->count;
     if (restart) {
         /* the same file goes on: unfinished frames out, the scene and the
          * history say what was added */
         s = pd_drop_incomplete_frames(out);
         if (s == PD_OK)
             s = pd_append_history(out, cmdline);
+    } else if (part) { /* the model, each rank its part's bonds */
+        s = pd_write_header(out, from, cmdline);
+        if (s == PD_OK)
+            s = pd_write_particles(out, p);
+        if (s == PD_OK)
+            s = pd_write_bonds_part(out, part, b);
+        if (s == PD_OK)
+            s = pd_write_sets(out, sets);
     } else
         s = pd_write_model(out, from, cmdline, p, b, sets);
     if (s == PD_OK)
@@ -99,7 +135,7 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
     /* every frame laid out now, then the file under its final name: a run
      * killed at any moment leaves it readable with its complete frames */
     if (s == PD_OK)
-        s = plan_frames(out, p, b, sc,
+        s = plan_frames(out, p, nbonds, sc,
                         sc->fields | (sc->has_projectile ? PD_FRAME_PROJECTILE : 0) |
                             (sc->damping > 0 && !sc->relax ? PD_FRAME_DAMPING : 0),
                         first, !restart);
@@ -116,11 +152,28 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
     if (s == PD_OK && sc->damping > 0 && !sc->relax)
         s = pd_plan_restart_damping(out);
     const int width = pd_model_history_width(pd_model_of(sc->model));
-    if (s == PD_OK && width > 0 && b->count > 0)
-        s = pd_plan_restart_history(out, b->count, width);
+    if (s == PD_OK && width > 0 && nbonds > 0)
+        s = pd_plan_restart_history(out, nbonds, width);
     if (s == PD_OK)
         s = pd_file_publish(out);
     return s;
+}
+
+pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
+                            const pd_particles *p, const pd_bonds *b, const pd_sets *sets,
+                            const pd_scene *sc, const char *effects, const char *cmdline,
+                            const char *text, int64_t first)
+{
+    return run_file_start(out, restart, from, p, b, NULL, sets, sc, effects, cmdline, text,
+                          first);
+}
+
+pd_status pd_run_file_start_part(pd_file *out, const pd_file *from, const pd_particles *p,
+                                 const pd_bonds *b, const pd_part *part, const pd_sets *sets,
+                                 const pd_scene *sc, const char *effects, const char *cmdline,
+                                 const char *text)
+{
+    return run_file_start(out, 0, from, p, b, part, sets, sc, effects, cmdline, text, 0);
 }
 
 pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,

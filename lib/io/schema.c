@@ -795,6 +795,242 @@ pd_status pd_read_bonds_compact(const pd_file *f, const pd_particles *p, pd_bond
     return read_bonds(f, p, 0, out);
 }
 
+/* ------------------------------------------- a piece's rows of /bonds */
+
+int pd_file_bonds_listed(const pd_file *f)
+{
+    if (!pd_file_has_bonds(f))
+        return 0;
+    hid_t g = H5Gopen2(f->fid, "/bonds", H5P_DEFAULT);
+    char *form = NULL;
+    int lists = 1; /* no form: lists, as files before the stencil */
+    if (pd_h5_has_attr(g, "form"))
+        lists = pd_h5_read_attr_string(g, "form", &form) == PD_OK && strcmp(form, "csr") == 0;
+    free(form);
+    H5Gclose(g);
+    return lists;
+}
+
+/* Rows [r0, r1] of /bonds/offset into off (r1 - r0 + 1 entries), checked
+ * to rise (and to start at 0). */
+static pd_status read_offset_rows(const pd_file *f, int64_t r0, int64_t r1, int64_t *off)
+{
+    const pd_h5_form of = {H5T_INTEGER, 8, 1, {0, 0}};
+    pd_status s = pd_h5_read_rows(f->fid, f->name, "/bonds/offset", &of, H5T_NATIVE_INT64, off,
+                                  r0, r1 - r0 + 1);
+    if (s == PD_OK && r0 == 0 && off[0] != 0)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset must start at 0", f->name);
+    for (int64_t i = r0; i < r1 && s == PD_OK; i++)
+        if (off[i + 1 - r0] < off[i - r0])
+            s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset decreases at row %lld", f->name,
+                        (long long)i);
+    return s;
+}
+
+#define SPAN_CHUNK (1 << 20) /* bonds read at a time */
+
+pd_status pd_read_bonds_span(const pd_file *f, int64_t n, int64_t r0, int64_t r1, int64_t *span)
+{
+    *span = 1;
+    int64_t *off = malloc((size_t)(r1 - r0 + 1) * sizeof(int64_t));
+    int32_t *nb = NULL;
+    int64_t cap = 0;
+    pd_status s = off ? read_offset_rows(f, r0, r1, off)
+                      : pd_fail(PD_ERR_NOMEM, "out of memory for the bonds' offsets");
+    const pd_h5_form nf = {H5T_INTEGER, 4, 1, {0, 0}};
+    for (int64_t i = r0; i < r1 && s == PD_OK;) { /* whole rows, about SPAN_CHUNK bonds */
+        int64_t e = i + 1;
+        while (e < r1 && off[e + 1 - r0] - off[i - r0] <= SPAN_CHUNK)
+            e++;
+        const int64_t k0 = off[i - r0], m = off[e - r0] - k0;
+        if (m > cap) {
+            free(nb);
+            cap = m > SPAN_CHUNK ? m : SPAN_CHUNK;
+            if ((nb = malloc((size_t)cap * sizeof(int32_t))) == NULL) {
+                s = pd_fail(PD_ERR_NOMEM, "out of memory for the bonds' partners");
+                break;
+            }
+        }
+        s = pd_h5_read_rows(f->fid, f->name, "/bonds/neighbor", &nf, H5T_NATIVE_INT32, nb, k0, m);
+        for (int64_t r = i; r < e && s == PD_OK; r++)
+            for (int64_t k = off[r - r0]; k < off[r + 1 - r0] && s == PD_OK; k++) {
+                const int64_t j = nb[k - k0];
+                if (j < 0 || j >= n)
+                    s = pd_fail(PD_ERR_FORMAT, "'%s': bond %lld points to particle %lld of %lld",
+                                f->name, (long long)k, (long long)j, (long long)n);
+                *span = j - r > *span ? j - r : *span;
+            }
+        i = e;
+    }
+    free(off);
+    free(nb);
+    return s;
+}
+
+/* Bits [k0, k1) of a dataset of bits packed as /bonds/state into bits
+ * [0, k1 - k0) of words (cleared first). */
+static pd_status read_bit_rows(const pd_file *f, const char *name, int64_t k0, int64_t k1,
+                               uint64_t *words)
+{
+    memset(words, 0, (size_t)(pd_bits_words(k1 - k0) + 1) * sizeof(uint64_t));
+    if (k1 <= k0)
+        return PD_OK;
+    const int64_t b0 = k0 / 8, nbytes = (k1 + 7) / 8 - b0;
+    uint8_t *bytes = malloc((size_t)nbytes);
+    const pd_h5_form bf = {H5T_INTEGER, 1, 1, {0, 0}};
+    pd_status s = bytes ? pd_h5_read_rows(f->fid, f->name, name, &bf, H5T_NATIVE_UINT8, bytes, b0,
+                                          nbytes)
+                        : pd_fail(PD_ERR_NOMEM, "out of memory for the bonds' states");
+    for (int64_t k = k0; k < k1 && s == PD_OK; k++)
+        if ((bytes[k / 8 - b0] >> (k % 8)) & 1)
+            words[(k - k0) >> 6] |= UINT64_C(1) << ((k - k0) & 63);
+    free(bytes);
+    return s;
+}
+
+/* check_bonds of rows [g0, g1) of b alone: each bond as check_bonds wants
+ * it, and the symmetry of the bonds between two of the rows (a bond to a
+ * row beyond them is checked by a piece that holds both). */
+static pd_status check_bond_rows(const char *fn, const pd_bonds *b, int64_t g0, int64_t g1)
+{
+    for (int64_t i = g0; i < g1; i++)
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            const int32_t j = b->neighbor[k];
+            if (j == i)
+                return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld is bonded to itself", fn,
+                               (long long)i);
+            if (k > b->offset[i] && b->neighbor[k - 1] >= j)
+                return pd_fail(PD_ERR_FORMAT, "'%s': family of particle %lld is not sorted", fn,
+                               (long long)i);
+            if (!(b->length[k] > 0) || !isfinite(b->length[k]) ||
+                b->length[k] > b->horizon * (1 + 1e-9))
+                return pd_fail(PD_ERR_FORMAT, "'%s': a bond of particle %lld is %g m long (the "
+                                              "horizon is %g m)",
+                               fn, (long long)i, b->length[k], b->horizon);
+            if (!(b->vfactor[k] > 0 && b->vfactor[k] <= 1))
+                return pd_fail(PD_ERR_FORMAT, "'%s': a bond of particle %lld has volume factor %g",
+                               fn, (long long)i, b->vfactor[k]);
+        }
+    /* as check_bonds: the mirror of i-j (j < i) is the next unmatched entry
+     * above the diagonal in j's row */
+    int64_t *next = malloc((size_t)(g1 > g0 ? g1 - g0 : 1) * sizeof(int64_t));
+    if (next == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory checking bonds");
+    for (int64_t j = g0; j < g1; j++) {
+        int64_t q = b->offset[j];
+        while (q < b->offset[j + 1] && b->neighbor[q] < j)
+            q++;
+        next[j - g0] = q;
+    }
+    pd_status s = PD_OK;
+    for (int64_t i = g0; i < g1 && s == PD_OK; i++)
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1] && b->neighbor[k] < i && s == PD_OK;
+             k++) {
+            const int64_t j = b->neighbor[k];
+            if (j < g0)
+                continue;
+            const int64_t q = next[j - g0]++;
+            if (q >= b->offset[j + 1] || b->neighbor[q] != i)
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)", fn,
+                            (long long)i, (long long)j, (long long)j, (long long)i);
+            else if (pd_bond_intact(b->intact, k) != pd_bond_intact(b->intact, q))
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': bond %lld-%lld is broken on one side only (state bits differ)",
+                            fn, (long long)j, (long long)i);
+            else if (b->precrack &&
+                     pd_bond_intact(b->precrack, k) != pd_bond_intact(b->precrack, q))
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': bond %lld-%lld is pre-cracked on one side only (precrack bits "
+                            "differ)",
+                            fn, (long long)j, (long long)i);
+        }
+    for (int64_t j = g0; j < g1 && s == PD_OK; j++) {
+        const int64_t q = next[j - g0];
+        if (q < b->offset[j + 1] && b->neighbor[q] < g1)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)",
+                        fn, (long long)j, (long long)b->neighbor[q], (long long)b->neighbor[q],
+                        (long long)j);
+    }
+    free(next);
+    return s;
+}
+
+pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0, int64_t g1,
+                             pd_bonds **out)
+{
+    *out = NULL;
+    const char *fn = f->name;
+    const int64_t n = p->n;
+    double horizon = 0;
+    hid_t g = H5Gopen2(f->fid, "/bonds", H5P_DEFAULT);
+    pd_status s = PD_OK;
+    if (g < 0 || pd_h5_read_attr_double(g, "horizon", &horizon) != PD_OK)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds has no horizon attribute", fn);
+    else if (!(horizon > 0) || !isfinite(horizon))
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds horizon must be positive", fn);
+    if (g >= 0)
+        H5Gclose(g);
+    /* the offsets of every row (8 bytes a particle), the rest of the rows' */
+    int64_t *off = NULL;
+    pd_h5_form of = {H5T_INTEGER, 8, 1, {(hsize_t)n + 1, 0}};
+    if (s == PD_OK)
+        s = pd_h5_read_data(f->fid, fn, "/bonds/offset", &of, H5T_NATIVE_INT64, sizeof(int64_t),
+                            (void **)&off, NULL);
+    if (s == PD_OK && off[0] != 0)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset must start at 0", fn);
+    for (int64_t i = 0; i < n && s == PD_OK; i++)
+        if (off[i + 1] < off[i])
+            s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset decreases at row %lld", fn,
+                        (long long)i);
+    const int64_t k0 = s == PD_OK ? off[g0] : 0, k1 = s == PD_OK ? off[g1] : 0;
+    pd_bonds *b = s == PD_OK ? pd_bonds_alloc(n, k1 - k0) : NULL;
+    if (s == PD_OK && b == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)(k1 - k0));
+    for (int64_t i = 0; b && i <= n; i++)
+        b->offset[i] = (off[i] < k0 ? k0 : off[i] > k1 ? k1 : off[i]) - k0;
+    free(off);
+    const char *names[3] = {"/bonds/neighbor", "/bonds/length", "/bonds/volume_factor"};
+    const pd_h5_form forms[3] = {{H5T_INTEGER, 4, 1, {0, 0}},
+                                 {H5T_FLOAT, 8, 1, {0, 0}},
+                                 {H5T_FLOAT, 8, 1, {0, 0}}};
+    const hid_t types[3] = {H5T_NATIVE_INT32, H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE};
+    for (int a = 0; a < 3 && s == PD_OK; a++)
+        s = pd_h5_read_rows(f->fid, fn, names[a], &forms[a], types[a],
+                            a == 0 ? (void *)b->neighbor : a == 1 ? (void *)b->length
+                                                                  : (void *)b->vfactor,
+                            k0, k1 - k0);
+    for (int64_t k = 0; k < k1 - k0 && s == PD_OK; k++)
+        if (b->neighbor[k] < 0 || b->neighbor[k] >= n)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': bond %lld points to particle %lld of %lld", fn,
+                        (long long)(k0 + k), (long long)b->neighbor[k], (long long)n);
+    if (s == PD_OK)
+        s = read_bit_rows(f, "/bonds/state", k0, k1, b->intact);
+    if (s == PD_OK && k1 > k0 && pd_h5_has_link(f->fid, "/bonds/precrack")) {
+        if ((b->precrack = malloc((size_t)(pd_bits_words(k1 - k0) + 1) * sizeof(uint64_t))) ==
+            NULL)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory for the pre-crack");
+        else
+            s = read_bit_rows(f, "/bonds/precrack", k0, k1, b->precrack);
+        if (s == PD_OK && pd_bits_count_broken(b->precrack, b->count) == b->count) {
+            free(b->precrack); /* none of these is pre-cracked */
+            b->precrack = NULL;
+        }
+    }
+    if (b)
+        b->horizon = horizon;
+    if (s == PD_OK)
+        s = check_bond_rows(fn, b, g0, g1);
+    if (s == PD_OK)
+        s = check_precrack(fn, p, b);
+    if (s != PD_OK) {
+        pd_bonds_free(b);
+        return s;
+    }
+    *out = b;
+    return PD_OK;
+}
+
 /* The families as lists (CSR) or, when b->stencil says they are one, as the
  * stencil's table and its lattice (no per-bond arrays). */
 static pd_status write_families(hid_t g, const pd_bonds *b)

@@ -1043,6 +1043,11 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
         pd_bond_iter it;
         for (pd_family_start(b, p, i, &it); pd_family_next(&it);) {
             const int32_t j = it.j;
+            if (m[j] == 0) { /* a partner whose family b lacks (a piece's rows
+                                alone, pd_read_bonds_rows): its rank's row */
+                sum = 0;
+                break;
+            }
             const double om = bond_omega(p, b, s, i, &it);
             const double C = om * it.vfactor *
                              (PD_LPS_SHEAR_FACTOR * G * (1.0 / m[i] + 1.0 / m[j]) +

@@ -137,6 +137,59 @@ static int64_t piece_first_block(const int64_t *K, int r)
     return r == 0 ? 0 : (K[r] - 1) - ((K[r] - 1) & 1);
 }
 
+/* The P ranks' blocks of a body of n rows in nb blocks (block k's first
+ * row start[k], start[nb] = n): rank r owns blocks [K[r], K[r + 1]), two
+ * at least each, about as many rows walked each, a rank above the first
+ * walking one or two blocks below its own again (1.5 blocks of rows on
+ * average, dup): rank 0 owns W rows, the others W - dup,
+ * W = (n + (P - 1) dup) / P. */
+static pd_status cut_ranks(int64_t n, int64_t nb, const int64_t *start, int P, int64_t *K)
+{
+    if (nb < 2 * (int64_t)P)
+        return pd_fail(PD_ERR_INVALID,
+                       "the body is cut into %lld blocks and each of the %d MPI ranks needs two: "
+                       "run it on at most %lld rank%s",
+                       (long long)nb, P, (long long)(nb / 2), nb / 2 == 1 ? "" : "s");
+    K[0] = 0;
+    K[P] = nb;
+    const double dup = 1.5 * (double)n / (double)(nb > 0 ? nb : 1);
+    const double W = ((double)n + (P - 1) * dup) / P;
+    for (int r = 1; r < P; r++) {
+        int64_t k = K[r - 1] + 2;
+        while (k < nb - 2 * (P - r) && (double)start[k] < r * W - (r - 1) * dup)
+            k++;
+        K[r] = k;
+    }
+    return PD_OK;
+}
+
+int pd_piece_reads_rows(const pd_particles *p, const pd_scene *sc)
+{
+    const pd_model *model = pd_model_of(sc->model);
+    return pd_comm_size() > 1 && model && !pd_grid_possible(p, sc, model->stencil(sc));
+}
+
+pd_status pd_piece_rows(int64_t n, int64_t span, int64_t *g0, int64_t *g1)
+{
+    const int P = pd_comm_size(), me = pd_comm_rank();
+    int64_t nb = 0;
+    const int64_t block = pd_half_block_of(n, span, &nb);
+    int64_t *start = malloc((size_t)(nb + 1) * sizeof(int64_t));
+    int64_t *K = malloc((size_t)(P + 1) * sizeof(int64_t));
+    pd_status s = start && K ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for the pieces");
+    for (int64_t k = 0; s == PD_OK && k <= nb; k++)
+        start[k] = k * block < n ? k * block : n;
+    if (s == PD_OK)
+        s = cut_ranks(n, nb, start, P, K);
+    if (s == PD_OK) {
+        *g0 = start[piece_first_block(K, me)];
+        *g1 = start[K[me + 1] + 1 < nb ? K[me + 1] + 1 : nb];
+    }
+    free(start);
+    free(K);
+    return s;
+}
+
 /* The piece's bond history (VES, EPS) from the whole body's hw, w values
  * for each directed bond of b in its families' order: NULL out of memory,
  * or (*bad) when a piece's family is not the whole one's less the partners
@@ -226,8 +279,9 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
     int64_t nb = 0, block = 0;
     if (grid)
         nb = pd_grid_blocks(plan, NULL, NULL, NULL);
-    else
-        block = pd_half_block_of(p->n, pd_half_span(b), &nb);
+    else /* b may hold the families of this rank's rows alone (pd_read_bonds_rows):
+            the largest span over the ranks (collective) */
+        block = pd_half_block_of(p->n, -pd_comm_min(-pd_half_span(b)), &nb);
     if (grid && nb == 0) {
         pd_grid_free(plan);
         return pd_fail(PD_ERR_INVALID, "on MPI ranks the particles must be in lattice order, as "
@@ -261,25 +315,7 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
         for (int64_t k = 0; k <= nb; k++)
             start[k] = k * pc->half_block < n ? k * pc->half_block : n;
     }
-    if (nb < 2 * (int64_t)P)
-        st = pd_fail(PD_ERR_INVALID,
-                     "the body is cut into %lld blocks and each of the %d MPI ranks needs two: "
-                     "run it on at most %lld rank%s",
-                     (long long)nb, P, (long long)(nb / 2), nb / 2 == 1 ? "" : "s");
-    /* the ranks' blocks, two at least each: about as many rows walked
-     * each, a rank above the first walking one or two blocks below its own
-     * again (1.5 blocks of rows on average, dup): rank 0 owns W rows, the
-     * others W - dup, W = (n + (P - 1) dup) / P */
-    K[0] = 0;
-    K[P] = nb;
-    const double dup = 1.5 * (double)n / (double)(nb > 0 ? nb : 1);
-    const double W = ((double)n + (P - 1) * dup) / P;
-    for (int r = 1; r < P && st == PD_OK; r++) {
-        int64_t k = K[r - 1] + 2;
-        while (k < nb - 2 * (P - r) && (double)start[k] < r * W - (r - 1) * dup)
-            k++;
-        K[r] = k;
-    }
+    st = cut_ranks(n, nb, start, P, K);
     if (st == PD_OK) {
         for (int r = 0; r < P; r++) {
             pc->rows[r] = start[K[r + 1]] - start[K[r]];
@@ -334,12 +370,14 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
     /* the whole body's figures: the box outside which a particle is lost,
      * and the AVX-512 rows' contact gap and cap */
     pd_lost_box(p, sc->lost_margin, sim->box_lo, sim->box_hi);
-    if (sim->half.contact) {
+    if (sim->half.contact) { /* over the ranks' own rows (collective) */
         pd_half_bonds h;
         memset(&h, 0, sizeof h);
-        st = pd_half_build(b, &h);
+        int64_t lo, hi;
+        pd_sim_owned(sim, &lo, &hi);
+        st = pd_comm_agree(pd_half_build(b, &h));
         if (st == PD_OK)
-            st = pd_half_gap(&h, b, p, &sim->half.gap);
+            st = pd_half_gap_rows(&h, b, p, lo, hi, 1, &sim->half.gap);
         pd_half_free(&h);
         sim->half.contact_cap = pd_half_contact_cap(p);
     }

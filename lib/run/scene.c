@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
 #include "models/model.h"
 
 /* The default contact skin, in spacings (pd-run(1)): the list is rebuilt
@@ -217,9 +218,14 @@ pd_status pd_scene_resolve(pd_scene_spec *o, const pd_particles *p, const pd_bon
         sc->lost_margin = pd_lost_margin_default(p);
     if (sc->balance_limit == 0)
         sc->balance_limit = PD_BALANCE_LIMIT;
+    /* the smallest over the particles and the largest stiffness: on MPI
+     * ranks each may hold its own rows' families alone (pd_read_bonds_run),
+     * the ranks' together (a min or max in any order is exact) */
     sc->dt_stable = pd_stable_dt(p, b, sc);
+    if (pd_comm_size() > 1)
+        sc->dt_stable = pd_comm_or(isnan(sc->dt_stable)) ? NAN : -pd_comm_max(-sc->dt_stable);
     if (sc->has_projectile && !o->has_proj_k)
-        sc->proj_k = pd_projectile_default_k(p, b, sc);
+        sc->proj_k = pd_comm_max(pd_projectile_default_k(p, b, sc));
     if (sc->relax) { /* dt is the load steps' time; the iterations take the stable step */
         if (!isfinite(sc->dt_stable))
             return pd_fail(PD_ERR_INVALID, "no bonds, so nothing to relax");

@@ -559,10 +559,10 @@ void pd_grid_sync(pd_sim *sim, pd_grid *G)
 /* May the model's stencil `kind` walk the body p, b at all?  PMB with one
  * c and s00 for every bond, or LPS with an influence function of |xi|
  * alone; equal volumes and radii. */
-static int grid_candidate(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
+static int grid_candidate(const pd_particles *p, int64_t bonds, const pd_scene *sc,
                           pd_stencil_kind kind, const double *kfail)
 {
-    if (kind == PD_STENCIL_NONE || sc->bond_list || kfail || p->n < 2 || b->count == 0)
+    if (kind == PD_STENCIL_NONE || sc->bond_list || kfail || p->n < 2 || bonds == 0)
         return 0;
     for (int64_t i = 1; i < p->n; i++)
         if (p->volume[i] != p->volume[0] || p->radius[i] != p->radius[0])
@@ -653,7 +653,7 @@ pd_status pd_grid_plan(const pd_particles *p, const pd_bonds *b, const pd_scene 
                        pd_stencil_kind kind, pd_grid **out)
 {
     *out = NULL;
-    if (!grid_candidate(p, b, sc, kind, NULL))
+    if (!grid_candidate(p, b->count, sc, kind, NULL))
         return PD_OK;
     pd_grid *G = calloc(1, sizeof *G);
     const int ok = G ? grid_lay(G, p, b, NULL, kind == PD_STENCIL_LPS) : -1;
@@ -665,6 +665,21 @@ pd_status pd_grid_plan(const pd_particles *p, const pd_bonds *b, const pd_scene 
     return PD_OK;
 }
 
+int pd_grid_possible(const pd_particles *p, const pd_scene *sc, pd_stencil_kind kind)
+{
+    if (!grid_candidate(p, 1, sc, kind, NULL))
+        return 0;
+    int32_t *lc[3];
+    int axis[3], ok = -1;
+    for (int d = 0; d < 3; d++)
+        lc[d] = malloc((size_t)p->n * sizeof(int32_t));
+    if (lc[0] && lc[1] && lc[2])
+        ok = pd_lattice_coords(p, axis, lc);
+    for (int d = 0; d < 3; d++)
+        free(lc[d]);
+    return ok != 0; /* out of memory: maybe */
+}
+
 pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
 {
     *out = NULL;
@@ -672,7 +687,7 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
     const pd_bonds *b = sim->b;
     const pd_scene *sc = &sim->sc;
     const int lps = kind == PD_STENCIL_LPS;
-    if (!grid_candidate(p, b, sc, kind, sim->half.kfail))
+    if (!grid_candidate(p, b->count, sc, kind, sim->half.kfail))
         return PD_OK;
     pd_grid *G = calloc(1, sizeof *G);
     if (G == NULL)

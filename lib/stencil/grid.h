@@ -26,6 +26,10 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out);
  * when pd_grid_new would find none. */
 pd_status pd_grid_plan(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
                        pd_stencil_kind kind, pd_grid **out);
+/* 0 when no stencil of `kind` can walk the body p under the scene sc,
+ * whatever its bonds (its particles are off any lattice, say): a piece of
+ * it on MPI ranks may then read its own rows' bonds alone. */
+int pd_grid_possible(const pd_particles *p, const pd_scene *sc, pd_stencil_kind kind);
 void pd_grid_free(pd_grid *g);
 /* The PMB forces (and with `failure` the breaking test and s0), and the
  * contact forces of the stencil pairs when the scene has contact. */
