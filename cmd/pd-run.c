@@ -1119,12 +1119,13 @@ static int start(struct options *o, struct held *h, int64_t *first)
     if (s == PD_OK)
         s = pd_read_particles(h->in, &h->p);
     /* on MPI ranks a body of bond lists off any lattice: each rank its
-     * piece's rows (collective; a restart reads the whole body's) */
+     * piece's rows (collective) */
     int rows = 0;
+    int64_t first_bond = 0;
     if (ranks)
         s = cli_agreed(s);
-    if (s == PD_OK && ranks && !restart)
-        s = pd_read_bonds_run(h->in, h->p, &o->spec.sc, &h->b, &rows);
+    if (s == PD_OK && ranks)
+        s = pd_read_bonds_run(h->in, h->p, &o->spec.sc, &h->b, &rows, &first_bond);
     else if (s == PD_OK)
         s = pd_read_bonds_compact(h->in, h->p, &h->b);
     h->rows = rows;
@@ -1141,7 +1142,9 @@ static int start(struct options *o, struct held *h, int64_t *first)
     if (s == PD_OK && !restart)
         s = pd_scene_inspect(&o->spec, h->p, h->b, &h->report);
     if (s == PD_OK && restart) {
-        s = pd_run_file_load(h->in, h->p, h->b, first, &h->r, h->v0, &h->bits0);
+        s = rows ? pd_run_file_load_rows(h->in, h->p, h->b, first_bond, first, &h->r, h->v0,
+                                         &h->bits0)
+                 : pd_run_file_load(h->in, h->p, h->b, first, &h->r, h->v0, &h->bits0);
         sc->steps += *first; /* --steps N more */
     }
     /* a row of the series every --series N steps, by default the status
@@ -1186,8 +1189,9 @@ static int start(struct options *o, struct held *h, int64_t *first)
     h->nbonds = rows ? part.nbonds : h->b ? h->b->count : 0;
     const char *effects = pd_sim_effects(h->piece ? h->piece : h->sim);
     if (s == PD_OK && rows)
-        s = pd_run_file_start_part(h->out, h->in, h->p, h->b, &part, h->sets, sc, effects,
-                                   h->cmdline ? h->cmdline : PROG, h->text);
+        s = pd_run_file_start_part(h->out, restart, restart ? h->out : h->in, h->p, h->b, &part,
+                                   h->sets, sc, effects, h->cmdline ? h->cmdline : PROG, h->text,
+                                   *first);
     else if (s == PD_OK)
         s = pd_run_file_start(h->out, restart, restart ? h->out : h->in, h->p, h->b, h->sets,
                               sc, effects, h->cmdline ? h->cmdline : PROG, h->text, *first);

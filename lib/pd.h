@@ -1315,17 +1315,19 @@ pd_status pd_read_bonds_compact(const pd_file *f, const pd_particles *p, pd_bond
  * of all its n rows in which only rows [g0, g1) have their families (the
  * others none), checked as pd_read_bonds checks a body: each bond, and the
  * symmetry of the bonds between two of these rows (a piece's rows hold
- * both ends of each bond of the rows it owns). */
+ * both ends of each bond of the rows it owns); *first_bond, the whole
+ * body's index of their first bond. */
 int pd_file_bonds_listed(const pd_file *f);
 pd_status pd_read_bonds_span(const pd_file *f, int64_t n, int64_t r0, int64_t r1, int64_t *span);
 pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0, int64_t g1,
-                             pd_bonds **out);
+                             pd_bonds **out, int64_t *first_bond);
 /* The bonds a run of the scene sc on the body p reads (lib/io/runfile.c):
  * pd_read_bonds_compact's, or on several MPI ranks, where the body's bonds
  * are lists walked as a bond list (pd_piece_reads_rows), those of this
- * rank's piece alone (pd_read_bonds_rows; collective), *rows then 1. */
+ * rank's piece alone (pd_read_bonds_rows; collective), *rows then 1 and
+ * *first_bond the whole body's index of their first bond. */
 pd_status pd_read_bonds_run(const pd_file *f, const pd_particles *p, const pd_scene *sc,
-                            pd_bonds **out, int *rows);
+                            pd_bonds **out, int *rows, int64_t *first_bond);
 pd_status pd_write_bonds(pd_file *f, const pd_bonds *b);
 /* The bond lists of a part of the body (pd_part: rows [first, first +
  * rows), whose bonds are the body's [bond0, bond0 + bonds)) from b, a
@@ -1393,6 +1395,10 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
  * rank its own, at once, into a file of pd_file_create_ranks). */
 pd_status pd_write_restart_part(pd_file *f, const pd_part *pt, int64_t step, const pd_restart *r);
 pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart *r);
+/* The same with the bond history's rows [k0, k0 + nb) alone (a piece's
+ * bonds, pd_read_bonds_rows). */
+pd_status pd_read_restart_rows(const pd_file *f, int64_t n, int64_t step, int64_t k0, int64_t nb,
+                               pd_restart *r);
 /* Lay out the projectile's state in the restart slots (after
  * pd_plan_restart; nothing when it is there already). */
 pd_status pd_plan_restart_projectile(pd_file *f);
@@ -1435,15 +1441,21 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
 /* The same on MPI ranks whose b holds the families of their own rows alone
  * (pd_read_bonds_run): each writes its part's bonds (pd_part: its own
  * rows, whole-body row indices in b; collective). */
-pd_status pd_run_file_start_part(pd_file *out, const pd_file *from, const pd_particles *p,
-                                 const pd_bonds *b, const pd_part *part, const pd_sets *sets,
-                                 const pd_scene *sc, const char *effects, const char *cmdline,
-                                 const char *text);
+pd_status pd_run_file_start_part(pd_file *out, int restart, const pd_file *from,
+                                 const pd_particles *p, const pd_bonds *b, const pd_part *part,
+                                 const pd_sets *sets, const pd_scene *sc, const char *effects,
+                                 const char *cmdline, const char *text, int64_t first);
 /* The state at the last complete frame of a run: its step, the restart
  * slot (pd_restart_free), the frame's velocities and bond states
  * (malloc'ed), for pd_sim_restore. */
 pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int64_t *step,
                            pd_restart *r, double *v[3], uint64_t **bits);
+/* The same where b holds a piece's rows' bonds alone (pd_read_bonds_run),
+ * the whole body's bonds [first_bond, first_bond + b->count): their states
+ * and history alone. */
+pd_status pd_run_file_load_rows(pd_file *f, const pd_particles *p, const pd_bonds *b,
+                                int64_t first_bond, int64_t *step, pd_restart *r, double *v[3],
+                                uint64_t **bits);
 /* The frame of the run's current step (energies, the optional `fields`)
  * and its restart data; the energies also go to *energy (may be NULL). */
 pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
@@ -1519,6 +1531,9 @@ pd_status pd_read_frame_vectors(const pd_file *f, const char *name, int64_t n,
 /* Bond state bits of a frame (count bonds) into a words array. */
 pd_status pd_read_frame_state(const pd_file *f, const char *name, int64_t count,
                               uint64_t *intact);
+/* Bits [k0, k0 + count) of them into bits [0, count) of intact. */
+pd_status pd_read_frame_state_rows(const pd_file *f, const char *name, int64_t k0, int64_t count,
+                                   uint64_t *intact);
 /* Optional scalar field (N) of a frame, e.g. "damage"; *present = 0 when
  * absent (not an error). */
 pd_status pd_read_frame_scalar(const pd_file *f, const char *name, const char *field,

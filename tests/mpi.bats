@@ -134,6 +134,17 @@ with h5py.File('np4.h5') as f:
     assert_line --partial "each read with its own rows' bonds alone"
     pd-run --threads 1 -q --scene impact.scene --steps 60 body.h5 -o one.h5
     run -0 "$PY" "$SAME" one.h5 rows.h5
+    # a restart of VES (its bond history) from 2 ranks on 3, each reading its
+    # rows' bonds, their states and their history alone
+    sed -i 's/^steps 400/steps 120/' impact.scene
+    local ves="--model ves --bulk-modulus 14.9e9 --shear-modulus 11.2e9 --ves-lambda 0.5 --ves-tau 1e-6"
+    # shellcheck disable=SC2086
+    mpi 2 --threads 1 -q --scene impact.scene $ves body.h5 -o r.h5
+    cp r.h5 r1.h5
+    pd-run --threads 1 -q --restart r1.h5 --steps 100 -o one.h5
+    run -0 mpi 3 --threads 1 --restart r.h5 --steps 100 -o np3.h5
+    assert_line --partial "each read with its own rows' bonds alone"
+    run -0 "$PY" "$SAME" one.h5 np3.h5
     # a lattice's stencil is read whole (small), as the serial program does
     impact_body
     run -0 mpi 2 --threads 1 --scene impact.scene --steps 1 body.h5 -o grid.h5

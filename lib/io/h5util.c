@@ -411,22 +411,27 @@ pd_status pd_h5_read_rows(hid_t loc, const char *file, const char *name, const p
         return pd_fail(PD_ERR_FORMAT, "'%s': '%s' is not a dataset", file, name);
     hid_t t = H5Dget_type(d), fs = H5Dget_space(d);
     pd_status s = PD_OK;
-    hsize_t dims[1] = {0};
+    hsize_t dims[2] = {0, 1};
     const H5T_class_t cls = H5Tget_class(t);
     const size_t size = H5Tget_size(t);
+    const int rank = H5Sget_simple_extent_ndims(fs);
     if (cls != form->cls || size != form->size)
         s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' is %s, expected %s", file, name,
                     class_name(cls, size), class_name(form->cls, form->size));
-    else if (H5Sget_simple_extent_ndims(fs) != 1)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has rank %d, expected 1", file, name,
-                    H5Sget_simple_extent_ndims(fs));
+    else if (rank != form->rank || rank < 1 || rank > 2)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has rank %d, expected %d", file, name,
+                    rank, form->rank);
     else if (H5Sget_simple_extent_dims(fs, dims, NULL) < 0 || row0 < 0 || rows < 0 ||
              (uint64_t)(row0 + rows) > (uint64_t)dims[0])
         s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has %llu entries, rows up to %lld wanted",
                     file, name, (unsigned long long)dims[0], (long long)(row0 + rows));
+    else if (rank == 2 && form->dims[1] != 0 && dims[1] != form->dims[1])
+        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has %llu entries along axis 1, expected "
+                    "%llu", file, name, (unsigned long long)dims[1],
+                    (unsigned long long)form->dims[1]);
     if (s == PD_OK && rows > 0) {
-        hsize_t start[1] = {(hsize_t)row0}, count[1] = {(hsize_t)rows};
-        hid_t ms = H5Screate_simple(1, count, NULL);
+        hsize_t start[2] = {(hsize_t)row0, 0}, count[2] = {(hsize_t)rows, dims[1]};
+        hid_t ms = H5Screate_simple(rank, count, NULL);
         if (H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, count, NULL) < 0 ||
             H5Dread(d, memtype, ms, fs, H5P_DEFAULT, buf) < 0)
             s = pd_fail(PD_ERR_FORMAT, "'%s': cannot read dataset '%s'", file, name);

@@ -75,9 +75,9 @@ typedef struct {
  * clipped by HDF5, so callers range-check what they read. */
 pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
                           hid_t memtype, size_t elsize, void **buf, hsize_t *dims);
-/* Read entries [row0, row0 + rows) of a 1-D dataset of the form's class and
- * size into buf (of that many elements of memtype): a piece of a body on
- * MPI ranks reads only its rows. */
+/* Read rows [row0, row0 + rows) of a dataset of the form's class, size and
+ * rank (1 or 2; a fixed second dimension checked) into buf (that many rows
+ * of memtype): a piece of a body on MPI ranks reads only its rows. */
 pd_status pd_h5_read_rows(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
                           hid_t memtype, void *buf, int64_t row0, int64_t rows);
 

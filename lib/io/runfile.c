@@ -15,9 +15,10 @@
 #include "pd.h"
 
 pd_status pd_read_bonds_run(const pd_file *f, const pd_particles *p, const pd_scene *sc,
-                            pd_bonds **out, int *rows)
+                            pd_bonds **out, int *rows, int64_t *first_bond)
 {
     *out = NULL;
+    *first_bond = 0;
     *rows = pd_file_bonds_listed(f) && pd_piece_reads_rows(p, sc);
     if (!*rows)
         return pd_read_bonds_compact(f, p, out);
@@ -35,7 +36,7 @@ pd_status pd_read_bonds_run(const pd_file *f, const pd_particles *p, const pd_sc
     if (s == PD_OK)
         s = pd_piece_rows(n, span, &g0, &g1);
     if (s == PD_OK)
-        s = pd_read_bonds_rows(f, p, g0, g1, out);
+        s = pd_read_bonds_rows(f, p, g0, g1, out, first_bond);
     return s;
 }
 
@@ -62,9 +63,11 @@ static pd_status plan_frames(pd_file *out, const pd_particles *p, int64_t nbonds
 }
 
 /* The state at the last complete frame of a run: its step, the restart
- * slot, the frame's velocities and bond states. */
-pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int64_t *step,
-                           pd_restart *r, double *v[3], uint64_t **bits)
+ * slot, the frame's velocities and bond states (of b's bonds, the whole
+ * body's [k0, k0 + b->count) when `rows`). */
+static pd_status run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int rows,
+                               int64_t k0, int64_t *step, pd_restart *r, double *v[3],
+                               uint64_t **bits)
 {
     int64_t nframes = 0;
     char **names = NULL;
@@ -82,13 +85,28 @@ pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b,
     if (s == PD_OK)
         s = pd_read_frame_vectors(f, names[nframes - 1], p->n, NULL, v);
     if (s == PD_OK)
-        s = pd_read_frame_state(f, names[nframes - 1], b->count, *bits);
+        s = rows ? pd_read_frame_state_rows(f, names[nframes - 1], k0, b->count, *bits)
+                 : pd_read_frame_state(f, names[nframes - 1], b->count, *bits);
     if (s == PD_OK)
-        s = pd_read_restart(f, p->n, fi.step, r);
+        s = rows ? pd_read_restart_rows(f, p->n, fi.step, k0, b->count, r)
+                 : pd_read_restart(f, p->n, fi.step, r);
     if (s == PD_OK)
         *step = fi.step;
     pd_frames_free_list(nframes, names);
     return s;
+}
+
+pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int64_t *step,
+                           pd_restart *r, double *v[3], uint64_t **bits)
+{
+    return run_file_load(f, p, b, 0, 0, step, r, v, bits);
+}
+
+pd_status pd_run_file_load_rows(pd_file *f, const pd_particles *p, const pd_bonds *b,
+                                int64_t first_bond, int64_t *step, pd_restart *r, double *v[3],
+                                uint64_t **bits)
+{
+    return run_file_load(f, p, b, 1, first_bond, step, r, v, bits);
 }
 
 
@@ -168,12 +186,13 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
                           first);
 }
 
-pd_status pd_run_file_start_part(pd_file *out, const pd_file *from, const pd_particles *p,
-                                 const pd_bonds *b, const pd_part *part, const pd_sets *sets,
-                                 const pd_scene *sc, const char *effects, const char *cmdline,
-                                 const char *text)
+pd_status pd_run_file_start_part(pd_file *out, int restart, const pd_file *from,
+                                 const pd_particles *p, const pd_bonds *b, const pd_part *part,
+                                 const pd_sets *sets, const pd_scene *sc, const char *effects,
+                                 const char *cmdline, const char *text, int64_t first)
 {
-    return run_file_start(out, 0, from, p, b, part, sets, sc, effects, cmdline, text, 0);
+    return run_file_start(out, restart, from, p, b, part, sets, sc, effects, cmdline, text,
+                          first);
 }
 
 pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,

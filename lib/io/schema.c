@@ -957,9 +957,10 @@ static pd_status check_bond_rows(const char *fn, const pd_bonds *b, int64_t g0, 
 }
 
 pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0, int64_t g1,
-                             pd_bonds **out)
+                             pd_bonds **out, int64_t *first_bond)
 {
     *out = NULL;
+    *first_bond = 0;
     const char *fn = f->name;
     const int64_t n = p->n;
     double horizon = 0;
@@ -1028,6 +1029,7 @@ pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0
         return s;
     }
     *out = b;
+    *first_bond = k0;
     return PD_OK;
 }
 
@@ -1718,6 +1720,14 @@ pd_status pd_read_frame_vectors(const pd_file *f, const char *name, int64_t n, d
     return PD_OK;
 }
 
+pd_status pd_read_frame_state_rows(const pd_file *f, const char *name, int64_t k0, int64_t count,
+                                   uint64_t *intact)
+{
+    char path[256];
+    pd_status s = frame_path(name, "state", path, sizeof path);
+    return s == PD_OK ? read_bit_rows(f, path, k0, k0 + count, intact) : s;
+}
+
 pd_status pd_read_frame_state(const pd_file *f, const char *name, int64_t count, uint64_t *intact)
 {
     char path[256];
@@ -2025,7 +2035,52 @@ void pd_restart_free(pd_restart *r)
     memset(r, 0, sizeof *r);
 }
 
+/* The bond history's rows [k0, k0 + nb) of the restart slot's dataset
+ * `path` (width values a row) into r. */
+static pd_status read_history_rows(const pd_file *f, const char *path, int64_t k0, int64_t nb,
+                                   pd_restart *r)
+{
+    hid_t d = H5Dopen2(f->fid, path, H5P_DEFAULT);
+    hsize_t dims[2] = {0, 0};
+    if (d < 0)
+        return pd_fail(PD_ERR_FORMAT, "'%s': '%s' is not a dataset", f->name, path);
+    hid_t sp = H5Dget_space(d);
+    const int rank = H5Sget_simple_extent_ndims(sp);
+    if (rank == 2)
+        H5Sget_simple_extent_dims(sp, dims, NULL);
+    H5Sclose(sp);
+    H5Dclose(d);
+    if (rank != 2 || dims[1] < 1 || dims[1] > 16)
+        return pd_fail(PD_ERR_FORMAT, "'%s': %s is not a table of a few values a bond", f->name,
+                       path);
+    const int w = (int)dims[1];
+    r->bond_history = malloc((size_t)(nb > 0 ? nb : 1) * (size_t)w * sizeof(double));
+    if (r->bond_history == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the bond history");
+    const pd_h5_form form = {H5T_FLOAT, 8, 2, {0, (hsize_t)w}};
+    r->history_bonds = nb;
+    r->history_width = w;
+    return pd_h5_read_rows(f->fid, f->name, path, &form, H5T_NATIVE_DOUBLE, r->bond_history, k0,
+                           nb);
+}
+
+static pd_status read_restart(const pd_file *f, int64_t n, int64_t step, int64_t k0, int64_t nb,
+                              pd_restart *r);
+
 pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart *r)
+{
+    return read_restart(f, n, step, 0, -1, r);
+}
+
+pd_status pd_read_restart_rows(const pd_file *f, int64_t n, int64_t step, int64_t k0, int64_t nb,
+                               pd_restart *r)
+{
+    return read_restart(f, n, step, k0, nb, r);
+}
+
+/* pd_read_restart, the bond history's rows [k0, k0 + nb) alone when nb >= 0. */
+static pd_status read_restart(const pd_file *f, int64_t n, int64_t step, int64_t k0, int64_t nb,
+                              pd_restart *r)
 {
     memset(r, 0, sizeof *r);
     int k = -1;
@@ -2101,7 +2156,9 @@ pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart 
         }
         char hpath[64];
         snprintf(hpath, sizeof hpath, "%s/bond_history", group);
-        if (s == PD_OK && pd_h5_has_link(f->fid, hpath)) {
+        if (s == PD_OK && nb >= 0 && pd_h5_has_link(f->fid, hpath))
+            s = read_history_rows(f, hpath, k0, nb, r);
+        else if (s == PD_OK && pd_h5_has_link(f->fid, hpath)) {
             pd_h5_form form = {H5T_FLOAT, 8, 2, {0, 0}};
             hsize_t dims[8] = {0};
             s = pd_h5_read_data(f->fid, f->name, hpath, &form, H5T_NATIVE_DOUBLE, sizeof(double),
