@@ -343,60 +343,75 @@ static const char *class_name(H5T_class_t c, size_t size)
     return "non-numeric";
 }
 
-pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
-                          hid_t memtype, size_t elsize, void **buf, hsize_t *dims_out)
+/* Open dataset `name` (*d, its space *sp; *rank) checked against the
+ * form's class, size and rank; on failure nothing is left open. */
+static pd_status open_checked(hid_t loc, const char *file, const char *name,
+                              const pd_h5_form *form, hid_t *d, hid_t *sp, int *rank)
 {
     if (!pd_h5_has_link(loc, name))
         return pd_fail(PD_ERR_FORMAT, "'%s' has no dataset '%s'", file, name);
-    hid_t d = H5Dopen2(loc, name, H5P_DEFAULT);
-    if (d < 0)
+    if ((*d = H5Dopen2(loc, name, H5P_DEFAULT)) < 0)
         return pd_fail(PD_ERR_FORMAT, "'%s': '%s' is not a dataset", file, name);
-    hid_t t = H5Dget_type(d), sp = H5Dget_space(d);
+    hid_t t = H5Dget_type(*d);
+    *sp = H5Dget_space(*d);
+    *rank = H5Sget_simple_extent_ndims(*sp);
+    const H5T_class_t cls = H5Tget_class(t);
+    const size_t size = H5Tget_size(t);
+    H5Tclose(t);
     pd_status s = PD_OK;
-    hsize_t dims[8] = {0};
-    int rank = H5Sget_simple_extent_ndims(sp);
-    H5T_class_t cls = H5Tget_class(t);
-    size_t size = H5Tget_size(t);
-    if (cls != form->cls || size != form->size) {
+    if (cls != form->cls || size != form->size)
         s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' is %s, expected %s", file, name,
                     class_name(cls, size), class_name(form->cls, form->size));
-    } else if (rank != form->rank) {
-        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has rank %d, expected %d", file, name, rank,
-                    form->rank);
-    } else {
-        H5Sget_simple_extent_dims(sp, dims, NULL);
-        double total = 1;
-        for (int r = 0; r < rank; r++) {
-            if (form->dims[r] != 0 && dims[r] != form->dims[r]) {
-                s = pd_fail(PD_ERR_FORMAT,
-                            "'%s': dataset '%s' has %llu entries along axis %d, expected %llu",
-                            file, name, (unsigned long long)dims[r], r,
-                            (unsigned long long)form->dims[r]);
-                break;
-            }
-            total *= (double)dims[r];
+    else if (*rank != form->rank)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has rank %d, expected %d", file, name,
+                    *rank, form->rank);
+    if (s != PD_OK) {
+        H5Sclose(*sp);
+        H5Dclose(*d);
+    }
+    return s;
+}
+
+pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
+                          hid_t memtype, size_t elsize, void **buf, hsize_t *dims_out)
+{
+    hid_t d, sp;
+    int rank;
+    pd_status s = open_checked(loc, file, name, form, &d, &sp, &rank);
+    if (s != PD_OK)
+        return s;
+    hsize_t dims[8] = {0};
+    H5Sget_simple_extent_dims(sp, dims, NULL);
+    double total = 1;
+    for (int r = 0; r < rank; r++) {
+        if (form->dims[r] != 0 && dims[r] != form->dims[r]) {
+            s = pd_fail(PD_ERR_FORMAT,
+                        "'%s': dataset '%s' has %llu entries along axis %d, expected %llu",
+                        file, name, (unsigned long long)dims[r], r,
+                        (unsigned long long)form->dims[r]);
+            break;
         }
-        if (s == PD_OK && total * (double)elsize > pd_memory_bytes())
-            s = pd_fail(PD_ERR_NOMEM, "'%s': dataset '%s' declares %.3g bytes, more than memory",
-                        file, name, total * (double)elsize);
-        if (s == PD_OK) {
-            void *b = *buf ? *buf : malloc(total > 0 ? (size_t)total * elsize : 1);
-            if (b == NULL)
-                s = pd_fail(PD_ERR_NOMEM, "out of memory reading '%s'", name);
-            else if (total > 0 && H5Dread(d, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, b) < 0) {
-                if (b != *buf)
-                    free(b);
-                s = pd_fail(PD_ERR_FORMAT, "'%s': cannot read dataset '%s'", file, name);
-            } else {
-                *buf = b;
-                if (dims_out)
-                    for (int r = 0; r < rank; r++)
-                        dims_out[r] = dims[r];
-            }
+        total *= (double)dims[r];
+    }
+    if (s == PD_OK && total * (double)elsize > pd_memory_bytes())
+        s = pd_fail(PD_ERR_NOMEM, "'%s': dataset '%s' declares %.3g bytes, more than memory",
+                    file, name, total * (double)elsize);
+    if (s == PD_OK) {
+        void *b = *buf ? *buf : malloc(total > 0 ? (size_t)total * elsize : 1);
+        if (b == NULL)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory reading '%s'", name);
+        else if (total > 0 && H5Dread(d, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, b) < 0) {
+            if (b != *buf)
+                free(b);
+            s = pd_fail(PD_ERR_FORMAT, "'%s': cannot read dataset '%s'", file, name);
+        } else {
+            *buf = b;
+            if (dims_out)
+                for (int r = 0; r < rank; r++)
+                    dims_out[r] = dims[r];
         }
     }
     H5Sclose(sp);
-    H5Tclose(t);
     H5Dclose(d);
     return s;
 }
@@ -404,23 +419,15 @@ pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const p
 pd_status pd_h5_read_rows(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
                           hid_t memtype, void *buf, int64_t row0, int64_t rows)
 {
-    if (!pd_h5_has_link(loc, name))
-        return pd_fail(PD_ERR_FORMAT, "'%s' has no dataset '%s'", file, name);
-    hid_t d = H5Dopen2(loc, name, H5P_DEFAULT);
-    if (d < 0)
-        return pd_fail(PD_ERR_FORMAT, "'%s': '%s' is not a dataset", file, name);
-    hid_t t = H5Dget_type(d), fs = H5Dget_space(d);
-    pd_status s = PD_OK;
+    hid_t d, fs;
+    int rank;
+    pd_status s = open_checked(loc, file, name, form, &d, &fs, &rank);
+    if (s != PD_OK)
+        return s;
     hsize_t dims[2] = {0, 1};
-    const H5T_class_t cls = H5Tget_class(t);
-    const size_t size = H5Tget_size(t);
-    const int rank = H5Sget_simple_extent_ndims(fs);
-    if (cls != form->cls || size != form->size)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' is %s, expected %s", file, name,
-                    class_name(cls, size), class_name(form->cls, form->size));
-    else if (rank != form->rank || rank < 1 || rank > 2)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has rank %d, expected %d", file, name,
-                    rank, form->rank);
+    if (rank < 1 || rank > 2)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has rank %d, expected 1 or 2", file, name,
+                    rank);
     else if (H5Sget_simple_extent_dims(fs, dims, NULL) < 0 || row0 < 0 || rows < 0 ||
              (uint64_t)(row0 + rows) > (uint64_t)dims[0])
         s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has %llu entries, rows up to %lld wanted",
@@ -438,7 +445,6 @@ pd_status pd_h5_read_rows(hid_t loc, const char *file, const char *name, const p
         H5Sclose(ms);
     }
     H5Sclose(fs);
-    H5Tclose(t);
     H5Dclose(d);
     return s;
 }

@@ -359,6 +359,74 @@ static uint8_t *state_bytes(const pd_file *f, const pd_part *pt, const uint64_t 
 static pd_status check_compact(const char *fn, const pd_particles *p, const pd_bonds *b);
 static int64_t row_of(const pd_bonds *b, int64_t k);
 
+static pd_status check_bond_rows(const char *fn, const pd_bonds *b, int64_t g0, int64_t g1,
+                                 int64_t k0)
+{
+    for (int64_t i = g0; i < g1; i++)
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+            const int32_t j = b->neighbor[k];
+            if (j == i)
+                return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld is bonded to itself", fn,
+                               (long long)i);
+            if (k > b->offset[i] && b->neighbor[k - 1] >= j)
+                return pd_fail(PD_ERR_FORMAT, "'%s': family of particle %lld is not sorted", fn,
+                               (long long)i);
+            if (!(b->length[k] > 0) || !isfinite(b->length[k]))
+                return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has length %g", fn,
+                               (long long)(k0 + k), b->length[k]);
+            if (b->length[k] > b->horizon * (1 + 1e-9))
+                return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld is %g m long, beyond the horizon "
+                                              "%g m", fn, (long long)(k0 + k), b->length[k],
+                               b->horizon);
+            if (!(b->vfactor[k] > 0 && b->vfactor[k] <= 1))
+                return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has volume factor %g", fn,
+                               (long long)(k0 + k), b->vfactor[k]);
+        }
+    /* as check_bonds: the mirror of i-j (j < i) is the next unmatched entry
+     * above the diagonal in j's row */
+    int64_t *next = malloc((size_t)(g1 > g0 ? g1 - g0 : 1) * sizeof(int64_t));
+    if (next == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory checking bonds");
+    for (int64_t j = g0; j < g1; j++) {
+        int64_t q = b->offset[j];
+        while (q < b->offset[j + 1] && b->neighbor[q] < j)
+            q++;
+        next[j - g0] = q;
+    }
+    pd_status s = PD_OK;
+    for (int64_t i = g0; i < g1 && s == PD_OK; i++)
+        for (int64_t k = b->offset[i]; k < b->offset[i + 1] && b->neighbor[k] < i && s == PD_OK;
+             k++) {
+            const int64_t j = b->neighbor[k];
+            if (j < g0)
+                continue;
+            const int64_t q = next[j - g0]++;
+            if (q >= b->offset[j + 1] || b->neighbor[q] != i)
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)", fn,
+                            (long long)i, (long long)j, (long long)j, (long long)i);
+            else if (pd_bond_intact(b->intact, k) != pd_bond_intact(b->intact, q))
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': bond %lld-%lld is broken on one side only (state bits differ)",
+                            fn, (long long)j, (long long)i);
+            else if (b->precrack &&
+                     pd_bond_intact(b->precrack, k) != pd_bond_intact(b->precrack, q))
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': bond %lld-%lld is pre-cracked on one side only (precrack bits "
+                            "differ)",
+                            fn, (long long)j, (long long)i);
+        }
+    for (int64_t j = g0; j < g1 && s == PD_OK; j++) {
+        const int64_t q = next[j - g0];
+        if (q < b->offset[j + 1] && b->neighbor[q] < g1)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)",
+                        fn, (long long)j, (long long)b->neighbor[q], (long long)b->neighbor[q],
+                        (long long)j);
+    }
+    free(next);
+    return s;
+}
+
 static pd_status check_bonds(const char *fn, const pd_particles *p, const pd_bonds *b)
 {
     if (!pd_bonds_has_lists(b))
@@ -372,68 +440,7 @@ static pd_status check_bonds(const char *fn, const pd_particles *p, const pd_bon
     if (b->offset[b->n] != b->count)
         return pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset ends at %lld but there are %lld bonds",
                        fn, (long long)b->offset[b->n], (long long)b->count);
-    for (int64_t i = 0; i < b->n; i++)
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            int32_t j = b->neighbor[k];
-            if (j == i)
-                return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld is bonded to itself", fn,
-                               (long long)i);
-            if (k > b->offset[i] && b->neighbor[k - 1] >= j)
-                return pd_fail(PD_ERR_FORMAT, "'%s': family of particle %lld is not sorted", fn,
-                               (long long)i);
-            if (!(b->length[k] > 0) || !isfinite(b->length[k]))
-                return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has length %g", fn, (long long)k,
-                               b->length[k]);
-            if (b->length[k] > b->horizon * (1 + 1e-9))
-                return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld is %g m long, beyond the horizon "
-                                              "%g m", fn, (long long)k, b->length[k], b->horizon);
-            if (!(b->vfactor[k] > 0 && b->vfactor[k] <= 1))
-                return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has volume factor %g", fn,
-                               (long long)k, b->vfactor[k]);
-        }
-    /* Symmetry in one walk: row i meets its partners j < i in ascending i
-     * for each j, so the mirror of bond i-j is the next unmatched entry
-     * above the diagonal in j's row. */
-    int64_t *next = malloc((size_t)(b->n > 0 ? b->n : 1) * sizeof(int64_t));
-    if (next == NULL)
-        return pd_fail(PD_ERR_NOMEM, "out of memory checking bonds");
-    for (int64_t j = 0; j < b->n; j++) {
-        next[j] = b->offset[j];
-        while (next[j] < b->offset[j + 1] && b->neighbor[next[j]] < j)
-            next[j]++;
-    }
-    pd_status s = PD_OK;
-    for (int64_t i = 0; i < b->n && s == PD_OK; i++)
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1] && b->neighbor[k] < i; k++) {
-            int64_t j = b->neighbor[k], q = next[j]++;
-            if (q >= b->offset[j + 1] || b->neighbor[q] != i) {
-                s = pd_fail(PD_ERR_FORMAT,
-                            "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)", fn,
-                            (long long)i, (long long)j, (long long)j, (long long)i);
-                break;
-            }
-            if (pd_bond_intact(b->intact, k) != pd_bond_intact(b->intact, q)) {
-                s = pd_fail(PD_ERR_FORMAT,
-                            "'%s': bond %lld-%lld is broken on one side only (state bits differ)",
-                            fn, (long long)j, (long long)i);
-                break;
-            }
-            if (b->precrack &&
-                pd_bond_intact(b->precrack, k) != pd_bond_intact(b->precrack, q)) {
-                s = pd_fail(PD_ERR_FORMAT,
-                            "'%s': bond %lld-%lld is pre-cracked on one side only (precrack bits "
-                            "differ)",
-                            fn, (long long)j, (long long)i);
-                break;
-            }
-        }
-    for (int64_t j = 0; j < b->n && s == PD_OK; j++)
-        if (next[j] != b->offset[j + 1])
-            s = pd_fail(PD_ERR_FORMAT, "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)",
-                        fn, (long long)j, (long long)b->neighbor[next[j]],
-                        (long long)b->neighbor[next[j]], (long long)j);
-    free(next);
-    return s;
+    return check_bond_rows(fn, b, 0, b->n, 0);
 }
 
 /* Is every bond of compact families as check_bonds wants it (length
@@ -891,70 +898,6 @@ static pd_status read_bit_rows(const pd_file *f, const char *name, int64_t k0, i
 /* check_bonds of rows [g0, g1) of b alone: each bond as check_bonds wants
  * it, and the symmetry of the bonds between two of the rows (a bond to a
  * row beyond them is checked by a piece that holds both). */
-static pd_status check_bond_rows(const char *fn, const pd_bonds *b, int64_t g0, int64_t g1)
-{
-    for (int64_t i = g0; i < g1; i++)
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-            const int32_t j = b->neighbor[k];
-            if (j == i)
-                return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld is bonded to itself", fn,
-                               (long long)i);
-            if (k > b->offset[i] && b->neighbor[k - 1] >= j)
-                return pd_fail(PD_ERR_FORMAT, "'%s': family of particle %lld is not sorted", fn,
-                               (long long)i);
-            if (!(b->length[k] > 0) || !isfinite(b->length[k]) ||
-                b->length[k] > b->horizon * (1 + 1e-9))
-                return pd_fail(PD_ERR_FORMAT, "'%s': a bond of particle %lld is %g m long (the "
-                                              "horizon is %g m)",
-                               fn, (long long)i, b->length[k], b->horizon);
-            if (!(b->vfactor[k] > 0 && b->vfactor[k] <= 1))
-                return pd_fail(PD_ERR_FORMAT, "'%s': a bond of particle %lld has volume factor %g",
-                               fn, (long long)i, b->vfactor[k]);
-        }
-    /* as check_bonds: the mirror of i-j (j < i) is the next unmatched entry
-     * above the diagonal in j's row */
-    int64_t *next = malloc((size_t)(g1 > g0 ? g1 - g0 : 1) * sizeof(int64_t));
-    if (next == NULL)
-        return pd_fail(PD_ERR_NOMEM, "out of memory checking bonds");
-    for (int64_t j = g0; j < g1; j++) {
-        int64_t q = b->offset[j];
-        while (q < b->offset[j + 1] && b->neighbor[q] < j)
-            q++;
-        next[j - g0] = q;
-    }
-    pd_status s = PD_OK;
-    for (int64_t i = g0; i < g1 && s == PD_OK; i++)
-        for (int64_t k = b->offset[i]; k < b->offset[i + 1] && b->neighbor[k] < i && s == PD_OK;
-             k++) {
-            const int64_t j = b->neighbor[k];
-            if (j < g0)
-                continue;
-            const int64_t q = next[j - g0]++;
-            if (q >= b->offset[j + 1] || b->neighbor[q] != i)
-                s = pd_fail(PD_ERR_FORMAT,
-                            "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)", fn,
-                            (long long)i, (long long)j, (long long)j, (long long)i);
-            else if (pd_bond_intact(b->intact, k) != pd_bond_intact(b->intact, q))
-                s = pd_fail(PD_ERR_FORMAT,
-                            "'%s': bond %lld-%lld is broken on one side only (state bits differ)",
-                            fn, (long long)j, (long long)i);
-            else if (b->precrack &&
-                     pd_bond_intact(b->precrack, k) != pd_bond_intact(b->precrack, q))
-                s = pd_fail(PD_ERR_FORMAT,
-                            "'%s': bond %lld-%lld is pre-cracked on one side only (precrack bits "
-                            "differ)",
-                            fn, (long long)j, (long long)i);
-        }
-    for (int64_t j = g0; j < g1 && s == PD_OK; j++) {
-        const int64_t q = next[j - g0];
-        if (q < b->offset[j + 1] && b->neighbor[q] < g1)
-            s = pd_fail(PD_ERR_FORMAT, "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)",
-                        fn, (long long)j, (long long)b->neighbor[q], (long long)b->neighbor[q],
-                        (long long)j);
-    }
-    free(next);
-    return s;
-}
 
 pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0, int64_t g1,
                              pd_bonds **out, int64_t *first_bond)
@@ -1021,7 +964,7 @@ pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0
     if (b)
         b->horizon = horizon;
     if (s == PD_OK)
-        s = check_bond_rows(fn, b, g0, g1);
+        s = check_bond_rows(fn, b, g0, g1, k0);
     if (s == PD_OK)
         s = check_precrack(fn, p, b);
     if (s != PD_OK) {
