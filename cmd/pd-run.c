@@ -861,8 +861,7 @@ static pd_status timed_frame(pd_file *out, const pd_sim *sim, unsigned fields, d
                              pd_energy *energy)
 {
     double t0 = pd_wtime();
-    pd_status s = pd_run_file_frame(out, pd_sim_particles(sim), pd_sim_bonds(sim), sim, fields,
-                                    energy);
+    pd_status s = pd_run_file_frame(out, sim, fields, energy);
     *t_out += pd_wtime() - t0;
     return s;
 }

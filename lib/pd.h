@@ -1458,8 +1458,7 @@ pd_status pd_run_file_load_rows(pd_file *f, const pd_particles *p, const pd_bond
                                 uint64_t **bits);
 /* The frame of the run's current step (energies, the optional `fields`)
  * and its restart data; the energies also go to *energy (may be NULL). */
-pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
-                            const pd_sim *sim, unsigned fields, pd_energy *energy);
+pd_status pd_run_file_frame(pd_file *out, const pd_sim *sim, unsigned fields, pd_energy *energy);
 /* The row of the time series (/series, laid out by pd_run_file_start when
  * sc->series > 0) of the run's current step, when it is one of the
  * series' steps (pd_series_at; else nothing is written): computed from the

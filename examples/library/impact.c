@@ -118,7 +118,7 @@ int main(int argc, char **argv)
             s = pd_sim_step(sim);
         pd_energy e;
         if (s == PD_OK && pd_frame_at(sc, n) &&
-            (s = pd_run_file_frame(f, p, b, sim, sc->fields, &e)) == PD_OK)
+            (s = pd_run_file_frame(f, sim, sc->fields, &e)) == PD_OK)
             printf("step %3lld  t %.4e s  kinetic %.6e J  projectile %.6e J  released %.6e J  "
                    "balance %.6e J  broken %lld\n",
                    (long long)n, pd_sim_time(sim), e.kinetic, e.projectile, e.released,

@@ -195,11 +195,9 @@ pd_status pd_run_file_start_part(pd_file *out, int restart, const pd_file *from,
                           first);
 }
 
-pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds *b,
-                            const pd_sim *sim, unsigned fields, pd_energy *energy)
+pd_status pd_run_file_frame(pd_file *out, const pd_sim *sim, unsigned fields, pd_energy *energy)
 {
-    (void)b; /* the run's own (a piece's on MPI ranks) */
-    /* on MPI ranks every rank takes part in each sum and write below */
+    /* the run's own particles and bonds (a piece's on MPI ranks); on MPI ranks every rank takes part in each sum and write below */
     pd_part pt;
     pd_sim_part(sim, &pt);
     pd_frame_info fi = {.step = pd_sim_stepno(sim), .time = pd_sim_time(sim),
@@ -243,7 +241,6 @@ pd_status pd_run_file_frame(pd_file *out, const pd_particles *p, const pd_bonds 
     if (s == PD_OK)
         s = pd_write_frame_part(out, &pt, &fi, q->x, pd_sim_positions(sim),
                                 pd_sim_velocities(sim), intact, &ff);
-    (void)p;
     free(damage);
     free(density);
     free(stress);
