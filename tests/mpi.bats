@@ -134,6 +134,14 @@ with h5py.File('np4.h5') as f:
     assert_line --partial "each read with its own rows' bonds alone"
     pd-run --threads 1 -q --scene impact.scene --steps 60 body.h5 -o one.h5
     run -0 "$PY" "$SAME" one.h5 rows.h5
+    # a pre-crack in some ranks' rows alone: the model's /bonds/precrack
+    # written again, each rank its rows'
+    pd-bonds -q --horizon 0.0030001 --crack rect,0.015,-1,-0.0001,0,2,0,0.01,0,0 lat.h5 -o cr.h5
+    same_on_ranks "3" 1 --scene impact.scene --steps 60 cr.h5
+    run -0 "$PY" -c "
+import h5py
+with h5py.File('np3.h5') as f:
+    assert f['bonds/precrack'][:].any()"
     # a restart of VES (its bond history) from 2 ranks on 3, each reading its
     # rows' bonds, their states and their history alone
     sed -i 's/^steps 400/steps 120/' impact.scene

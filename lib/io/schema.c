@@ -954,12 +954,9 @@ pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0
         if ((b->precrack = malloc((size_t)(pd_bits_words(k1 - k0) + 1) * sizeof(uint64_t))) ==
             NULL)
             s = pd_fail(PD_ERR_NOMEM, "out of memory for the pre-crack");
-        else
+        else /* kept when none of these rows' is: the file's /bonds/precrack
+                is written again by every rank's rows */
             s = read_bit_rows(f, "/bonds/precrack", k0, k1, b->precrack);
-        if (s == PD_OK && pd_bits_count_broken(b->precrack, b->count) == b->count) {
-            free(b->precrack); /* none of these is pre-cracked */
-            b->precrack = NULL;
-        }
     }
     if (b)
         b->horizon = horizon;
