@@ -1186,7 +1186,8 @@ static int start(struct options *o, struct held *h, int64_t *first)
         part.nbonds = pd_comm_total(part.bonds);
     }
     h->nbonds = rows ? part.nbonds : h->b ? h->b->count : 0;
-    const char *effects = pd_sim_effects(h->piece ? h->piece : h->sim);
+    const pd_sim *run = h->piece ? h->piece : h->sim;
+    const char *effects = run ? pd_sim_effects(run) : NULL;
     if (s == PD_OK && rows)
         s = pd_run_file_start_part(h->out, restart, restart ? h->out : h->in, h->p, h->b, &part,
                                    h->sets, sc, effects, h->cmdline ? h->cmdline : PROG, h->text,
