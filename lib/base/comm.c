@@ -95,6 +95,14 @@ int pd_comm_or(int v)
     return out;
 }
 
+unsigned pd_comm_bits(unsigned v)
+{
+    unsigned out = v;
+    if (pd_comm_size() > 1)
+        MPI_Allreduce(MPI_IN_PLACE, &out, 1, MPI_UNSIGNED, MPI_BOR, MPI_COMM_WORLD);
+    return out;
+}
+
 int64_t pd_comm_min(int64_t v)
 {
     long long out = v;
@@ -296,6 +304,11 @@ int pd_comm_size(void)
 int pd_comm_or(int v)
 {
     return v != 0;
+}
+
+unsigned pd_comm_bits(unsigned v)
+{
+    return v;
 }
 
 int64_t pd_comm_min(int64_t v)

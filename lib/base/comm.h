@@ -16,6 +16,9 @@ void pd_comm_allgather(const double *mine, const int64_t *counts, double *all);
 void pd_comm_counts(int64_t mine, int64_t *all);
 /* Each rank's send[r] to rank r, which gets it as recv[this rank]. */
 void pd_comm_counts_to(const int64_t *send, int64_t *recv);
+/* The bitwise or of v over the ranks (collective): several yes-or-no
+ * questions in one reduction. */
+unsigned pd_comm_bits(unsigned v);
 /* The smallest lo[d] and the largest hi[d] over the ranks, in place. */
 void pd_comm_box(double lo[3], double hi[3]);
 /* Each rank sends send_count[r] doubles to rank r (from `send`, in rank

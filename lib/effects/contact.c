@@ -964,14 +964,15 @@ static pd_status contact_build(pd_sim *sim, contact_list *cl)
     return PD_OK;
 }
 
-/* Has any particle moved more than skin/2 since the last build? */
-static int needs_rebuild(const pd_sim *sim, const contact_list *cl)
+/* Has any of this rank's own particles moved more than skin/2 since the
+ * last build (or is there none yet)?  (pd_effect.moved) */
+static int own_moved(const pd_sim *sim, void *state)
 {
+    const contact_list *cl = state;
     if (sim->contact_builds == 0)
         return 1;
     double lim2 = 0.25 * cl->skin * cl->skin;
     int moved = 0;
-    /* a piece: its own particles, and then those of every rank */
     const int64_t lo = sim->piece ? sim->piece->own_lo : 0, hi = sim->piece ? sim->piece->own_hi : sim->n;
 #pragma omp parallel for schedule(static) reduction(| : moved)
     for (int64_t i = lo; i < hi; i++) {
@@ -980,6 +981,19 @@ static int needs_rebuild(const pd_sim *sim, const contact_list *cl)
         double d2 = dx * dx + dy * dy + dz * dz;
         moved |= !(d2 <= lim2);
     }
+    return moved;
+}
+
+/* Has any particle moved more than skin/2 since the last build?  A piece:
+ * its own, then those of every rank (asked with the step's lost particles
+ * when the step asked: sim->moved). */
+static int needs_rebuild(const pd_sim *sim, contact_list *cl)
+{
+    if (sim->moved)
+        return sim->moved - 1;
+    if (sim->contact_builds == 0)
+        return 1;
+    int moved = own_moved(sim, cl);
     if (sim->piece) {
         const double t0 = pd_wtime();
         moved = pd_comm_or(moved);
@@ -1102,7 +1116,8 @@ static void contact_energy(const pd_sim *sim, void *state, double *e)
 const pd_effect pd_effect_contact = {
     .name = "contact", .timer = PD_T_CONTACT, .init = contact_init, .force = contact_force,
     .free = contact_free, .energy = contact_energy, .kind = PD_ENERGY_CONTACT,
-    .declared = contact_declared, .save = contact_save, .restore = contact_restore};
+    .declared = contact_declared, .save = contact_save, .restore = contact_restore,
+    .moved = own_moved};
 
 int64_t pd_sim_contact_builds(const pd_sim *sim)
 {

@@ -367,6 +367,10 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
         return st;
     }
     sim->piece_owned = 1;
+    /* its blocks' energies of broken bonds, kept for some steps */
+    const int64_t own = pc->blocks[pc->rank] > 0 ? pc->blocks[pc->rank] : 1;
+    if ((sim->rel_held = malloc((size_t)(PD_RELEASED_STEPS * own) * sizeof(double))) == NULL)
+        st = pd_fail(PD_ERR_NOMEM, "out of memory for a piece of the body");
     /* the whole body's figures: the box outside which a particle is lost,
      * and the AVX-512 rows' contact gap and cap */
     pd_lost_box(p, sc->lost_margin, sim->box_lo, sim->box_hi);
@@ -375,7 +379,7 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
         memset(&h, 0, sizeof h);
         int64_t lo, hi;
         pd_sim_owned(sim, &lo, &hi);
-        st = pd_comm_agree(pd_half_build(b, &h));
+        st = pd_comm_agree(st == PD_OK ? pd_half_build(b, &h) : st);
         if (st == PD_OK)
             st = pd_half_gap_rows(&h, b, p, lo, hi, 1, &sim->half.gap);
         pd_half_free(&h);

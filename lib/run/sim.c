@@ -226,6 +226,7 @@ void pd_sim_free(pd_sim *sim)
         free(sim->f[d]);
     }
     free(sim->intact);
+    free(sim->rel_held);
     pd_half_free(&sim->half);
     pd_grid_free(sim->grid);
     pd_bonds_free(sim->own);
@@ -620,9 +621,15 @@ pd_status pd_sim_step(pd_sim *sim)
     pd_status s = pd_sim_constrain(sim, PD_PHASE_DRIFT);
     int gone = away;
     if (sim->piece && s == PD_OK) { /* the ghosts' positions and s0 from their owners */
+        unsigned ask = away ? 1u : 0u; /* and, in one reduction, the effects' questions */
+        for (int k = 0; k < sim->neffects; k++)
+            if (sim->effects[k]->moved && sim->effects[k]->moved(sim, sim->state[k]))
+                ask |= 2u;
         const double th = pd_wtime();
         s = pd_piece_halo(sim);
-        gone = pd_comm_or(away);
+        const unsigned agreed = pd_comm_bits(ask);
+        gone = agreed & 1u;
+        sim->moved = 1 + (int)((agreed >> 1) & 1u);
         sim->timers[PD_T_RANKS] += pd_wtime() - th;
     }
     if (s == PD_OK && gone) {
@@ -630,9 +637,9 @@ pd_status pd_sim_step(pd_sim *sim)
         s = take_lost(sim);
         sim->timers[PD_T_FAILURE] += pd_wtime() - tl;
     }
-    if (s != PD_OK)
-        return s;
-    s = pd_sim_compute_forces(sim);
+    if (s == PD_OK)
+        s = pd_sim_compute_forces(sim);
+    sim->moved = 0; /* asked for these forces alone */
     if (s != PD_OK)
         return s;
     t0 = pd_wtime();
@@ -700,6 +707,7 @@ double pd_sim_kinetic(const pd_sim *sim)
 
 pd_status pd_sim_energy(const pd_sim *sim, pd_energy *e, double *density)
 {
+    pd_sim_released(sim); /* a piece's steps not yet summed (collective) */
     memset(e, 0, sizeof *e);
     double *buf = malloc((size_t)(sim->n > 0 ? sim->n : 1) * sizeof(double));
     if (sim->piece && pd_comm_or(buf == NULL)) { /* every rank, or none, goes on */
@@ -764,6 +772,7 @@ double pd_energy_total(const pd_energy *e)
 
 void pd_sim_accumulated(const pd_sim *sim, pd_restart *r)
 {
+    pd_sim_released(sim); /* a piece's steps not yet summed (collective) */
     r->work = sim->work;
     r->released = sim->released;
     r->power = sim->power;
@@ -872,10 +881,9 @@ pd_status pd_sim_restore(pd_sim *sim, int64_t step, const pd_restart *r, double 
 
 int64_t pd_sim_no_failure(const pd_sim *sim)
 {
-    int64_t n = 0, lo, hi; /* a piece: its own rows' */
-    pd_sim_owned(sim, &lo, &hi);
-    lo -= sim->piece ? sim->piece->first : 0;
-    hi -= sim->piece ? sim->piece->first : 0;
+    int64_t n = 0; /* a piece: its own rows' */
+    const int64_t lo = sim->piece ? sim->piece->own_lo : 0,
+                  hi = sim->piece ? sim->piece->own_hi : sim->n;
     for (int64_t i = lo; sim->nofail && i < hi; i++)
         n += sim->nofail[i];
     return n;

@@ -44,6 +44,12 @@ typedef struct pd_effect {
      * or load it, N, to r[a][i]: the reaction of a boundary condition
      * (pd_sim_series_row sums it over each set); NULL: none. */
     void (*reaction)(const pd_sim *sim, void *state, double *const r[3]);
+    /* On MPI ranks, after the drift: this rank's yes or no to the
+     * effect's question of the new positions (contact: has one of its own
+     * particles moved enough for the list to be rebuilt), or-ed over the
+     * ranks in the step's one reduction with the lost particles' and kept
+     * in sim->moved for the effect's force; NULL: none. */
+    int (*moved)(const pd_sim *sim, void *state);
 } pd_effect;
 
 /* Where pd_effect.constrain is called: in pd_sim_setup before the first
@@ -167,7 +173,12 @@ struct pd_sim {
     double power;       /* power put in by the effects at this step's
                            force evaluation, W                           */
     double work;        /* its time integral (trapezoidal), J            */
-    double released;    /* energy of the bonds broken so far, J          */
+    double released;    /* energy of the bonds broken so far, J (a piece:
+                           but for rel_held's steps, pd_sim_released)    */
+    double *rel_held;   /* a piece: its own blocks' energies of the bonds
+                           broken in each of rel_steps steps (at most
+                           PD_RELEASED_STEPS), not yet in `released`     */
+    int64_t rel_steps;
     double energy0;     /* kinetic + elastic + contact at step 0, J      */
     double penalty0;    /* its contact share (pairs, overlaps), J        */
     double damped;      /* the energy --damping took so far, J           */
@@ -189,6 +200,8 @@ struct pd_sim {
                            /scene@effects)                               */
     double timers[PD_T_COUNT]; /* wall time per pd_timer, s               */
     int64_t contact_builds;    /* contact list builds so far             */
+    int moved;          /* a piece: 0, or 1 + the ranks' answer to the
+                           step's pd_effect.moved, for this step's forces */
     int64_t contact_remote;    /* a piece: the most contact partners one
                                   of its lists took from beyond it        */
     int constrained;    /* 1: some effect has a constrain hook           */
@@ -234,6 +247,12 @@ void pd_sim_reactions(const pd_sim *sim, double *const r[3]);
  * of the kernel (nblocks, in block order), added to sim->released in the
  * whole body's block order (over the ranks, a piece's own blocks). */
 void pd_sim_add_released(pd_sim *sim, const double *released, int64_t nblocks);
+/* A piece keeps its own blocks' energies of PD_RELEASED_STEPS steps at
+ * most and adds the ranks' together, in the order one rank adds them,
+ * when sim->released is read (collective): pd_sim_released, before every
+ * read of it.  One meeting point a step fewer. */
+#define PD_RELEASED_STEPS 64
+void pd_sim_released(const pd_sim *sim);
 /* The sums of m per-row arrays of the run (x[c][0..n)) as pd_sum_fixed
  * takes them over the whole body: over the ranks, of the rows each piece
  * owns.  Every rank calls it and gets the same sums. */

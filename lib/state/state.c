@@ -7,6 +7,7 @@
  */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "base/comm.h"
 #include "state/sim.h"
@@ -103,25 +104,54 @@ void pd_sim_add_released(pd_sim *sim, const double *released, int64_t nblocks)
             sim->released += released[blk];
         return;
     }
-    /* every rank's own blocks, in rank order: the whole body's order (the
-     * time it takes is the ranks', not the failure's it is called in) */
-    const double t0 = pd_wtime();
-    int64_t total = 0;
-    for (int r = 0; r < pc->ranks; r++)
-        total += pc->blocks[r];
-    double *all = malloc((size_t)(total > 0 ? total : 1) * sizeof(double));
-    if (all == NULL) { /* a few doubles a block; nothing sane goes on */
-        sim->released = NAN;
-        return;
+    /* a piece: its own blocks' kept, every rank's added later in the whole
+     * body's order (pd_sim_released) */
+    if (sim->rel_steps == PD_RELEASED_STEPS) { /* the ranks' time, not the failure's it is
+                                                  called in (pd_sim_compute_forces takes the
+                                                  ranks' off the bonds') */
+        const double t0 = pd_wtime();
+        pd_sim_released(sim);
+        const double dt = pd_wtime() - t0;
+        sim->timers[PD_T_FAILURE] -= dt;
+        sim->timers[PD_T_BONDS] += dt;
     }
-    pd_comm_allgather(released + pc->own_blk_lo, pc->blocks, all);
-    for (int64_t blk = 0; blk < total; blk++)
-        sim->released += all[blk];
+    const int64_t own = pc->blocks[pc->rank];
+    memcpy(sim->rel_held + sim->rel_steps * own, released + pc->own_blk_lo,
+           (size_t)own * sizeof(double));
+    sim->rel_steps++;
+}
+
+void pd_sim_released(const pd_sim *csim)
+{
+    pd_sim *sim = (pd_sim *)csim; /* the sums owed to `released` */
+    const pd_piece *pc = sim->piece;
+    if (pc == NULL || sim->rel_steps == 0)
+        return;
+    /* every rank's own blocks of each step, step by step, in rank order:
+     * the whole body's block order, as one rank adds them (the time it
+     * takes is the ranks') */
+    const double t0 = pd_wtime();
+    const int P = pc->ranks;
+    const int64_t m = sim->rel_steps;
+    int64_t counts[P], at[P], total = 0;
+    for (int r = 0; r < P; r++) {
+        counts[r] = m * pc->blocks[r];
+        at[r] = total;
+        total += counts[r];
+    }
+    double *all = malloc((size_t)(total > 0 ? total : 1) * sizeof(double));
+    if (pd_comm_or(all == NULL)) /* a few doubles a block; nothing sane goes on */
+        sim->released = NAN;
+    else {
+        pd_comm_allgather(sim->rel_held, counts, all);
+        for (int64_t st = 0; st < m; st++)
+            for (int r = 0; r < P; r++)
+                for (int64_t blk = 0; blk < pc->blocks[r]; blk++)
+                    sim->released += all[at[r] + st * pc->blocks[r] + blk];
+    }
     free(all);
-    const double dt = pd_wtime() - t0;
-    sim->timers[PD_T_RANKS] += dt;
-    sim->timers[PD_T_FAILURE] -= dt;
-    sim->timers[PD_T_BONDS] += dt; /* pd_sim_compute_forces takes it off */
+    sim->rel_steps = 0;
+    sim->timers[PD_T_RANKS] += pd_wtime() - t0;
 }
 
 void pd_sim_sum(const pd_sim *sim, const double *const *x, int m, double *sums)
