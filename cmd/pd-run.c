@@ -880,7 +880,9 @@ static pd_status timed_sample(pd_file *out, pd_sim *sim, double *t_out, pd_energ
     return s;
 }
 
-static void print_timing(const pd_sim *sim, double wall, double output)
+/* spread: on MPI ranks the least and the most over the ranks of the bonds'
+ * and of the ranks' time (else NULL). */
+static void print_timing(const pd_sim *sim, double wall, double output, const double *spread)
 {
     static const char *names[PD_T_COUNT] = {"bonds",  "contact", "neighbour lists", "indenter",
                                             "integration", "output", "failure", "MPI ranks"};
@@ -891,6 +893,11 @@ static void print_timing(const pd_sim *sim, double wall, double output)
     for (int k = 0; k < PD_T_COUNT - (pd_comm_size() == 1); k++) /* one rank: no MPI line */
         fprintf(stderr, "  %-16s %10.3f s %6.1f%%\n", names[k], t[k],
                 wall > 0 ? 100.0 * t[k] / wall : 0.0);
+    if (spread) /* a rank that walks its bonds faster waits for the others */
+        fprintf(stderr,
+                "  over the ranks: bonds %.3f to %.3f s, MPI ranks %.3f to %.3f s (rank 0's "
+                "above)\n",
+                spread[0], spread[1], spread[2], spread[3]);
 }
 
 /* The constants the run uses, and where they come from. */
@@ -1405,8 +1412,16 @@ static int run_main(int argc, char **argv)
         fprintf(stderr, PROG ": contact across the ranks: at most %lld partners of a rank's list "
                              "from beyond its piece\n",
                 (long long)remote);
+    double spread[4]; /* the ranks' least and most bonds' and ranks' time (collective) */
+    if (s == PD_OK && o.timing && h.piece) {
+        const double *t = pd_sim_timers(sim);
+        spread[0] = -pd_comm_max(-t[PD_T_BONDS]);
+        spread[1] = pd_comm_max(t[PD_T_BONDS]);
+        spread[2] = -pd_comm_max(-t[PD_T_RANKS]);
+        spread[3] = pd_comm_max(t[PD_T_RANKS]);
+    }
     if (s == PD_OK && o.timing && tell)
-        print_timing(sim, wall, t_output);
+        print_timing(sim, wall, t_output, h.piece ? spread : NULL);
     release(&h);
     return s == PD_OK ? 0 : cli_failed();
 }

@@ -106,10 +106,18 @@ import h5py
 with h5py.File('np4.h5') as f:
     last = f['frames'][sorted(f['frames'])[-1]]
     assert last.attrs['broken_bonds'] > 50000, last.attrs['broken_bonds']"
-    run -0 mpi 2 --threads 1 --scene impact.scene body.h5 -o log.h5
+    run -0 mpi 2 --threads 1 --timing --scene impact.scene body.h5 -o log.h5
     assert_line --partial "pd-run: 2 MPI ranks x 1 thread"
     assert_line --partial "lattice stencil"
     assert_line --partial "every rank writes its rows of 'log.h5' (parallel HDF5)"
+    # --timing: the ranks' least and most bonds' and ranks' time, rank 0's
+    # among them
+    local over bonds0
+    over=$(printf '%s\n' "${lines[@]}" | grep "over the ranks: bonds")
+    bonds0=$(printf '%s\n' "${lines[@]}" | awk '$1 == "bonds" { print $2 }')
+    [ -n "$over" ] && [ -n "$bonds0" ]
+    echo "$over" | awk -v b="$bonds0" '{ lo = $5; hi = $7; mlo = $11; mhi = $13 }
+        END { exit !(lo > 0 && lo <= b + 0.0005 && b <= hi + 0.0005 && mlo > 0 && mlo <= mhi) }'
     # the frames' energy density and stress, each rank its own rows'
     same_on_ranks "3" 1 --scene impact.scene --fields energy,stress body.h5
 }

@@ -623,8 +623,11 @@ pd_status pd_sim_step(pd_sim *sim)
     if (sim->piece && s == PD_OK) { /* the ghosts' positions and s0 from their owners */
         unsigned ask = away ? 1u : 0u; /* and, in one reduction, the effects' questions */
         for (int k = 0; k < sim->neffects; k++)
-            if (sim->effects[k]->moved && sim->effects[k]->moved(sim, sim->state[k]))
-                ask |= 2u;
+            if (sim->effects[k]->moved) {
+                const double tq = pd_wtime(); /* the effect's own time */
+                ask |= sim->effects[k]->moved(sim, sim->state[k]) ? 2u : 0u;
+                sim->timers[sim->effects[k]->timer] += pd_wtime() - tq;
+            }
         const double th = pd_wtime();
         s = pd_piece_halo(sim);
         const unsigned agreed = pd_comm_bits(ask);
