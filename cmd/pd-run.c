@@ -997,7 +997,7 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
     fprintf(stderr,
             PROG ": %lld particles, %lld bonds; effects: %s\n" PROG
                  ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
-            (long long)p->n, (long long)(h->nbonds / 2), pd_sim_effects(sim), sc->dt,
+            (long long)pd_body_count(p), (long long)(h->nbonds / 2), pd_sim_effects(sim), sc->dt,
             sc->dt_stable, (long long)nsteps, o->restart ? " more" : "");
     const char *wait = getenv("OMP_WAIT_POLICY"), *spin = getenv("GOMP_SPINCOUNT");
     if (pd_comm_mpi()) /* the MPI build: ranks x threads */
@@ -1122,17 +1122,15 @@ static int start(struct options *o, struct held *h, int64_t *first)
      * the ranks have their pieces) */
     pd_status s = restart && !ranks ? pd_file_update(o->restart, o->output, &h->in)
                                     : pd_file_open(restart ? o->restart : o->input, &h->in);
-    if (s == PD_OK)
-        s = pd_read_particles(h->in, &h->p);
     /* on MPI ranks a body of bond lists off any lattice: each rank its
-     * piece's rows (collective) */
+     * piece's rows, particles and bonds (collective) */
     int rows = 0;
     int64_t first_bond = 0;
     if (ranks)
         s = cli_agreed(s);
     if (s == PD_OK && ranks)
-        s = pd_read_bonds_run(h->in, h->p, &o->spec.sc, &h->b, &rows, &first_bond);
-    else if (s == PD_OK)
+        s = pd_read_body_ranks(h->in, &o->spec.sc, &h->p, &h->b, &rows, &first_bond);
+    else if (s == PD_OK && (s = pd_read_particles(h->in, &h->p)) == PD_OK)
         s = pd_read_bonds_compact(h->in, h->p, &h->b);
     h->rows = rows;
     if (ranks) /* the scene's figures below are taken over the ranks */
@@ -1184,11 +1182,11 @@ static int start(struct options *o, struct held *h, int64_t *first)
     pd_part part = {0};
     if (rows) { /* (collective) */
         s = cli_agreed(s);
-        int64_t lo = 0, hi = 0;
-        if (s == PD_OK)
-            pd_sim_owned(h->piece, &lo, &hi);
-        part = (pd_part){lo, lo, hi - lo, h->p->n, s == PD_OK ? h->b->offset[lo] : 0, 0,
-                         s == PD_OK ? h->b->offset[hi] - h->b->offset[lo] : 0, 0};
+        if (s == PD_OK) { /* the window's own rows */
+            const int64_t lo = h->p->own_lo, hi = h->p->own_hi;
+            part = (pd_part){lo, h->p->first + lo, hi - lo, pd_body_count(h->p),
+                             h->b->offset[lo], 0, h->b->offset[hi] - h->b->offset[lo], 0};
+        }
         part.bond0 = pd_comm_below(part.bonds);
         part.nbonds = pd_comm_total(part.bonds);
     }
@@ -1386,7 +1384,7 @@ static int run_main(int argc, char **argv)
                      "its ghosts%s; halo of at most %.3g MB a rank a step; every rank writes "
                      "its rows of '%s' (parallel HDF5)\n",
                 pd_comm_size(), (long long)rows,
-                h.rows ? ", each read with its own rows' bonds alone" : "", (double)halo / 1e6,
+                h.rows ? ", each read with its own rows' particles and bonds alone" : "", (double)halo / 1e6,
                 o.output);
     if (h.piece)
         drop_whole(&h);

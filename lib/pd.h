@@ -101,12 +101,26 @@ typedef struct {
     int dimension;     /* 3, or 2 for a plate: sites in the plane z = 0    */
     double thickness;  /* plate thickness H, m (dimension 2; 0 in 3-D):
                           volumes are spacing^2 H                          */
+    /* A window of a body spread over MPI ranks (pd_read_body_ranks): rows
+     * [first, first + n) of the body's `total`, of which this rank owns
+     * [own_lo, own_hi) (local indices).  Its whole-body figures
+     * (pd_body_bounds, ...) are taken over the ranks: collective.  A
+     * whole body: window 0 (and the rest 0, n, 0, n). */
+    int window;
+    int64_t first, total, own_lo, own_hi;
 } pd_particles;
 
 pd_particles *pd_particles_new(int64_t n);
 void pd_particles_free(pd_particles *p);
 /* The bounding box of the reference positions (+inf, -inf when empty). */
 void pd_particles_bounds(const pd_particles *p, double lo[3], double hi[3]);
+/* The same of the whole body p is (a window: over the ranks, collective). */
+void pd_body_bounds(const pd_particles *p, double lo[3], double hi[3]);
+/* The whole body's count of particles (a window's total). */
+int64_t pd_body_count(const pd_particles *p);
+/* The largest of v over the ranks whose windows make the body (v itself
+ * for a whole body; collective for a window). */
+double pd_body_max(const pd_particles *p, double v);
 
 /* ---------------------------------------------------------------- regions */
 
@@ -704,8 +718,9 @@ void pd_comm_barrier(void);
  * The rows [*g0, *g1) of this rank's piece of a body of n rows walked as a
  * bond list whose bonds span at most `span` rows (the body's, over every
  * rank: pd_read_bonds_span), as pd_sim_piece_new cuts it: the rows whose
- * bonds it reads (pd_read_bonds_rows). */
-pd_status pd_piece_rows(int64_t n, int64_t span, int64_t *g0, int64_t *g1);
+ * bonds it reads (pd_read_bonds_rows); [*o0, *o1) those it owns. */
+pd_status pd_piece_rows(int64_t n, int64_t span, int64_t *g0, int64_t *g1, int64_t *o0,
+                        int64_t *o1);
 /* On several ranks, is the body p walked as a bond list under the scene sc
  * whatever its bonds (off any lattice), so that each rank may read its own
  * rows' bonds alone? */
@@ -1299,6 +1314,20 @@ pd_status pd_read_history(const pd_file *f, char **out);
 
 pd_status pd_read_particles(const pd_file *f, pd_particles **out);
 pd_status pd_write_particles(pd_file *f, const pd_particles *p);
+/* The body's count of particles, checked as pd_read_particles checks it. */
+pd_status pd_file_particles(const pd_file *f, int64_t *n);
+/* Rows [g0, g1) of the file's n particles as a window of the body
+ * (pd_particles: window, first g0, total n, owning every row read), each
+ * row checked as pd_read_particles checks it (the ids' uniqueness below). */
+pd_status pd_read_particles_rows(const pd_file *f, int64_t n, int64_t g0, int64_t g1,
+                                 pd_particles **out);
+/* No two particles of the body have the same id, the ranks' windows of it
+ * p together holding every row once (collective; pd_read_particles' error). */
+pd_status pd_check_ids_ranks(const pd_file *f, const pd_particles *p);
+/* /particles of a part of the body (pd_part: its rows [lo, lo + rows) of
+ * p are the body's [first, first + rows) of n): on MPI ranks every rank
+ * writes its own, at once, into a file of pd_file_create_ranks. */
+pd_status pd_write_particles_part(pd_file *f, const pd_part *pt, const pd_particles *p);
 int pd_file_has_bonds(const pd_file *f);
 /* Whether the file has a /frames group (a run of pd-run), complete frames
  * or not. */
@@ -1311,29 +1340,36 @@ pd_status pd_read_bonds_compact(const pd_file *f, const pd_particles *p, pd_bond
  * (lib/run/piece.c).  pd_file_bonds_listed: 1 when the file's /bonds are
  * lists (CSR), 0 for a stencil or none.  pd_read_bonds_span: the largest
  * span j - i of a bond of rows [r0, r1) (at least 1), the partners read a
- * million at a time.  pd_read_bonds_rows: the body's bonds as a pd_bonds
- * of all its n rows in which only rows [g0, g1) have their families (the
- * others none), checked as pd_read_bonds checks a body: each bond, and the
- * symmetry of the bonds between two of these rows (a piece's rows hold
- * both ends of each bond of the rows it owns); *first_bond, the whole
- * body's index of their first bond. */
+ * million at a time.  pd_read_bonds_rows: the bonds of the body's rows
+ * [g0, g1) as a pd_bonds of the rows of the window p (pd_read_particles_rows,
+ * which reaches a span beyond them: partners are rows of p), in which only
+ * those rows have their families (the others none), checked as
+ * pd_read_bonds checks a body: each bond, and the symmetry of the bonds
+ * between two of these rows (a piece's rows hold both ends of each bond of
+ * the rows it owns); *first_bond, the whole body's index of their first
+ * bond. */
 int pd_file_bonds_listed(const pd_file *f);
 pd_status pd_read_bonds_span(const pd_file *f, int64_t n, int64_t r0, int64_t r1, int64_t *span);
 pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0, int64_t g1,
                              pd_bonds **out, int64_t *first_bond);
-/* The bonds a run of the scene sc on the body p reads (lib/io/runfile.c):
- * pd_read_bonds_compact's, or on several MPI ranks, where the body's bonds
- * are lists walked as a bond list (pd_piece_reads_rows), those of this
- * rank's piece alone (pd_read_bonds_rows; collective), *rows then 1 and
- * *first_bond the whole body's index of their first bond. */
-pd_status pd_read_bonds_run(const pd_file *f, const pd_particles *p, const pd_scene *sc,
-                            pd_bonds **out, int *rows, int64_t *first_bond);
+/* The body a run of the scene sc on several MPI ranks reads
+ * (lib/io/runfile.c; collective): each rank checks its share of the
+ * particles' rows (and the ids over the ranks); where the body's bonds are
+ * lists walked as a bond list (pd_piece_reads_rows), each reads its
+ * piece's rows alone (pd_piece_rows): the particles they reach as a window
+ * (pd_read_particles_rows, owning its own rows) and their bonds
+ * (pd_read_bonds_rows), *rows then 1 and *first_bond the whole body's
+ * index of their first bond; else the whole body (pd_read_particles,
+ * pd_read_bonds_compact). */
+pd_status pd_read_body_ranks(const pd_file *f, const pd_scene *sc, pd_particles **p,
+                             pd_bonds **b, int *rows, int64_t *first_bond);
 pd_status pd_write_bonds(pd_file *f, const pd_bonds *b);
 /* The bond lists of a part of the body (pd_part: rows [first, first +
  * rows), whose bonds are the body's [bond0, bond0 + bonds)) from b, a
- * pd_bonds of every row whose rows outside the part may have none
- * (pd_bonds_build_rows): on MPI ranks every rank writes its own, at once,
- * into a file of pd_file_create_ranks. */
+ * pd_bonds of every row (pd_bonds_build_rows) or of a window's (its rows
+ * and partners the body's less first - lo) whose rows outside the part
+ * may have none: on MPI ranks every rank writes its own, at once, into a
+ * file of pd_file_create_ranks. */
 pd_status pd_write_bonds_part(pd_file *f, const pd_part *pt, const pd_bonds *b);
 pd_status pd_write_scene(pd_file *f, const pd_scene *s, const char *effects,
                          const char *options_text);
@@ -1395,10 +1431,10 @@ pd_status pd_write_restart(pd_file *f, int64_t n, int64_t step, const pd_restart
  * rank its own, at once, into a file of pd_file_create_ranks). */
 pd_status pd_write_restart_part(pd_file *f, const pd_part *pt, int64_t step, const pd_restart *r);
 pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart *r);
-/* The same with the bond history's rows [k0, k0 + nb) alone (a piece's
- * bonds, pd_read_bonds_rows). */
-pd_status pd_read_restart_rows(const pd_file *f, int64_t n, int64_t step, int64_t k0, int64_t nb,
-                               pd_restart *r);
+/* The same of the particles' rows [g0, g0 + m) alone, and the bond
+ * history's rows [k0, k0 + nb) (a piece's bonds, pd_read_bonds_rows). */
+pd_status pd_read_restart_rows(const pd_file *f, int64_t n, int64_t g0, int64_t m, int64_t step,
+                               int64_t k0, int64_t nb, pd_restart *r);
 /* Lay out the projectile's state in the restart slots (after
  * pd_plan_restart; nothing when it is there already). */
 pd_status pd_plan_restart_projectile(pd_file *f);
@@ -1438,9 +1474,9 @@ pd_status pd_run_file_start(pd_file *out, int restart, const pd_file *from,
                             const pd_particles *p, const pd_bonds *b, const pd_sets *sets,
                             const pd_scene *sc, const char *effects, const char *cmdline,
                             const char *text, int64_t first);
-/* The same on MPI ranks whose b holds the families of their own rows alone
- * (pd_read_bonds_run): each writes its part's bonds (pd_part: its own
- * rows, whole-body row indices in b; collective). */
+/* The same on MPI ranks whose p is a window of the body and b holds the
+ * families of their own rows alone (pd_read_body_ranks): each writes its
+ * part's particles and bonds (pd_part: its own rows; collective). */
 pd_status pd_run_file_start_part(pd_file *out, int restart, const pd_file *from,
                                  const pd_particles *p, const pd_bonds *b, const pd_part *part,
                                  const pd_sets *sets, const pd_scene *sc, const char *effects,
@@ -1450,9 +1486,9 @@ pd_status pd_run_file_start_part(pd_file *out, int restart, const pd_file *from,
  * (malloc'ed), for pd_sim_restore. */
 pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int64_t *step,
                            pd_restart *r, double *v[3], uint64_t **bits);
-/* The same where b holds a piece's rows' bonds alone (pd_read_bonds_run),
- * the whole body's bonds [first_bond, first_bond + b->count): their states
- * and history alone. */
+/* The same where p is a window of the body and b holds a piece's rows'
+ * bonds alone (pd_read_body_ranks), the whole body's bonds [first_bond,
+ * first_bond + b->count): their rows, states and history alone. */
 pd_status pd_run_file_load_rows(pd_file *f, const pd_particles *p, const pd_bonds *b,
                                 int64_t first_bond, int64_t *step, pd_restart *r, double *v[3],
                                 uint64_t **bits);
@@ -1527,6 +1563,9 @@ pd_status pd_frame_spheres(const pd_file *f, const pd_frame_info *fi, pd_frame_s
  * arrays d[3] (any may be NULL to skip). */
 pd_status pd_read_frame_vectors(const pd_file *f, const char *name, int64_t n,
                                 double *disp[3], double *vel[3]);
+/* The same of rows [g0, g0 + m) of the n alone. */
+pd_status pd_read_frame_vectors_rows(const pd_file *f, const char *name, int64_t n, int64_t g0,
+                                     int64_t m, double *disp[3], double *vel[3]);
 /* Bond state bits of a frame (count bonds) into a words array. */
 pd_status pd_read_frame_state(const pd_file *f, const char *name, int64_t count,
                               uint64_t *intact);

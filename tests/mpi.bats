@@ -139,7 +139,7 @@ with h5py.File('np4.h5') as f:
 @test "mpi: a body of bond lists off any lattice: each rank reads its own rows' bonds alone, checked as one rank checks them" {
     impact_body perturbed
     run -0 mpi 3 --threads 1 --scene impact.scene --steps 60 body.h5 -o rows.h5
-    assert_line --partial "each read with its own rows' bonds alone"
+    assert_line --partial "each read with its own rows' particles and bonds alone"
     pd-run --threads 1 -q --scene impact.scene --steps 60 body.h5 -o one.h5
     run -0 "$PY" "$SAME" one.h5 rows.h5
     # a pre-crack in some ranks' rows alone: the model's /bonds/precrack
@@ -159,12 +159,12 @@ with h5py.File('np3.h5') as f:
     cp r.h5 r1.h5
     pd-run --threads 1 -q --restart r1.h5 --steps 100 -o one.h5
     run -0 mpi 3 --threads 1 --restart r.h5 --steps 100 -o np3.h5
-    assert_line --partial "each read with its own rows' bonds alone"
+    assert_line --partial "each read with its own rows' particles and bonds alone"
     run -0 "$PY" "$SAME" one.h5 np3.h5
     # a lattice's stencil is read whole (small), as the serial program does
     impact_body
     run -0 mpi 2 --threads 1 --scene impact.scene --steps 1 body.h5 -o grid.h5
-    refute_line --partial "own rows' bonds alone"
+    refute_line --partial "own rows' particles and bonds alone"
     # a bond broken on one side only, in the rows of the middle rank: the
     # serial program's one error line, exit 1 and no run file
     impact_body perturbed

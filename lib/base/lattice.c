@@ -185,10 +185,10 @@ static int lattice_axis(const pd_particles *p, int d, double lo, double h, int32
 int pd_lattice_coords(const pd_particles *p, int axis[3], int32_t *lc[3])
 {
     const double h = p->spacing;
-    if (!(h > 0) || p->n == 0)
+    if (!(h > 0) || (p->n == 0 && !p->window))
         return 0;
     double lo[3], hi[3];
-    pd_particles_bounds(p, lo, hi);
+    pd_body_bounds(p, lo, hi); /* a window: the whole body's (collective) */
     for (int d = 0; d < 3; d++)
         if (!isfinite(lo[d]) || !isfinite(hi[d]) || (hi[d] - lo[d]) / h > 1e9)
             return 0;

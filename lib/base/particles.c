@@ -5,7 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "pd.h"
+#include "base/comm.h"
 
 pd_particles *pd_particles_new(int64_t n)
 {
@@ -22,6 +22,7 @@ pd_particles *pd_particles_new(int64_t n)
     p->material = malloc(m * sizeof(int32_t));
     p->id = malloc(m * sizeof(int64_t));
     p->dimension = 3;
+    p->total = p->own_hi = n;
     if (!p->x[0] || !p->x[1] || !p->x[2] || !p->volume || !p->density ||
         !p->radius || !p->material || !p->id) {
         pd_particles_free(p);
@@ -54,4 +55,21 @@ void pd_particles_bounds(const pd_particles *p, double lo[3], double hi[3])
             hi[d] = fmax(hi[d], p->x[d][i]);
         }
     }
+}
+
+void pd_body_bounds(const pd_particles *p, double lo[3], double hi[3])
+{
+    pd_particles_bounds(p, lo, hi);
+    if (p->window)
+        pd_comm_box(lo, hi);
+}
+
+int64_t pd_body_count(const pd_particles *p)
+{
+    return p->window ? p->total : p->n;
+}
+
+double pd_body_max(const pd_particles *p, double v)
+{
+    return p->window ? pd_comm_max(v) : v;
 }

@@ -76,8 +76,12 @@ typedef struct {
 pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
                           hid_t memtype, size_t elsize, void **buf, hsize_t *dims);
 /* Read rows [row0, row0 + rows) of a dataset of the form's class, size and
- * rank (1 or 2; a fixed second dimension checked) into buf (that many rows
- * of memtype): a piece of a body on MPI ranks reads only its rows. */
+ * rank (1 or 2; fixed dimensions checked) into buf (that many rows of
+ * memtype): a piece of a body on MPI ranks reads only its rows. */
+/* The rows of a dataset of the form's class, size and rank (1 or 2; a
+ * fixed second dimension checked), before any is read. */
+pd_status pd_h5_rows(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
+                     int64_t *rows);
 pd_status pd_h5_read_rows(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
                           hid_t memtype, void *buf, int64_t row0, int64_t rows);
 

@@ -14,30 +14,62 @@
 #include "io/h5util.h"
 #include "pd.h"
 
-pd_status pd_read_bonds_run(const pd_file *f, const pd_particles *p, const pd_scene *sc,
-                            pd_bonds **out, int *rows, int64_t *first_bond)
+pd_status pd_read_body_ranks(const pd_file *f, const pd_scene *sc, pd_particles **pout,
+                             pd_bonds **bout, int *rows, int64_t *first_bond)
 {
-    *out = NULL;
+    *pout = NULL;
+    *bout = NULL;
+    *rows = 0;
     *first_bond = 0;
-    *rows = pd_file_bonds_listed(f) && pd_piece_reads_rows(p, sc);
-    if (!*rows)
-        return pd_read_bonds_compact(f, p, out);
-    /* the largest span of a bond, each rank over its share of the rows,
-     * then this rank's piece and its rows' bonds (collective) */
-    const int64_t n = p->n, P = pd_comm_size(), me = pd_comm_rank();
-    int64_t span = 1, g0 = 0, g1 = 0;
-    pd_status s = pd_file_has_bonds(f) ? PD_OK
-                                       : pd_fail(PD_ERR_FORMAT, "'%s' has no /bonds (run "
-                                                                "pd-bonds first)", f->name);
+    /* each rank its share of the rows, checked: the ids over the ranks, and
+     * whether the body is off any lattice (collective) */
+    const int64_t P = pd_comm_size(), me = pd_comm_rank();
+    int64_t n = 0;
+    pd_particles *share = NULL;
+    pd_status s = pd_file_particles(f, &n);
     if (s == PD_OK)
-        s = pd_read_bonds_span(f, n, n * me / P, n * (me + 1) / P, &span);
+        s = pd_read_particles_rows(f, n, n * me / P, n * (me + 1) / P, &share);
+    s = pd_comm_agree(s);
+    if (s == PD_OK)
+        s = pd_comm_agree(pd_check_ids_ranks(f, share));
+    if (s == PD_OK)
+        *rows = pd_file_bonds_listed(f) && pd_piece_reads_rows(share, sc);
+    if (s != PD_OK || !*rows) { /* the whole body (a lattice's stencil) */
+        pd_particles_free(share);
+        if (s == PD_OK)
+            s = pd_read_particles(f, pout);
+        if (s == PD_OK)
+            s = pd_read_bonds_compact(f, *pout, bout);
+        return s;
+    }
+    /* the largest span of a bond, each rank over its share of the rows;
+     * then this rank's piece: its rows' bonds, and the particles they reach */
+    int64_t span = 1, g0 = 0, g1 = 0, o0 = 0, o1 = 0;
+    s = pd_file_has_bonds(f) ? PD_OK
+                             : pd_fail(PD_ERR_FORMAT, "'%s' has no /bonds (run pd-bonds first)",
+                                       f->name);
+    if (s == PD_OK)
+        s = pd_read_bonds_span(f, n, share->first, share->first + share->n, &span);
+    pd_particles_free(share);
     s = pd_comm_agree(s);
     span = -pd_comm_min(-span);
     if (s == PD_OK)
-        s = pd_piece_rows(n, span, &g0, &g1);
+        s = pd_piece_rows(n, span, &g0, &g1, &o0, &o1);
+    pd_particles *p = NULL;
     if (s == PD_OK)
-        s = pd_read_bonds_rows(f, p, g0, g1, out, first_bond);
-    return s;
+        s = pd_read_particles_rows(f, n, g0 - span > 0 ? g0 - span : 0,
+                                   g1 + span < n ? g1 + span : n, &p);
+    if (s == PD_OK) {
+        p->own_lo = o0 - p->first;
+        p->own_hi = o1 - p->first;
+        s = pd_read_bonds_rows(f, p, g0, g1, bout, first_bond);
+    }
+    if (s != PD_OK) {
+        pd_particles_free(p);
+        return s;
+    }
+    *pout = p;
+    return PD_OK;
 }
 
 /* Every frame of the run laid out (pd_frame_steps: the steps after `first`
@@ -56,7 +88,7 @@ static pd_status plan_frames(pd_file *out, const pd_particles *p, int64_t nbonds
     pd_frame_steps(sc, first, fresh, steps);
     for (int64_t k = 0; k < m; k++)
         times[k] = (double)steps[k] * sc->dt;
-    pd_status s = pd_plan_frames(out, p->n, nbonds, m, steps, times, fields);
+    pd_status s = pd_plan_frames(out, pd_body_count(p), nbonds, m, steps, times, fields);
     free(steps);
     free(times);
     return s;
@@ -77,19 +109,20 @@ static pd_status run_file_load(pd_file *f, const pd_particles *p, const pd_bonds
     pd_frame_info fi;
     if (s == PD_OK)
         s = pd_read_frame_info(f, names[nframes - 1], &fi);
+    const int64_t n = pd_body_count(p); /* p: the body's rows [first, first + p->n) */
     for (int d = 0; d < 3 && s == PD_OK; d++)
-        if ((v[d] = malloc((size_t)p->n * sizeof(double))) == NULL)
+        if ((v[d] = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof(double))) == NULL)
             s = pd_fail(PD_ERR_NOMEM, "out of memory");
     if (s == PD_OK && (*bits = calloc((size_t)pd_bits_words(b->count) + 1, 8)) == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory");
     if (s == PD_OK)
-        s = pd_read_frame_vectors(f, names[nframes - 1], p->n, NULL, v);
+        s = pd_read_frame_vectors_rows(f, names[nframes - 1], n, p->first, p->n, NULL, v);
     if (s == PD_OK)
         s = rows ? pd_read_frame_state_rows(f, names[nframes - 1], k0, b->count, *bits)
                  : pd_read_frame_state(f, names[nframes - 1], b->count, *bits);
     if (s == PD_OK)
-        s = rows ? pd_read_restart_rows(f, p->n, fi.step, k0, b->count, r)
-                 : pd_read_restart(f, p->n, fi.step, r);
+        s = rows ? pd_read_restart_rows(f, n, p->first, p->n, fi.step, k0, b->count, r)
+                 : pd_read_restart(f, n, fi.step, r);
     if (s == PD_OK)
         *step = fi.step;
     pd_frames_free_list(nframes, names);
@@ -141,7 +174,7 @@ static pd_status run_file_start(pd_file *out, int restart, const pd_file *from,
     } else if (part) { /* the model, each rank its part's bonds */
         s = pd_write_header(out, from, cmdline);
         if (s == PD_OK)
-            s = pd_write_particles(out, p);
+            s = p->window ? pd_write_particles_part(out, part, p) : pd_write_particles(out, p);
         if (s == PD_OK)
             s = pd_write_bonds_part(out, part, b);
         if (s == PD_OK)
@@ -164,7 +197,7 @@ static pd_status run_file_start(pd_file *out, int restart, const pd_file *from,
      * one (a kill before it is complete leaves no frame to go on from) */
     const int slots = restart || pd_frame_steps(sc, first, !restart, NULL) > 1 ? 2 : 1;
     if (s == PD_OK)
-        s = pd_plan_restart(out, p->n, sc->has_failure, sc->has_contact, slots);
+        s = pd_plan_restart(out, pd_body_count(p), sc->has_failure, sc->has_contact, slots);
     if (s == PD_OK && sc->has_projectile)
         s = pd_plan_restart_projectile(out);
     if (s == PD_OK && sc->damping > 0 && !sc->relax)

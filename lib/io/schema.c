@@ -90,16 +90,16 @@ static int cmp_int64(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Ids are the particles' stable names: no two may be equal. */
-static pd_status check_unique_ids(const char *fn, const pd_particles *p)
+/* Ids are the particles' stable names: no two of the n may be equal. */
+static pd_status check_unique_ids(const char *fn, const int64_t *id, int64_t n)
 {
-    int64_t *ids = malloc((size_t)p->n * sizeof(int64_t));
+    int64_t *ids = malloc((size_t)(n > 0 ? n : 1) * sizeof(int64_t));
     if (ids == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory checking ids");
-    memcpy(ids, p->id, (size_t)p->n * sizeof(int64_t));
-    qsort(ids, (size_t)p->n, sizeof *ids, cmp_int64);
+    memcpy(ids, id, (size_t)n * sizeof(int64_t));
+    qsort(ids, (size_t)n, sizeof *ids, cmp_int64);
     pd_status s = PD_OK;
-    for (int64_t i = 1; i < p->n; i++)
+    for (int64_t i = 1; i < n; i++)
         if (ids[i] == ids[i - 1]) {
             s = pd_fail(PD_ERR_FORMAT, "'%s': particle id %lld appears twice", fn,
                         (long long)ids[i]);
@@ -109,62 +109,13 @@ static pd_status check_unique_ids(const char *fn, const pd_particles *p)
     return s;
 }
 
-pd_status pd_read_particles(const pd_file *f, pd_particles **out)
+/* The attributes of /particles into p, checked. */
+static pd_status read_particle_attrs(const pd_file *f, pd_particles *p)
 {
     const char *fn = f->name;
-    if (!pd_h5_has_link(f->fid, "/particles"))
-        return pd_fail(PD_ERR_FORMAT, "'%s' has no /particles (not made by pd-lattice?)", fn);
-    double *pos = NULL;
-    hsize_t dims[2];
-    pd_status s = pd_h5_read_data(f->fid, fn, "/particles/position", &F64_N3, H5T_NATIVE_DOUBLE,
-                                  sizeof(double), (void **)&pos, dims);
-    if (s != PD_OK)
-        return s;
-    int64_t n = (int64_t)dims[0];
-    if (n == 0) {
-        free(pos);
-        return pd_fail(PD_ERR_FORMAT, "'%s' holds no particles", fn);
-    }
-    if (n >= INT32_MAX) {
-        free(pos);
-        return pd_fail(PD_ERR_FORMAT, "'%s' holds too many particles for one process", fn);
-    }
-    pd_particles *p = pd_particles_new(n);
-    if (p == NULL) {
-        free(pos);
-        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld particles", (long long)n);
-    }
-    deinterleave(p->x, pos, n);
-    free(pos);
-
-    struct {
-        const char *name;
-        H5T_class_t cls;
-        size_t size;
-        hid_t mt;
-        void *dst;
-    } fields[] = {
-        {"/particles/volume", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, p->volume},
-        {"/particles/density", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, p->density},
-        {"/particles/radius", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, p->radius},
-        {"/particles/material", H5T_INTEGER, 4, H5T_NATIVE_INT32, p->material},
-        {"/particles/id", H5T_INTEGER, 8, H5T_NATIVE_INT64, p->id},
-    };
-    for (size_t k = 0; k < sizeof fields / sizeof fields[0]; k++) {
-        pd_h5_form form = {fields[k].cls, fields[k].size, 1, {(hsize_t)n, 0}};
-        void *buf = NULL;
-        s = pd_h5_read_data(f->fid, fn, fields[k].name, &form, fields[k].mt, fields[k].size, &buf,
-                            NULL);
-        if (s != PD_OK) {
-            pd_particles_free(p);
-            return s;
-        }
-        memcpy(fields[k].dst, buf, (size_t)n * fields[k].size);
-        free(buf);
-    }
     hid_t g = H5Gopen2(f->fid, "/particles", H5P_DEFAULT);
     int64_t dim = 3;
-    s = pd_h5_read_attr_double(g, "spacing", &p->spacing);
+    pd_status s = pd_h5_read_attr_double(g, "spacing", &p->spacing);
     if (s == PD_OK && pd_h5_has_attr(g, "dimension"))
         s = pd_h5_read_attr_int(g, "dimension", &dim);
     /* a plate (dimension 2) says its thickness */
@@ -172,49 +123,184 @@ pd_status pd_read_particles(const pd_file *f, pd_particles **out)
     if (s == PD_OK && dim == 2 && has_thickness)
         s = pd_h5_read_attr_double(g, "thickness", &p->thickness);
     H5Gclose(g);
-    if (s != PD_OK) {
-        pd_particles_free(p);
+    if (s != PD_OK)
         return pd_fail(PD_ERR_FORMAT, "'%s': /particles: %s", fn, pd_errmsg());
-    }
     p->dimension = (int)dim;
     if (!(p->spacing > 0) || !isfinite(p->spacing))
-        s = pd_fail(PD_ERR_FORMAT, "'%s': /particles spacing must be positive", fn);
-    else if (dim != 3 && dim != 2)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': /particles dimension %lld (this pd runs 3-D bodies and "
-                    "2-D plates)", fn, (long long)dim);
-    else if (dim == 2 && !has_thickness)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': /particles of dimension 2 without a thickness", fn);
-    else if (dim == 2 && (!(p->thickness > 0) || !isfinite(p->thickness)))
-        s = pd_fail(PD_ERR_FORMAT, "'%s': /particles thickness must be positive, not %g", fn,
-                    p->thickness);
-    for (int64_t i = 0; i < n && s == PD_OK; i++) {
+        return pd_fail(PD_ERR_FORMAT, "'%s': /particles spacing must be positive", fn);
+    if (dim != 3 && dim != 2)
+        return pd_fail(PD_ERR_FORMAT, "'%s': /particles dimension %lld (this pd runs 3-D bodies "
+                       "and 2-D plates)", fn, (long long)dim);
+    if (dim == 2 && !has_thickness)
+        return pd_fail(PD_ERR_FORMAT, "'%s': /particles of dimension 2 without a thickness", fn);
+    if (dim == 2 && (!(p->thickness > 0) || !isfinite(p->thickness)))
+        return pd_fail(PD_ERR_FORMAT, "'%s': /particles thickness must be positive, not %g", fn,
+                       p->thickness);
+    return PD_OK;
+}
+
+/* Each of p's rows checked: row i is the body's particle first + i. */
+static pd_status check_particle_rows(const char *fn, const pd_particles *p, int64_t first)
+{
+    const int dim = p->dimension;
+    for (int64_t i = 0; i < p->n; i++) {
+        const long long g = (long long)(first + i);
         if (!isfinite(p->x[0][i]) || !isfinite(p->x[1][i]) || !isfinite(p->x[2][i]))
-            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has a non-finite position", fn,
-                        (long long)i);
-        else if (dim == 2 && p->x[2][i] != 0)
-            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld of a plate (dimension 2) has z = %g, "
-                        "not 0", fn, (long long)i, p->x[2][i]);
-        else if (!(p->volume[i] > 0) || !isfinite(p->volume[i]))
-            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has volume %g", fn, (long long)i,
-                        p->volume[i]);
-        else if (!(p->density[i] > 0) || !isfinite(p->density[i]))
-            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has density %g", fn, (long long)i,
-                        p->density[i]);
-        else if (!(p->radius[i] > 0) || !isfinite(p->radius[i]))
-            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has radius %g", fn, (long long)i,
-                        p->radius[i]);
-        else if (p->id[i] < 1)
-            s = pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has id %lld (ids start at 1)", fn,
-                        (long long)i, (long long)p->id[i]);
+            return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has a non-finite position", fn,
+                           g);
+        if (dim == 2 && p->x[2][i] != 0)
+            return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld of a plate (dimension 2) has "
+                           "z = %g, not 0", fn, g, p->x[2][i]);
+        if (!(p->volume[i] > 0) || !isfinite(p->volume[i]))
+            return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has volume %g", fn, g,
+                           p->volume[i]);
+        if (!(p->density[i] > 0) || !isfinite(p->density[i]))
+            return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has density %g", fn, g,
+                           p->density[i]);
+        if (!(p->radius[i] > 0) || !isfinite(p->radius[i]))
+            return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has radius %g", fn, g,
+                           p->radius[i]);
+        if (p->id[i] < 1)
+            return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld has id %lld (ids start at 1)", fn,
+                           g, (long long)p->id[i]);
+    }
+    return PD_OK;
+}
+
+pd_status pd_file_particles(const pd_file *f, int64_t *n)
+{
+    const char *fn = f->name;
+    *n = 0;
+    if (!pd_h5_has_link(f->fid, "/particles"))
+        return pd_fail(PD_ERR_FORMAT, "'%s' has no /particles (not made by pd-lattice?)", fn);
+    pd_status s = pd_h5_rows(f->fid, fn, "/particles/position", &F64_N3, n);
+    if (s == PD_OK && *n == 0)
+        s = pd_fail(PD_ERR_FORMAT, "'%s' holds no particles", fn);
+    else if (s == PD_OK && *n >= INT32_MAX)
+        s = pd_fail(PD_ERR_FORMAT, "'%s' holds too many particles for one process", fn);
+    return s;
+}
+
+/* Rows [g0, g1) of the n particles of f, checked row by row. */
+static pd_status read_particle_rows(const pd_file *f, int64_t n, int64_t g0, int64_t g1,
+                                    pd_particles **out)
+{
+    const char *fn = f->name;
+    *out = NULL;
+    const int64_t m = g1 - g0;
+    pd_particles *p = pd_particles_new(m);
+    double *pos = malloc((size_t)(m > 0 ? m : 1) * 3 * sizeof(double));
+    pd_status s = p && pos ? PD_OK
+                           : pd_fail(PD_ERR_NOMEM, "out of memory for %lld particles",
+                                     (long long)m);
+    const pd_h5_form pf = {H5T_FLOAT, 8, 2, {(hsize_t)n, 3}};
+    if (s == PD_OK)
+        s = pd_h5_read_rows(f->fid, fn, "/particles/position", &pf, H5T_NATIVE_DOUBLE, pos, g0,
+                            m);
+    if (s == PD_OK)
+        deinterleave(p->x, pos, m);
+    free(pos);
+    struct {
+        const char *name;
+        H5T_class_t cls;
+        size_t size;
+        hid_t mt;
+        void *dst;
+    } fields[] = {
+        {"/particles/volume", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, p ? p->volume : NULL},
+        {"/particles/density", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, p ? p->density : NULL},
+        {"/particles/radius", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, p ? p->radius : NULL},
+        {"/particles/material", H5T_INTEGER, 4, H5T_NATIVE_INT32, p ? p->material : NULL},
+        {"/particles/id", H5T_INTEGER, 8, H5T_NATIVE_INT64, p ? p->id : NULL},
+    };
+    for (size_t k = 0; k < sizeof fields / sizeof fields[0] && s == PD_OK; k++) {
+        const pd_h5_form form = {fields[k].cls, fields[k].size, 1, {(hsize_t)n, 0}};
+        s = pd_h5_read_rows(f->fid, fn, fields[k].name, &form, fields[k].mt, fields[k].dst, g0,
+                            m);
     }
     if (s == PD_OK)
-        s = check_unique_ids(fn, p);
+        s = read_particle_attrs(f, p);
+    if (s == PD_OK)
+        s = check_particle_rows(fn, p, g0);
     if (s != PD_OK) {
         pd_particles_free(p);
         return s;
     }
     *out = p;
     return PD_OK;
+}
+
+pd_status pd_read_particles(const pd_file *f, pd_particles **out)
+{
+    *out = NULL;
+    int64_t n = 0;
+    pd_particles *p = NULL;
+    pd_status s = pd_file_particles(f, &n);
+    if (s == PD_OK)
+        s = read_particle_rows(f, n, 0, n, &p);
+    if (s == PD_OK)
+        s = check_unique_ids(f->name, p->id, n);
+    if (s != PD_OK) {
+        pd_particles_free(p);
+        return s;
+    }
+    *out = p;
+    return PD_OK;
+}
+
+pd_status pd_read_particles_rows(const pd_file *f, int64_t n, int64_t g0, int64_t g1,
+                                 pd_particles **out)
+{
+    pd_status s = read_particle_rows(f, n, g0, g1, out);
+    if (s == PD_OK) {
+        pd_particles *p = *out;
+        p->window = 1;
+        p->first = g0;
+        p->total = n;
+        p->own_lo = 0;
+        p->own_hi = p->n;
+    }
+    return s;
+}
+
+pd_status pd_check_ids_ranks(const pd_file *f, const pd_particles *p)
+{
+    /* the windows' ids sorted, each unique and their ranges apart: every
+     * id unique; else (or when in doubt) every rank checks all of them */
+    const int64_t m = p->n;
+    int64_t *ids = malloc((size_t)(m > 0 ? m : 1) * sizeof(int64_t));
+    int ok = ids != NULL;
+    if (ok) {
+        memcpy(ids, p->id, (size_t)m * sizeof(int64_t));
+        qsort(ids, (size_t)m, sizeof *ids, cmp_int64);
+        for (int64_t i = 1; i < m && ok; i++)
+            ok = ids[i] > ids[i - 1];
+    }
+    const int P = pd_comm_size();
+    int64_t *lo = malloc((size_t)P * sizeof(int64_t)), *hi = malloc((size_t)P * sizeof(int64_t));
+    ok = pd_comm_min(ok && lo && hi) == 1;
+    if (ok) {
+        pd_comm_counts(m > 0 ? ids[0] : INT64_MAX, lo);
+        pd_comm_counts(m > 0 ? ids[m - 1] : INT64_MIN, hi);
+        for (int a = 0; a < P && ok; a++)
+            for (int c = 0; c < P && ok; c++)
+                ok = a == c || hi[a] < lo[c] || hi[c] < lo[a];
+    }
+    free(ids);
+    free(lo);
+    free(hi);
+    if (ok)
+        return PD_OK;
+    const int64_t n = p->total;
+    int64_t *all = malloc((size_t)n * sizeof(int64_t));
+    const pd_h5_form form = {H5T_INTEGER, 8, 1, {(hsize_t)n, 0}};
+    pd_status s = all ? pd_h5_read_rows(f->fid, f->name, "/particles/id", &form,
+                                         H5T_NATIVE_INT64, all, 0, n)
+                      : pd_fail(PD_ERR_NOMEM, "out of memory checking ids");
+    if (s == PD_OK)
+        s = check_unique_ids(f->name, all, n);
+    free(all);
+    return s;
 }
 
 pd_status pd_write_particles(pd_file *f, const pd_particles *p)
@@ -243,6 +329,47 @@ pd_status pd_write_particles(pd_file *f, const pd_particles *p)
                               p->material)) == PD_OK &&
         (s = pd_h5_write_data(g, "id", H5T_STD_I64LE, H5T_NATIVE_INT64, 1, d1, p->id)) ==
             PD_OK &&
+        (s = pd_h5_write_attr_doubles(g, "spacing", &p->spacing, 1)) == PD_OK)
+        s = pd_h5_write_attr_int(g, "dimension", p->dimension);
+    if (s == PD_OK && p->dimension == 2)
+        s = pd_h5_write_attr_doubles(g, "thickness", &p->thickness, 1);
+    free(pos);
+    H5Gclose(g);
+    return s;
+}
+
+pd_status pd_write_particles_part(pd_file *f, const pd_part *pt, const pd_particles *p)
+{
+    hid_t g = pd_h5_create_group(f->fid, "/particles");
+    if (g < 0)
+        return pd_fail(PD_ERR_IO, "cannot create /particles");
+    const int64_t lo = pt->lo, m = pt->rows;
+    double *pos = malloc((size_t)(m > 0 ? m : 1) * 3 * sizeof(double));
+    pd_status s = pos ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory");
+    if (f->ranks > 1)
+        s = pd_comm_agree(s);
+    if (pos) {
+        double *const x[3] = {p->x[0] + lo, p->x[1] + lo, p->x[2] + lo};
+        interleave(pos, x, m);
+    }
+    hsize_t d2[2] = {(hsize_t)pt->n, 3}, d1[1] = {(hsize_t)pt->n};
+    if (s == PD_OK &&
+        (s = pd_h5_reserve_data(g, "position", H5T_IEEE_F64LE, 2, d2)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "volume", H5T_IEEE_F64LE, 1, d1)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "density", H5T_IEEE_F64LE, 1, d1)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "radius", H5T_IEEE_F64LE, 1, d1)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "material", H5T_STD_I32LE, 1, d1)) == PD_OK &&
+        (s = pd_h5_reserve_data(g, "id", H5T_STD_I64LE, 1, d1)) == PD_OK &&
+        (s = pd_h5_write_rows(g, "position", H5T_NATIVE_DOUBLE, pos, pt->first, m)) == PD_OK &&
+        (s = pd_h5_write_rows(g, "volume", H5T_NATIVE_DOUBLE, p->volume + lo, pt->first, m)) ==
+            PD_OK &&
+        (s = pd_h5_write_rows(g, "density", H5T_NATIVE_DOUBLE, p->density + lo, pt->first, m)) ==
+            PD_OK &&
+        (s = pd_h5_write_rows(g, "radius", H5T_NATIVE_DOUBLE, p->radius + lo, pt->first, m)) ==
+            PD_OK &&
+        (s = pd_h5_write_rows(g, "material", H5T_NATIVE_INT32, p->material + lo, pt->first,
+                              m)) == PD_OK &&
+        (s = pd_h5_write_rows(g, "id", H5T_NATIVE_INT64, p->id + lo, pt->first, m)) == PD_OK &&
         (s = pd_h5_write_attr_doubles(g, "spacing", &p->spacing, 1)) == PD_OK)
         s = pd_h5_write_attr_int(g, "dimension", p->dimension);
     if (s == PD_OK && p->dimension == 2)
@@ -360,17 +487,17 @@ static pd_status check_compact(const char *fn, const pd_particles *p, const pd_b
 static int64_t row_of(const pd_bonds *b, int64_t k);
 
 static pd_status check_bond_rows(const char *fn, const pd_bonds *b, int64_t g0, int64_t g1,
-                                 int64_t k0)
+                                 int64_t k0, int64_t first)
 {
     for (int64_t i = g0; i < g1; i++)
         for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
             const int32_t j = b->neighbor[k];
             if (j == i)
                 return pd_fail(PD_ERR_FORMAT, "'%s': particle %lld is bonded to itself", fn,
-                               (long long)i);
+                               (long long)(first + i));
             if (k > b->offset[i] && b->neighbor[k - 1] >= j)
                 return pd_fail(PD_ERR_FORMAT, "'%s': family of particle %lld is not sorted", fn,
-                               (long long)i);
+                               (long long)(first + i));
             if (!(b->length[k] > 0) || !isfinite(b->length[k]))
                 return pd_fail(PD_ERR_FORMAT, "'%s': bond %lld has length %g", fn,
                                (long long)(k0 + k), b->length[k]);
@@ -404,24 +531,25 @@ static pd_status check_bond_rows(const char *fn, const pd_bonds *b, int64_t g0, 
             if (q >= b->offset[j + 1] || b->neighbor[q] != i)
                 s = pd_fail(PD_ERR_FORMAT,
                             "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)", fn,
-                            (long long)i, (long long)j, (long long)j, (long long)i);
+                            (long long)(first + i), (long long)(first + j),
+                            (long long)(first + j), (long long)(first + i));
             else if (pd_bond_intact(b->intact, k) != pd_bond_intact(b->intact, q))
                 s = pd_fail(PD_ERR_FORMAT,
                             "'%s': bond %lld-%lld is broken on one side only (state bits differ)",
-                            fn, (long long)j, (long long)i);
+                            fn, (long long)(first + j), (long long)(first + i));
             else if (b->precrack &&
                      pd_bond_intact(b->precrack, k) != pd_bond_intact(b->precrack, q))
                 s = pd_fail(PD_ERR_FORMAT,
                             "'%s': bond %lld-%lld is pre-cracked on one side only (precrack bits "
                             "differ)",
-                            fn, (long long)j, (long long)i);
+                            fn, (long long)(first + j), (long long)(first + i));
         }
     for (int64_t j = g0; j < g1 && s == PD_OK; j++) {
         const int64_t q = next[j - g0];
         if (q < b->offset[j + 1] && b->neighbor[q] < g1)
             s = pd_fail(PD_ERR_FORMAT, "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)",
-                        fn, (long long)j, (long long)b->neighbor[q], (long long)b->neighbor[q],
-                        (long long)j);
+                        fn, (long long)(first + j), (long long)(first + b->neighbor[q]),
+                        (long long)(first + b->neighbor[q]), (long long)(first + j));
     }
     free(next);
     return s;
@@ -440,7 +568,7 @@ static pd_status check_bonds(const char *fn, const pd_particles *p, const pd_bon
     if (b->offset[b->n] != b->count)
         return pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset ends at %lld but there are %lld bonds",
                        fn, (long long)b->offset[b->n], (long long)b->count);
-    return check_bond_rows(fn, b, 0, b->n, 0);
+    return check_bond_rows(fn, b, 0, b->n, 0, 0);
 }
 
 /* Is every bond of compact families as check_bonds wants it (length
@@ -582,7 +710,8 @@ static pd_status check_precrack(const char *fn, const pd_particles *p, const pd_
             return pd_fail(PD_ERR_FORMAT,
                            "'%s': bond %lld-%lld is pre-cracked (/bonds/precrack) but intact in "
                            "/bonds/state",
-                           fn, (long long)row_of(b, k), (long long)partner_of(p, b, k));
+                           fn, (long long)(p->first + row_of(b, k)),
+                           (long long)(p->first + partner_of(p, b, k)));
         }
     }
     return PD_OK;
@@ -905,34 +1034,33 @@ pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0
     *out = NULL;
     *first_bond = 0;
     const char *fn = f->name;
-    const int64_t n = p->n;
+    const int64_t n = pd_body_count(p), e0 = p->first, e1 = p->first + p->n;
     double horizon = 0;
     hid_t g = H5Gopen2(f->fid, "/bonds", H5P_DEFAULT);
     pd_status s = PD_OK;
-    if (g < 0 || pd_h5_read_attr_double(g, "horizon", &horizon) != PD_OK)
+    if (g0 < e0 || g1 > e1 || g0 > g1)
+        s = pd_fail(PD_ERR_INVALID, "rows %lld to %lld are not in the particles read",
+                    (long long)g0, (long long)g1);
+    else if (g < 0 || pd_h5_read_attr_double(g, "horizon", &horizon) != PD_OK)
         s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds has no horizon attribute", fn);
     else if (!(horizon > 0) || !isfinite(horizon))
         s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds horizon must be positive", fn);
     if (g >= 0)
         H5Gclose(g);
-    /* the offsets of every row (8 bytes a particle), the rest of the rows' */
-    int64_t *off = NULL;
-    pd_h5_form of = {H5T_INTEGER, 8, 1, {(hsize_t)n + 1, 0}};
+    /* the rows' offsets alone, then their bonds */
+    int64_t *off = malloc((size_t)(g1 - g0 + 1) * sizeof(int64_t));
+    if (s == PD_OK && off == NULL)
+        s = pd_fail(PD_ERR_NOMEM, "out of memory for the bonds' offsets");
     if (s == PD_OK)
-        s = pd_h5_read_data(f->fid, fn, "/bonds/offset", &of, H5T_NATIVE_INT64, sizeof(int64_t),
-                            (void **)&off, NULL);
-    if (s == PD_OK && off[0] != 0)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset must start at 0", fn);
-    for (int64_t i = 0; i < n && s == PD_OK; i++)
-        if (off[i + 1] < off[i])
-            s = pd_fail(PD_ERR_FORMAT, "'%s': /bonds/offset decreases at row %lld", fn,
-                        (long long)i);
-    const int64_t k0 = s == PD_OK ? off[g0] : 0, k1 = s == PD_OK ? off[g1] : 0;
-    pd_bonds *b = s == PD_OK ? pd_bonds_alloc(n, k1 - k0) : NULL;
+        s = read_offset_rows(f, g0, g1, off);
+    const int64_t k0 = s == PD_OK ? off[0] : 0, k1 = s == PD_OK ? off[g1 - g0] : 0;
+    pd_bonds *b = s == PD_OK ? pd_bonds_alloc(p->n, k1 - k0) : NULL;
     if (s == PD_OK && b == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)(k1 - k0));
-    for (int64_t i = 0; b && i <= n; i++)
-        b->offset[i] = (off[i] < k0 ? k0 : off[i] > k1 ? k1 : off[i]) - k0;
+    for (int64_t i = 0; b && i <= p->n; i++) { /* rows of p: those of [g0, g1) have bonds */
+        const int64_t r = e0 + i;
+        b->offset[i] = (r <= g0 ? k0 : r >= g1 ? k1 : off[r - g0]) - k0;
+    }
     free(off);
     const char *names[3] = {"/bonds/neighbor", "/bonds/length", "/bonds/volume_factor"};
     const pd_h5_form forms[3] = {{H5T_INTEGER, 4, 1, {0, 0}},
@@ -944,10 +1072,22 @@ pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0
                             a == 0 ? (void *)b->neighbor : a == 1 ? (void *)b->length
                                                                   : (void *)b->vfactor,
                             k0, k1 - k0);
-    for (int64_t k = 0; k < k1 - k0 && s == PD_OK; k++)
-        if (b->neighbor[k] < 0 || b->neighbor[k] >= n)
-            s = pd_fail(PD_ERR_FORMAT, "'%s': bond %lld points to particle %lld of %lld", fn,
-                        (long long)(k0 + k), (long long)b->neighbor[k], (long long)n);
+    /* partners as rows of p: a bond's span is at most the body's largest,
+     * which p's rows reach beyond [g0, g1) (pd_read_body_ranks); one
+     * farther has no mirror */
+    for (int64_t i = g0; i < g1 && s == PD_OK; i++)
+        for (int64_t k = b->offset[i - e0]; k < b->offset[i - e0 + 1] && s == PD_OK; k++) {
+            const int64_t j = b->neighbor[k];
+            if (j < 0 || j >= n)
+                s = pd_fail(PD_ERR_FORMAT, "'%s': bond %lld points to particle %lld of %lld", fn,
+                            (long long)(k0 + k), (long long)j, (long long)n);
+            else if (j < e0 || j >= e1)
+                s = pd_fail(PD_ERR_FORMAT,
+                            "'%s': bonds are not symmetric (%lld-%lld has no %lld-%lld)", fn,
+                            (long long)i, (long long)j, (long long)j, (long long)i);
+            else
+                b->neighbor[k] = (int32_t)(j - e0);
+        }
     if (s == PD_OK)
         s = read_bit_rows(f, "/bonds/state", k0, k1, b->intact);
     if (s == PD_OK && k1 > k0 && pd_h5_has_link(f->fid, "/bonds/precrack")) {
@@ -961,7 +1101,7 @@ pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0
     if (b)
         b->horizon = horizon;
     if (s == PD_OK)
-        s = check_bond_rows(fn, b, g0, g1, k0);
+        s = check_bond_rows(fn, b, g0 - e0, g1 - e0, k0, e0);
     if (s == PD_OK)
         s = check_precrack(fn, p, b);
     if (s != PD_OK) {
@@ -1043,6 +1183,12 @@ pd_status pd_write_bonds_part(pd_file *f, const pd_part *pt, const pd_bonds *b)
     hsize_t dn[1] = {(hsize_t)pt->n + 1}, db[1] = {(hsize_t)pt->nbonds},
             ds[1] = {(hsize_t)((pt->nbonds + 7) / 8)};
     int64_t *off = malloc((size_t)(pt->rows + 1) * sizeof(int64_t));
+    /* b's rows are the body's shifted as the part's (a window's) */
+    const int64_t row0 = pt->first - pt->lo;
+    int32_t *nb = row0 != 0 ? malloc((size_t)(pt->bonds > 0 ? pt->bonds : 1) * sizeof(int32_t))
+                            : NULL;
+    for (int64_t k = 0; nb && k < pt->bonds; k++)
+        nb[k] = (int32_t)(b->neighbor[k0 + k] + row0);
     int64_t at = 0, count = 0, pat = 0, pcount = 0;
     uint8_t *bytes = pt->nbonds > 0 ? state_bytes(f, pt, b->intact, &at, &count) : NULL;
     /* the pre-crack only when some bond is pre-cracked */
@@ -1052,7 +1198,7 @@ pd_status pd_write_bonds_part(pd_file *f, const pd_part *pt, const pd_bonds *b)
     if (f->ranks > 1)
         cracked = pd_comm_or(cracked);
     uint8_t *pbytes = cracked ? state_bytes(f, pt, b->precrack, &pat, &pcount) : NULL;
-    pd_status s = off && (bytes || pt->nbonds == 0) && (pbytes || !cracked)
+    pd_status s = off && (bytes || pt->nbonds == 0) && (pbytes || !cracked) && (nb || !row0)
                       ? PD_OK
                       : pd_fail(PD_ERR_NOMEM, "out of memory");
     if (f->ranks > 1)
@@ -1067,8 +1213,8 @@ pd_status pd_write_bonds_part(pd_file *f, const pd_part *pt, const pd_bonds *b)
         (!cracked || (s = pd_h5_reserve_data(g, "precrack", H5T_STD_U8LE, 1, ds)) == PD_OK) &&
         (s = pd_h5_write_rows(g, "offset", H5T_NATIVE_INT64, off, pt->first,
                               pt->rows + last)) == PD_OK &&
-        (s = pd_h5_write_rows(g, "neighbor", H5T_NATIVE_INT32, b->neighbor + k0, pt->bond0,
-                              pt->bonds)) == PD_OK &&
+        (s = pd_h5_write_rows(g, "neighbor", H5T_NATIVE_INT32, nb ? nb : b->neighbor + k0,
+                              pt->bond0, pt->bonds)) == PD_OK &&
         (s = pd_h5_write_rows(g, "length", H5T_NATIVE_DOUBLE, b->length + k0, pt->bond0,
                               pt->bonds)) == PD_OK &&
         (s = pd_h5_write_rows(g, "volume_factor", H5T_NATIVE_DOUBLE, b->vfactor + k0,
@@ -1079,6 +1225,7 @@ pd_status pd_write_bonds_part(pd_file *f, const pd_part *pt, const pd_bonds *b)
         (s = pd_h5_write_attr_doubles(g, "horizon", &b->horizon, 1)) == PD_OK)
         s = pd_h5_write_attr_int(g, "count", pt->nbonds);
     free(off);
+    free(nb);
     free(bytes);
     free(pbytes);
     H5Gclose(g);
@@ -1639,6 +1786,12 @@ pd_status pd_frame_spheres(const pd_file *f, const pd_frame_info *fi, pd_frame_s
 pd_status pd_read_frame_vectors(const pd_file *f, const char *name, int64_t n, double *disp[3],
                                 double *vel[3])
 {
+    return pd_read_frame_vectors_rows(f, name, n, 0, n, disp, vel);
+}
+
+pd_status pd_read_frame_vectors_rows(const pd_file *f, const char *name, int64_t n, int64_t g0,
+                                     int64_t m, double *disp[3], double *vel[3])
+{
     const char *fields[2] = {"displacement", "velocity"};
     double **dst[2] = {disp, vel};
     for (int k = 0; k < 2; k++) {
@@ -1649,13 +1802,14 @@ pd_status pd_read_frame_vectors(const pd_file *f, const char *name, int64_t n, d
         if (s != PD_OK)
             return s;
         pd_h5_form form = {H5T_FLOAT, 8, 2, {(hsize_t)n, 3}};
-        double *buf = NULL;
-        s = pd_h5_read_data(f->fid, f->name, path, &form, H5T_NATIVE_DOUBLE, sizeof(double),
-                            (void **)&buf, NULL);
+        double *buf = malloc((size_t)(m > 0 ? m : 1) * 3 * sizeof(double));
+        s = buf ? pd_h5_read_rows(f->fid, f->name, path, &form, H5T_NATIVE_DOUBLE, buf, g0, m)
+                : pd_fail(PD_ERR_NOMEM, "out of memory reading a frame");
+        if (s == PD_OK)
+            deinterleave(dst[k], buf, m);
+        free(buf);
         if (s != PD_OK)
             return s;
-        deinterleave(dst[k], buf, n);
-        free(buf);
     }
     return PD_OK;
 }
@@ -2004,23 +2158,24 @@ static pd_status read_history_rows(const pd_file *f, const char *path, int64_t k
                            nb);
 }
 
-static pd_status read_restart(const pd_file *f, int64_t n, int64_t step, int64_t k0, int64_t nb,
-                              pd_restart *r);
+static pd_status read_restart(const pd_file *f, int64_t n, int64_t g0, int64_t m, int64_t step,
+                              int64_t k0, int64_t nb, pd_restart *r);
 
 pd_status pd_read_restart(const pd_file *f, int64_t n, int64_t step, pd_restart *r)
 {
-    return read_restart(f, n, step, 0, -1, r);
+    return read_restart(f, n, 0, n, step, 0, -1, r);
 }
 
-pd_status pd_read_restart_rows(const pd_file *f, int64_t n, int64_t step, int64_t k0, int64_t nb,
-                               pd_restart *r)
+pd_status pd_read_restart_rows(const pd_file *f, int64_t n, int64_t g0, int64_t m, int64_t step,
+                               int64_t k0, int64_t nb, pd_restart *r)
 {
-    return read_restart(f, n, step, k0, nb, r);
+    return read_restart(f, n, g0, m, step, k0, nb, r);
 }
 
-/* pd_read_restart, the bond history's rows [k0, k0 + nb) alone when nb >= 0. */
-static pd_status read_restart(const pd_file *f, int64_t n, int64_t step, int64_t k0, int64_t nb,
-                              pd_restart *r)
+/* pd_read_restart, of the particles' rows [g0, g0 + m) of n alone, and the
+ * bond history's rows [k0, k0 + nb) alone when nb >= 0. */
+static pd_status read_restart(const pd_file *f, int64_t n, int64_t g0, int64_t m, int64_t step,
+                              int64_t k0, int64_t nb, pd_restart *r)
 {
     memset(r, 0, sizeof *r);
     int k = -1;
@@ -2046,21 +2201,23 @@ static pd_status read_restart(const pd_file *f, int64_t n, int64_t step, int64_t
         }
         int vec = fld != 2;
         pd_h5_form form = {H5T_FLOAT, 8, vec ? 2 : 1, {(hsize_t)n, vec ? 3 : 0}};
-        double *buf = NULL;
-        s = pd_h5_read_data(f->fid, f->name, path, &form, H5T_NATIVE_DOUBLE, sizeof(double),
-                            (void **)&buf, NULL);
-        if (s != PD_OK)
+        double *buf = malloc((size_t)(m > 0 ? m : 1) * (vec ? 3 : 1) * sizeof(double));
+        s = buf ? pd_h5_read_rows(f->fid, f->name, path, &form, H5T_NATIVE_DOUBLE, buf, g0, m)
+                : pd_fail(PD_ERR_NOMEM, "out of memory reading restart data");
+        if (s != PD_OK) {
+            free(buf);
             break;
+        }
         if (!vec) {
             r->s0 = buf;
             continue;
         }
         double **dst = fld == 0 ? r->position : fld == 1 ? r->force : r->contact_position;
         for (int d = 0; d < 3 && s == PD_OK; d++)
-            if ((dst[d] = malloc((size_t)n * sizeof(double))) == NULL)
+            if ((dst[d] = malloc((size_t)(m > 0 ? m : 1) * sizeof(double))) == NULL)
                 s = pd_fail(PD_ERR_NOMEM, "out of memory reading restart data");
         if (s == PD_OK)
-            deinterleave(dst, buf, n);
+            deinterleave(dst, buf, m);
         free(buf);
     }
     if (s == PD_OK) {
@@ -2091,8 +2248,10 @@ static pd_status read_restart(const pd_file *f, int64_t n, int64_t step, int64_t
             char path[64];
             snprintf(path, sizeof path, "%s/lost", group);
             pd_h5_form form = {H5T_INTEGER, 1, 1, {(hsize_t)n, 0}};
-            s = pd_h5_read_data(f->fid, f->name, path, &form, H5T_NATIVE_UINT8, 1,
-                                (void **)&r->lost, NULL);
+            r->lost = malloc((size_t)(m > 0 ? m : 1));
+            s = r->lost ? pd_h5_read_rows(f->fid, f->name, path, &form, H5T_NATIVE_UINT8,
+                                          r->lost, g0, m)
+                        : pd_fail(PD_ERR_NOMEM, "out of memory reading restart data");
         }
         char hpath[64];
         snprintf(hpath, sizeof hpath, "%s/bond_history", group);

@@ -5,16 +5,47 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
 #include "base/sets.h"
 #include "io/h5util.h"
 
 typedef struct {
     const pd_file *f;
     const pd_id_row *ix;
-    int64_t n;
+    const pd_particles *p;
     pd_sets *sets;
     pd_status st;
 } read_ctx;
+
+/* The first of a set's n ids that is no particle's: -1 for none.  A window
+ * of a body on MPI ranks (collective) finds each id among the rows some
+ * rank owns. */
+static int64_t missing_id(const read_ctx *c, const int64_t *ids, int64_t n)
+{
+    const pd_particles *p = c->p;
+    if (!p->window) {
+        for (int64_t k = 0; k < n; k++)
+            if (pd_row_of_id(c->ix, p->n, ids[k]) < 0)
+                return k;
+        return -1;
+    }
+    double *found = calloc((size_t)(n > 0 ? n : 1), sizeof(double));
+    if (found)
+        for (int64_t k = 0; k < n; k++) {
+            const int64_t i = pd_row_of_id(c->ix, p->n, ids[k]);
+            found[k] = i >= p->own_lo && i < p->own_hi;
+        }
+    if (pd_comm_agree(found ? PD_OK : PD_ERR_NOMEM) != PD_OK) {
+        free(found);
+        return -2;
+    }
+    pd_comm_add(found, n); /* one owner a row: 1 or 0, exact */
+    int64_t k = 0;
+    while (k < n && found[k] != 0)
+        k++;
+    free(found);
+    return k < n ? k : -1;
+}
 
 static herr_t read_one(hid_t g, const char *name, const H5L_info_t *info, void *data)
 {
@@ -38,13 +69,16 @@ static herr_t read_one(hid_t g, const char *name, const H5L_info_t *info, void *
     int64_t n = (int64_t)dims[0];
     if (n == 0)
         c->st = pd_fail(PD_ERR_FORMAT, "'%s': set '%s' is empty", fn, name);
-    for (int64_t k = 0; k < n && c->st == PD_OK; k++)
-        if (k > 0 && !(ids[k] > ids[k - 1]))
+    for (int64_t k = 1; k < n && c->st == PD_OK; k++)
+        if (!(ids[k] > ids[k - 1]))
             c->st = pd_fail(PD_ERR_FORMAT, "'%s': set '%s': ids are not strictly ascending", fn,
                             name);
-        else if (pd_row_of_id(c->ix, c->n, ids[k]) < 0)
-            c->st = pd_fail(PD_ERR_FORMAT, "'%s': set '%s': id %lld is no particle's", fn, name,
-                            (long long)ids[k]);
+    const int64_t miss = c->st == PD_OK ? missing_id(c, ids, n) : -1;
+    if (miss == -2)
+        c->st = pd_fail(PD_ERR_NOMEM, "out of memory checking set '%s'", name);
+    else if (miss >= 0)
+        c->st = pd_fail(PD_ERR_FORMAT, "'%s': set '%s': id %lld is no particle's", fn, name,
+                        (long long)ids[miss]);
     if (c->st != PD_OK) {
         free(ids);
         return 1;
@@ -73,7 +107,7 @@ pd_status pd_read_sets(const pd_file *f, const pd_particles *p, pd_sets **out)
         pd_sets_free(s);
         return pd_fail(PD_ERR_NOMEM, "out of memory");
     }
-    read_ctx c = {f, ix, p->n, s, PD_OK};
+    read_ctx c = {f, ix, p, s, PD_OK};
     hsize_t idx = 0;
     herr_t e = H5Literate(g, H5_INDEX_NAME, H5_ITER_INC, &idx, read_one, &c);
     H5Gclose(g);

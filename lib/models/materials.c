@@ -121,7 +121,7 @@ pd_status pd_bond_laws_check(const pd_particles *p, const pd_scene *s)
             int64_t i = 0;
             while (i < p->n && p->material[i] != m)
                 i++;
-            if (i == p->n)
+            if (pd_body_max(p, i < p->n) == 0) /* a window: on no rank */
                 return pd_fail(PD_ERR_INVALID, "the body has no particle of material %d (%s)",
                                (int)m, law->a == law->b ? "--material" : "--interface");
         }

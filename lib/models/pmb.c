@@ -509,6 +509,8 @@ double pd_half_contact_cap(const pd_particles *p)
         rmin = fmin(rmin, p->radius[i]);
         rmax = fmax(rmax, p->radius[i]);
     }
+    rmin = -pd_body_max(p, -rmin); /* a window: over the ranks */
+    rmax = pd_body_max(p, rmax);
     return rmin == rmax ? PD_CONTACT_RADIUS_FAC * (rmax + rmax) : INFINITY;
 }
 

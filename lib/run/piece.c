@@ -169,7 +169,8 @@ int pd_piece_reads_rows(const pd_particles *p, const pd_scene *sc)
     return pd_comm_size() > 1 && model && !pd_grid_possible(p, sc, model->stencil(sc));
 }
 
-pd_status pd_piece_rows(int64_t n, int64_t span, int64_t *g0, int64_t *g1)
+pd_status pd_piece_rows(int64_t n, int64_t span, int64_t *g0, int64_t *g1, int64_t *o0,
+                        int64_t *o1)
 {
     const int P = pd_comm_size(), me = pd_comm_rank();
     int64_t nb = 0;
@@ -184,6 +185,8 @@ pd_status pd_piece_rows(int64_t n, int64_t span, int64_t *g0, int64_t *g1)
     if (s == PD_OK) {
         *g0 = start[piece_first_block(K, me)];
         *g1 = start[K[me + 1] + 1 < nb ? K[me + 1] + 1 : nb];
+        *o0 = start[K[me]];
+        *o1 = start[K[me + 1]];
     }
     free(start);
     free(K);
@@ -198,15 +201,16 @@ static double *slice_history(const pd_particles *p, const pd_bonds *b, const dou
                              const pd_piece *pc, int *bad)
 {
     const pd_bonds *q = pc->b;
+    const int64_t g = pc->first - p->first; /* the piece's first row in p */
     double *h = malloc((size_t)(q->count > 0 ? q->count : 1) * (size_t)w * sizeof(double));
     *bad = 0;
     for (int64_t i = 0; h && i < pc->p->n && !*bad; i++) {
         pd_bond_iter it, jt;
-        pd_family_start_partners(b, p, pc->first + i, &it);
+        pd_family_start_partners(b, p, g + i, &it);
         for (pd_family_start_partners(q, pc->p, i, &jt); pd_family_next(&jt) && !*bad;) {
             int found = 0;
             while (!found && pd_family_next(&it))
-                found = it.j == jt.j + pc->first;
+                found = it.j == jt.j + g;
             if (found)
                 memcpy(h + jt.q * w, hw + it.q * w, (size_t)w * sizeof(double));
             *bad = !found;
@@ -215,15 +219,15 @@ static double *slice_history(const pd_particles *p, const pd_bonds *b, const dou
     return h;
 }
 
-/* The piece goes on from the whole body's restart data r (its rows', and
- * its bonds' history), at `step`, with velocities v; its bond states are
- * its bonds' (sliced from the restart's).  Collective (the contact list's
- * build). */
+/* The piece goes on from the restart data r of the body p (of its rows,
+ * and its bonds' history), at `step`, with velocities v; its bond states
+ * are its bonds' (sliced from the restart's).  Collective (the contact
+ * list's build). */
 static pd_status piece_restore(const pd_particles *p, const pd_bonds *b, pd_sim *sim,
                                int64_t step, const pd_restart *r, double *const v[3])
 {
     const pd_piece *pc = sim->piece;
-    const int64_t g = pc->first;
+    const int64_t g = pc->first - p->first; /* the piece's first row in p */
     pd_restart mine = *r;
     double *vel[3];
     for (int d = 0; d < 3; d++) {
@@ -259,7 +263,9 @@ static pd_status piece_restore(const pd_particles *p, const pd_bonds *b, pd_sim 
 }
 
 /* This rank's piece of the body p, b (bond states `intact`) under the
- * scene sc, at rest at step 0, with the whole body's figures. */
+ * scene sc, at rest at step 0, with the whole body's figures.  p may be a
+ * window of the body (pd_read_body_ranks): then it holds the piece's rows,
+ * b their bonds, and the body is walked as a bond list. */
 static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
                            const uint64_t *intact, pd_sim **out)
 {
@@ -272,7 +278,7 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
      * lattice stencil's blocks, else the bond list's), without its run:
      * the first row of each block, and the end */
     pd_grid *plan = NULL;
-    pd_status st = pd_grid_plan(p, b, sc, model->stencil(sc), &plan);
+    pd_status st = p->window ? PD_OK : pd_grid_plan(p, b, sc, model->stencil(sc), &plan);
     if (st != PD_OK)
         return st;
     const int grid = plan != NULL;
@@ -281,7 +287,7 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
         nb = pd_grid_blocks(plan, NULL, NULL, NULL);
     else /* b may hold the families of this rank's rows alone (pd_read_bonds_rows):
             the largest span over the ranks (collective) */
-        block = pd_half_block_of(p->n, -pd_comm_min(-pd_half_span(b)), &nb);
+        block = pd_half_block_of(pd_body_count(p), -pd_comm_min(-pd_half_span(b)), &nb);
     if (grid && nb == 0) {
         pd_grid_free(plan);
         return pd_fail(PD_ERR_INVALID, "on MPI ranks the particles must be in lattice order, as "
@@ -303,7 +309,7 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
         pd_grid_free(plan);
         return pd_fail(PD_ERR_NOMEM, "out of memory for the pieces of the body");
     }
-    const int64_t n = p->n;
+    const int64_t n = pd_body_count(p), w0 = p->first; /* p's rows: [w0, w0 + p->n) */
     if (grid) {
         int thick;
         pd_grid_blocks(plan, start, pc->axis, &thick);
@@ -342,15 +348,18 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
         const int64_t halo = rows - (pc->own_hi - pc->own_lo) + pc->send_down + pc->send_up;
         pc->buf = malloc((size_t)(halo > 0 ? halo : 1) * 4 * sizeof(double));
         pc->sum3 = malloc((size_t)(rows > 0 ? rows : 1) * 3 * sizeof(double));
-        pc->p = slice_particles(p, pc->first, g1);
-        if (!pc->buf || !pc->sum3 || !pc->p)
+        if (pc->first < w0 || g1 > w0 + p->n ||
+            (p->window && (w0 + p->own_lo != start[K[me]] || w0 + p->own_hi != start[K[me + 1]])))
+            st = pd_fail(PD_ERR_INVALID, "a piece of the body is not cut as it was read");
+        else if ((pc->p = slice_particles(p, pc->first - w0, g1 - w0)) == NULL || !pc->buf ||
+                 !pc->sum3)
             st = pd_fail(PD_ERR_NOMEM, "out of memory for a piece of the body");
         /* the stencil walks a lattice body's compact families: the piece's
          * stay compact too; else its lists */
         if (st == PD_OK && grid && !pd_bonds_has_lists(b) && b->stencil)
             st = slice_compact(p, b, intact, pc->p, pc->first, &pc->b);
         if (st == PD_OK && pc->b == NULL)
-            st = slice_bonds(p, b, intact, pc->first, g1, &pc->b);
+            st = slice_bonds(p, b, intact, pc->first - w0, g1 - w0, &pc->b);
     }
     free(start);
     free(K);
@@ -361,6 +370,7 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
         st = pd_fail(PD_ERR_INVALID, "a piece of the body is not cut as the whole body is");
     pc->table = NULL; /* the piece's stencil has its lengths and volumes */
     pd_grid_free(plan);
+    st = pd_comm_agree(st); /* the whole body's figures below are collective */
     if (st != PD_OK) {
         pd_sim_free(sim);
         pd_piece_free(pc);
@@ -381,7 +391,7 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
         pd_sim_owned(sim, &lo, &hi);
         st = pd_comm_agree(st == PD_OK ? pd_half_build(b, &h) : st);
         if (st == PD_OK)
-            st = pd_half_gap_rows(&h, b, p, lo, hi, 1, &sim->half.gap);
+            st = pd_half_gap_rows(&h, b, p, lo - w0, hi - w0, 1, &sim->half.gap);
         pd_half_free(&h);
         sim->half.contact_cap = pd_half_contact_cap(p);
     }

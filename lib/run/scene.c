@@ -341,12 +341,22 @@ static pd_status sphere_check(const pd_scene_spec *o, const pd_particles *p, con
 {
     int64_t deep;
     double depth;
-    const double t = sphere_meets(p, c, R, v, PD_OVERLAP_TOL * p->spacing, &deep, &depth);
+    double t = sphere_meets(p, c, R, v, PD_OVERLAP_TOL * p->spacing, &deep, &depth);
+    int64_t id = deep >= 0 ? p->id[deep] : 0;
+    if (p->window) { /* over the ranks: the first of the deepest, the first touch */
+        t = -pd_body_max(p, -t);
+        const double most = pd_body_max(p, depth);
+        const int64_t g = deep >= 0 && depth == most ? p->first + deep : INT64_MAX;
+        const int64_t at = pd_comm_min(g);
+        id = pd_comm_min(at != INT64_MAX && g == at ? id : INT64_MAX);
+        deep = at == INT64_MAX ? -1 : at;
+        depth = most;
+    }
     if (deep >= 0 && !o->sc.allow_overlap)
         return pd_fail(PD_ERR_INVALID,
                        "the %s overlaps the body at t = 0: particle %lld (id %lld) is %.3g m "
                        "inside it (radius %g m); start it outside, or give --allow-overlap",
-                       what, (long long)deep, (long long)p->id[deep], depth, R);
+                       what, (long long)deep, (long long)id, depth, R);
     rep->contact_time = isnan(rep->contact_time) ? t : fmin(rep->contact_time, t);
     const double end = (double)o->sc.steps * o->sc.dt;
     if (isinf(t))
@@ -388,10 +398,12 @@ pd_status pd_scene_inspect(const pd_scene_spec *o, const pd_particles *p, const 
         rho_lo = fmin(rho_lo, p->density[i]);
         rho_hi = fmax(rho_hi, p->density[i]);
     }
-    if (p->n > 0 && rho_lo < PD_PLAUSIBLE_DENSITY_MIN)
+    rho_lo = -pd_body_max(p, -rho_lo); /* a window: over the ranks */
+    rho_hi = pd_body_max(p, rho_hi);
+    if (pd_body_count(p) > 0 && rho_lo < PD_PLAUSIBLE_DENSITY_MIN)
         warn(rep, "density %g kg/m^3 is far below any solid's; g/cm^3 meant? (%g g/cm^3 is "
                   "%g kg/m^3)", rho_lo, rho_lo, rho_lo * 1000);
-    if (p->n > 0 && rho_hi > PD_PLAUSIBLE_DENSITY_MAX)
+    if (pd_body_count(p) > 0 && rho_hi > PD_PLAUSIBLE_DENSITY_MAX)
         warn(rep, "density %g kg/m^3 is above any solid's (osmium: 22590 kg/m^3)", rho_hi);
     if (o->has_k)
         modulus_check(rep, "bulk modulus", sc->bulk_modulus);

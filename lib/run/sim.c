@@ -40,7 +40,7 @@ static pd_status add_effect(pd_sim *sim, const pd_effect *e)
 double pd_lost_margin_default(const pd_particles *p)
 {
     double lo[3], hi[3], edge = p->spacing;
-    pd_particles_bounds(p, lo, hi);
+    pd_body_bounds(p, lo, hi);
     for (int d = 0; d < 3; d++)
         if (hi[d] > lo[d])
             edge = fmax(edge, hi[d] - lo[d]);
@@ -50,7 +50,7 @@ double pd_lost_margin_default(const pd_particles *p)
 void pd_lost_box(const pd_particles *p, double lost_margin, double lo[3], double hi[3])
 {
     double margin = lost_margin > 0 ? lost_margin : pd_lost_margin_default(p);
-    pd_particles_bounds(p, lo, hi);
+    pd_body_bounds(p, lo, hi);
     for (int d = 0; d < 3; d++) {
         lo[d] -= margin;
         hi[d] += margin;

@@ -665,19 +665,37 @@ pd_status pd_grid_plan(const pd_particles *p, const pd_bonds *b, const pd_scene 
     return PD_OK;
 }
 
+/* grid_candidate of a window of a body (pd_particles): over the ranks,
+ * collective. */
+static int window_candidate(const pd_particles *p, const pd_scene *sc, pd_stencil_kind kind)
+{
+    if (kind == PD_STENCIL_NONE || sc->bond_list || pd_body_count(p) < 2)
+        return 0;
+    double vlo = INFINITY, vhi = -INFINITY, rlo = INFINITY, rhi = -INFINITY;
+    for (int64_t i = 0; i < p->n; i++) {
+        vlo = fmin(vlo, p->volume[i]);
+        vhi = fmax(vhi, p->volume[i]);
+        rlo = fmin(rlo, p->radius[i]);
+        rhi = fmax(rhi, p->radius[i]);
+    }
+    return -pd_body_max(p, -vlo) == pd_body_max(p, vhi) &&
+           -pd_body_max(p, -rlo) == pd_body_max(p, rhi);
+}
+
 int pd_grid_possible(const pd_particles *p, const pd_scene *sc, pd_stencil_kind kind)
 {
-    if (!grid_candidate(p, 1, sc, kind, NULL))
+    if (p->window ? !window_candidate(p, sc, kind) : !grid_candidate(p, 1, sc, kind, NULL))
         return 0;
     int32_t *lc[3];
     int axis[3], ok = -1;
     for (int d = 0; d < 3; d++)
-        lc[d] = malloc((size_t)p->n * sizeof(int32_t));
-    if (lc[0] && lc[1] && lc[2])
-        ok = pd_lattice_coords(p, axis, lc);
+        lc[d] = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof(int32_t));
+    if (p->window || (lc[0] && lc[1] && lc[2])) /* a window's ranks meet in it */
+        ok = pd_lattice_coords(p, axis, lc[0] && lc[1] && lc[2] ? lc : NULL);
     for (int d = 0; d < 3; d++)
         free(lc[d]);
-    return ok != 0; /* out of memory: maybe */
+    /* out of memory: maybe; a window: on every rank's rows */
+    return p->window ? pd_comm_min(ok != 0) == 1 : ok != 0;
 }
 
 pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)

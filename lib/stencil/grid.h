@@ -28,7 +28,8 @@ pd_status pd_grid_plan(const pd_particles *p, const pd_bonds *b, const pd_scene 
                        pd_stencil_kind kind, pd_grid **out);
 /* 0 when no stencil of `kind` can walk the body p under the scene sc,
  * whatever its bonds (its particles are off any lattice, say): a piece of
- * it on MPI ranks may then read its own rows' bonds alone. */
+ * it on MPI ranks may then read its own rows alone.  p may be a window of
+ * the body (pd_particles): then over the ranks' windows (collective). */
 int pd_grid_possible(const pd_particles *p, const pd_scene *sc, pd_stencil_kind kind);
 void pd_grid_free(pd_grid *g);
 /* The PMB forces (and with `failure` the breaking test and s0), and the
