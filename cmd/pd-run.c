@@ -1145,10 +1145,9 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_scene_resolve(&o->spec, h->p, h->b, o->input);
     if (s == PD_OK && !restart)
         s = pd_scene_inspect(&o->spec, h->p, h->b, &h->report);
-    if (s == PD_OK && restart) {
-        s = rows ? pd_run_file_load_rows(h->in, h->p, h->b, first_bond, first, &h->r, h->v0,
-                                         &h->bits0)
-                 : pd_run_file_load(h->in, h->p, h->b, first, &h->r, h->v0, &h->bits0);
+    if (s == PD_OK && restart) { /* on MPI ranks the bond states now, the rows below */
+        s = ranks ? pd_run_file_load_state(h->in, h->b, rows ? first_bond : -1, first, &h->bits0)
+                  : pd_run_file_load(h->in, h->p, h->b, first, &h->r, h->v0, &h->bits0);
         sc->steps += *first; /* --steps N more */
     }
     /* a row of the series every --series N steps, by default the status
@@ -1161,8 +1160,20 @@ static int start(struct options *o, struct held *h, int64_t *first)
     if (ranks) /* this rank's piece of the body, without the whole body's run */
         s = cli_agreed(s);
     if (s == PD_OK && ranks)
-        s = pd_sim_piece_new(h->p, h->b, sc, *first, restart ? &h->r : NULL, h->v0,
-                             restart ? h->bits0 : NULL, &h->piece);
+        s = pd_sim_piece_new(h->p, h->b, sc, restart ? h->bits0 : NULL, &h->piece);
+    if (restart && ranks) { /* the piece's rows of the last frame and restart slot */
+        int64_t g0 = 0, g1 = 0;
+        s = cli_agreed(s);
+        if (s == PD_OK) {
+            pd_sim_piece_rows(h->piece, &g0, &g1);
+            s = pd_run_file_load_rows(h->in, pd_body_count(h->p), g0, g1 - g0,
+                                      rows ? first_bond : 0, rows ? h->b->count : -1, &h->r,
+                                      h->v0);
+        }
+        s = cli_agreed(s);
+        if (s == PD_OK)
+            s = pd_sim_piece_restore(h->piece, h->p, h->b, *first, &h->r, g0, h->v0);
+    }
     s = cli_agreed(s);
     if (s == PD_OK && !restart) /* step 0's forces, and the check of its energy */
         s = start_energy(h);

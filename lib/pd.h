@@ -1448,16 +1448,22 @@ void pd_restart_free(pd_restart *r);
 /* This rank's piece of a run of the scene sc on the body p, b, for
  * pd_comm_size() ranks (collective), cut as pd_sim_new would cut the whole
  * body's kernel but without building the whole body's run: *piece is a run
- * of its own (its own particles and bonds, freed with it), not yet set up,
- * stepped with pd_sim_setup, pd_sim_step or pd_sim_relax by every rank
- * together.  A fresh run: r NULL, intact NULL (b's states).  Going on from
- * restart data (pd_run_file_load: the whole body's r, v and directed bond
- * states intact) at `step`: the piece takes its rows and bonds of them.  A
- * body the rank count cannot share (fewer than two blocks a rank) is
+ * of its own (its own particles and bonds, freed with it), at rest, not yet
+ * set up, stepped with pd_sim_setup, pd_sim_step or pd_sim_relax by every
+ * rank together.  Its bonds take the directed states intact (NULL: b's).
+ * A body the rank count cannot share (fewer than two blocks a rank) is
  * refused with PD_ERR_INVALID. */
 pd_status pd_sim_piece_new(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
-                           int64_t step, const pd_restart *r, double *const v[3],
                            const uint64_t *intact, pd_sim **piece);
+/* The body's rows [*g0, *g1) the piece holds (its own and its ghosts). */
+void pd_sim_piece_rows(const pd_sim *piece, int64_t *g0, int64_t *g1);
+/* The piece of the body p, b goes on at `step` from restart data r and
+ * velocities v of the body's rows from r_first on (the piece's rows at
+ * least: pd_run_file_load_rows), with the bond history of b's bonds
+ * (collective). */
+pd_status pd_sim_piece_restore(pd_sim *piece, const pd_particles *p, const pd_bonds *b,
+                               int64_t step, const pd_restart *r, int64_t r_first,
+                               double *const v[3]);
 /* A model file: the header (history from `from`, may be NULL, and
  * `cmdline`), the particles, the bonds (b may be NULL: a lattice before
  * pd-bonds) and the sets (may be NULL). */
@@ -1486,12 +1492,17 @@ pd_status pd_run_file_start_part(pd_file *out, int restart, const pd_file *from,
  * (malloc'ed), for pd_sim_restore. */
 pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int64_t *step,
                            pd_restart *r, double *v[3], uint64_t **bits);
-/* The same where p is a window of the body and b holds a piece's rows'
- * bonds alone (pd_read_body_ranks), the whole body's bonds [first_bond,
- * first_bond + b->count): their rows, states and history alone. */
-pd_status pd_run_file_load_rows(pd_file *f, const pd_particles *p, const pd_bonds *b,
-                                int64_t first_bond, int64_t *step, pd_restart *r, double *v[3],
-                                uint64_t **bits);
+/* The same in two parts, for a piece on MPI ranks: the step and the bond
+ * states of b's bonds (the whole body's [first_bond, first_bond +
+ * b->count) where first_bond >= 0, b then a piece's rows' bonds,
+ * pd_read_body_ranks; else every bond), before the piece is cut; then
+ * the rows [g0, g0 + m) of the body's n of the frame's velocities and of
+ * the restart slot, with the bond history of bonds [k0, k0 + nb) (every
+ * bond's where nb < 0). */
+pd_status pd_run_file_load_state(pd_file *f, const pd_bonds *b, int64_t first_bond,
+                                 int64_t *step, uint64_t **bits);
+pd_status pd_run_file_load_rows(pd_file *f, int64_t n, int64_t g0, int64_t m, int64_t k0,
+                                int64_t nb, pd_restart *r, double *v[3]);
 /* The frame of the run's current step (energies, the optional `fields`)
  * and its restart data; the energies also go to *energy (may be NULL). */
 pd_status pd_run_file_frame(pd_file *out, const pd_sim *sim, unsigned fields, pd_energy *energy);

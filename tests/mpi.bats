@@ -64,9 +64,10 @@ EOF
 }
 
 # The disk of impact_body with two sets: `core` (a cylinder of 6 mm under
-# the indenter) and `rim` (z > 12 mm), in bodys.h5.
+# the indenter) and `rim` (z > 12 mm), in bodys.h5; `perturbed` as there.
 sets_body() {
     pd-lattice --spacing 0.001 --cylinder y,0,0,0.02,-0.0025,0 --density 2200 \
+        ${1:+--perturb 1e-4} \
         --set core=cylinder,y,0,0,0.006,-1,1 --set rim=box,-1,1,-1,1,0.012,1 -q -o lats.h5
     pd-bonds --horizon 0.0030001 -q lats.h5 -o bodys.h5
 }
@@ -182,6 +183,74 @@ with h5py.File('body.h5', 'r+') as f:
     run -1 mpi 3 --threads 1 -q --scene impact.scene --steps 1 body.h5 -o bad.h5
     assert_line "$line"
     [ ! -e bad.h5 ]
+}
+
+# refused_alike FILE ARG...: the serial program and 3 ranks refuse the run
+# of FILE with the same one line, exit 1, and no run file.
+refused_alike() {
+    local file=$1
+    shift
+    run -1 pd-run --threads 1 -q --steps 1 "$@" "$file" -o bad.h5
+    local line=${lines[0]}
+    [ "${#lines[@]}" -eq 1 ] && [[ "$line" == "pd-run: error: "* ]]
+    run -1 mpi 3 --threads 1 -q --steps 1 "$@" "$file" -o bad.h5
+    assert_line "$line"
+    [ ! -e bad.h5 ]
+}
+
+@test "mpi: a body of bond lists, each rank holding the window of particles its rows reach: sets, boundary conditions, the projectile, and bad input refused as one rank refuses it" {
+    impact_body perturbed
+    sets_body perturbed
+    run -0 mpi 3 --threads 1 --scene impact.scene --steps 1 bodys.h5 -o w.h5
+    assert_line --partial "each read with its own rows' particles and bonds alone"
+    # sets' members on the ranks that hold them, each counted once
+    same_on_ranks "2 3" 1 --scene impact.scene --no-failure rim --damping 1e4,core bodys.h5
+    run -0 pd-run --threads 1 --scene impact.scene --no-failure rim --steps 1 bodys.h5 -o l1.h5
+    local line
+    line=$(printf '%s\n' "${lines[@]}" | grep -- "--no-failure rim: no bond of their")
+    run -0 mpi 3 --threads 1 --scene impact.scene --no-failure rim --steps 1 bodys.h5 -o l3.h5
+    assert_line "$line"
+    sed '/^indenter/d' impact.scene >bc.scene
+    same_on_ranks "3" 1 --scene bc.scene --displacement-bc core,y,-1e-5 --velocity-bc rim,z,5 \
+        bodys.h5
+    # the projectile: its default stiffness and first contact over the ranks
+    local proj=--projectile=sphere,0,0.0051,0,0.005,0.01,0,-300,0
+    same_on_ranks "3" 1 --scene bc.scene "$proj" --steps 200 bodys.h5
+    run -0 pd-run --threads 1 --scene bc.scene "$proj" --steps 1 bodys.h5 -o l1.h5
+    line=$(printf '%s\n' "${lines[@]}" | grep "first contact at")
+    [ -n "$line" ]
+    run -0 mpi 3 --threads 1 --scene bc.scene "$proj" --steps 1 bodys.h5 -o l3.h5
+    assert_line "$line"
+    # a restart from 2 ranks on 3: each its rows of the frame and the slot
+    mpi 2 --threads 1 -q --scene impact.scene --steps 100 bodys.h5 -o r.h5
+    cp r.h5 r1.h5
+    pd-run --threads 1 -q --restart r1.h5 --steps 60 -o one.h5
+    mpi 3 --threads 1 -q --restart r.h5 --steps 60 -o np3.h5
+    run -0 "$PY" "$SAME" one.h5 np3.h5
+    # bad input found in some rank's rows alone: the serial line
+    refused_alike bodys.h5 --scene impact.scene \
+        --projectile=sphere,0,0.004,0,0.005,0.01,0,-300,0
+    refused_alike bodys.h5 --scene impact.scene --material 3,c=1e22
+    "$PY" -c "
+import h5py
+with h5py.File('bodys.h5') as f, h5py.File('badset.h5', 'w') as g:
+    for k in f: f.copy(k, g)
+    for a, v in f.attrs.items(): g.attrs[a] = v
+    n = len(g['particles/id'])
+    del g['sets/rim']
+    g['sets/rim'] = [n // 2, n + 7]
+with h5py.File('bodys.h5') as f, h5py.File('dupid.h5', 'w') as g:
+    for k in f: f.copy(k, g)
+    for a, v in f.attrs.items(): g.attrs[a] = v
+    ids = g['particles/id']
+    ids[len(ids) - 3] = ids[len(ids) // 2]
+with h5py.File('bodys.h5') as f, h5py.File('badvol.h5', 'w') as g:
+    for k in f: f.copy(k, g)
+    for a, v in f.attrs.items(): g.attrs[a] = v
+    g['particles/volume'][len(g['particles/volume']) * 5 // 6] = -1"
+    refused_alike badset.h5 --scene impact.scene --damping 1e4,rim
+    refused_alike dupid.h5 --scene impact.scene
+    refused_alike badvol.h5 --scene impact.scene
 }
 
 @test "mpi: lost particles, taken on whichever rank owns them, the same bits" {

@@ -242,12 +242,13 @@ void pd_comm_box(double lo[3], double hi[3])
     MPI_Allreduce(MPI_IN_PLACE, hi, 3, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
 }
 
-void pd_comm_alltoall(const double *send, const int64_t *send_count, double *recv,
-                      const int64_t *recv_count)
+/* pd_comm_alltoall of values of type t, `size` bytes each. */
+static void alltoall(const void *send, const int64_t *send_count, void *recv,
+                     const int64_t *recv_count, MPI_Datatype t, size_t size)
 {
     const int P = pd_comm_size();
     if (P == 1) {
-        memmove(recv, send, (size_t)send_count[0] * sizeof(double));
+        memmove(recv, send, (size_t)send_count[0] * size);
         return;
     }
     int *c = malloc((size_t)P * 4 * sizeof(int));
@@ -255,9 +256,20 @@ void pd_comm_alltoall(const double *send, const int64_t *send_count, double *rec
         MPI_Abort(MPI_COMM_WORLD, 1);
     int_counts(send_count, P, c, c + P);
     int_counts(recv_count, P, c + 2 * P, c + 3 * P);
-    MPI_Alltoallv(send, c, c + P, MPI_DOUBLE, recv, c + 2 * P, c + 3 * P, MPI_DOUBLE,
-                  MPI_COMM_WORLD);
+    MPI_Alltoallv(send, c, c + P, t, recv, c + 2 * P, c + 3 * P, t, MPI_COMM_WORLD);
     free(c);
+}
+
+void pd_comm_alltoall(const double *send, const int64_t *send_count, double *recv,
+                      const int64_t *recv_count)
+{
+    alltoall(send, send_count, recv, recv_count, MPI_DOUBLE, sizeof(double));
+}
+
+void pd_comm_alltoall_int(const int64_t *send, const int64_t *send_count, int64_t *recv,
+                          const int64_t *recv_count)
+{
+    alltoall(send, send_count, recv, recv_count, MPI_INT64_T, sizeof(int64_t));
 }
 
 void pd_comm_sendrecv(const double *send, int64_t ns, int to, double *recv, int64_t nr,
@@ -390,6 +402,13 @@ void pd_comm_alltoall(const double *send, const int64_t *send_count, double *rec
 {
     (void)recv_count;
     memmove(recv, send, (size_t)send_count[0] * sizeof(double));
+}
+
+void pd_comm_alltoall_int(const int64_t *send, const int64_t *send_count, int64_t *recv,
+                          const int64_t *recv_count)
+{
+    (void)recv_count;
+    memmove(recv, send, (size_t)send_count[0] * sizeof(int64_t));
 }
 
 void pd_comm_sendrecv(const double *send, int64_t ns, int to, double *recv, int64_t nr,

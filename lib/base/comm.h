@@ -25,6 +25,9 @@ void pd_comm_box(double lo[3], double hi[3]);
  * order) and receives recv_count[r] from it (into `recv`, in rank order). */
 void pd_comm_alltoall(const double *send, const int64_t *send_count, double *recv,
                       const int64_t *recv_count);
+/* The same of int64 values. */
+void pd_comm_alltoall_int(const int64_t *send, const int64_t *send_count, int64_t *recv,
+                          const int64_t *recv_count);
 /* A sum taken in the one rank's order over rows the ranks hold in rank
  * order, as a chain: pd_comm_chain_in gives the sum of the ranks below (0
  * on rank 0), to which this rank adds its own terms in order; then

@@ -94,37 +94,50 @@ static pd_status plan_frames(pd_file *out, const pd_particles *p, int64_t nbonds
     return s;
 }
 
-/* The state at the last complete frame of a run: its step, the restart
- * slot, the frame's velocities and bond states (of b's bonds, the whole
- * body's [k0, k0 + b->count) when `rows`). */
-static pd_status run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int rows,
-                               int64_t k0, int64_t *step, pd_restart *r, double *v[3],
-                               uint64_t **bits)
+/* The last complete frame of a run: its name (of names, to free) and info. */
+static pd_status last_frame(pd_file *f, int64_t *nframes, char ***names, pd_frame_info *fi)
+{
+    pd_status s = pd_list_frames(f, nframes, names);
+    if (s == PD_OK && *nframes == 0)
+        s = pd_fail(PD_ERR_FORMAT, "the run has no complete frame to restart from");
+    if (s == PD_OK)
+        s = pd_read_frame_info(f, (*names)[*nframes - 1], fi);
+    return s;
+}
+
+pd_status pd_run_file_load_state(pd_file *f, const pd_bonds *b, int64_t first_bond,
+                                 int64_t *step, uint64_t **bits)
 {
     int64_t nframes = 0;
     char **names = NULL;
-    pd_status s = pd_list_frames(f, &nframes, &names);
-    if (s == PD_OK && nframes == 0)
-        s = pd_fail(PD_ERR_FORMAT, "the run has no complete frame to restart from");
     pd_frame_info fi;
-    if (s == PD_OK)
-        s = pd_read_frame_info(f, names[nframes - 1], &fi);
-    const int64_t n = pd_body_count(p); /* p: the body's rows [first, first + p->n) */
-    for (int d = 0; d < 3 && s == PD_OK; d++)
-        if ((v[d] = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof(double))) == NULL)
-            s = pd_fail(PD_ERR_NOMEM, "out of memory");
+    pd_status s = last_frame(f, &nframes, &names, &fi);
     if (s == PD_OK && (*bits = calloc((size_t)pd_bits_words(b->count) + 1, 8)) == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory");
     if (s == PD_OK)
-        s = pd_read_frame_vectors_rows(f, names[nframes - 1], n, p->first, p->n, NULL, v);
-    if (s == PD_OK)
-        s = rows ? pd_read_frame_state_rows(f, names[nframes - 1], k0, b->count, *bits)
-                 : pd_read_frame_state(f, names[nframes - 1], b->count, *bits);
-    if (s == PD_OK)
-        s = rows ? pd_read_restart_rows(f, n, p->first, p->n, fi.step, k0, b->count, r)
-                 : pd_read_restart(f, n, fi.step, r);
+        s = first_bond >= 0
+                ? pd_read_frame_state_rows(f, names[nframes - 1], first_bond, b->count, *bits)
+                : pd_read_frame_state(f, names[nframes - 1], b->count, *bits);
     if (s == PD_OK)
         *step = fi.step;
+    pd_frames_free_list(nframes, names);
+    return s;
+}
+
+pd_status pd_run_file_load_rows(pd_file *f, int64_t n, int64_t g0, int64_t m, int64_t k0,
+                                int64_t nb, pd_restart *r, double *v[3])
+{
+    int64_t nframes = 0;
+    char **names = NULL;
+    pd_frame_info fi;
+    pd_status s = last_frame(f, &nframes, &names, &fi);
+    for (int d = 0; d < 3 && s == PD_OK; d++)
+        if ((v[d] = malloc((size_t)(m > 0 ? m : 1) * sizeof(double))) == NULL)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory");
+    if (s == PD_OK)
+        s = pd_read_frame_vectors_rows(f, names[nframes - 1], n, g0, m, NULL, v);
+    if (s == PD_OK)
+        s = pd_read_restart_rows(f, n, g0, m, fi.step, k0, nb, r);
     pd_frames_free_list(nframes, names);
     return s;
 }
@@ -132,16 +145,9 @@ static pd_status run_file_load(pd_file *f, const pd_particles *p, const pd_bonds
 pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int64_t *step,
                            pd_restart *r, double *v[3], uint64_t **bits)
 {
-    return run_file_load(f, p, b, 0, 0, step, r, v, bits);
+    pd_status s = pd_run_file_load_state(f, b, -1, step, bits);
+    return s == PD_OK ? pd_run_file_load_rows(f, p->n, 0, p->n, 0, -1, r, v) : s;
 }
-
-pd_status pd_run_file_load_rows(pd_file *f, const pd_particles *p, const pd_bonds *b,
-                                int64_t first_bond, int64_t *step, pd_restart *r, double *v[3],
-                                uint64_t **bits)
-{
-    return run_file_load(f, p, b, 1, first_bond, step, r, v, bits);
-}
-
 
 pd_status pd_write_model(pd_file *out, const pd_file *from, const char *cmdline,
                          const pd_particles *p, const pd_bonds *b, const pd_sets *sets)

@@ -265,41 +265,51 @@ pd_status pd_read_particles_rows(const pd_file *f, int64_t n, int64_t g0, int64_
 
 pd_status pd_check_ids_ranks(const pd_file *f, const pd_particles *p)
 {
-    /* the windows' ids sorted, each unique and their ranges apart: every
-     * id unique; else (or when in doubt) every rank checks all of them */
-    const int64_t m = p->n;
-    int64_t *ids = malloc((size_t)(m > 0 ? m : 1) * sizeof(int64_t));
-    int ok = ids != NULL;
-    if (ok) {
-        memcpy(ids, p->id, (size_t)m * sizeof(int64_t));
-        qsort(ids, (size_t)m, sizeof *ids, cmp_int64);
-        for (int64_t i = 1; i < m && ok; i++)
-            ok = ids[i] > ids[i - 1];
-    }
+    /* each id to the rank of its range of ids, which sorts what it gets:
+     * the smallest id that appears twice over the ranks (collective) */
     const int P = pd_comm_size();
-    int64_t *lo = malloc((size_t)P * sizeof(int64_t)), *hi = malloc((size_t)P * sizeof(int64_t));
-    ok = pd_comm_min(ok && lo && hi) == 1;
-    if (ok) {
-        pd_comm_counts(m > 0 ? ids[0] : INT64_MAX, lo);
-        pd_comm_counts(m > 0 ? ids[m - 1] : INT64_MIN, hi);
-        for (int a = 0; a < P && ok; a++)
-            for (int c = 0; c < P && ok; c++)
-                ok = a == c || hi[a] < lo[c] || hi[c] < lo[a];
+    const int64_t m = p->n;
+    int64_t lo = INT64_MAX, hi = INT64_MIN;
+    for (int64_t i = 0; i < m; i++) {
+        lo = p->id[i] < lo ? p->id[i] : lo;
+        hi = p->id[i] > hi ? p->id[i] : hi;
     }
-    free(ids);
-    free(lo);
-    free(hi);
-    if (ok)
-        return PD_OK;
-    const int64_t n = p->total;
-    int64_t *all = malloc((size_t)n * sizeof(int64_t));
-    const pd_h5_form form = {H5T_INTEGER, 8, 1, {(hsize_t)n, 0}};
-    pd_status s = all ? pd_h5_read_rows(f->fid, f->name, "/particles/id", &form,
-                                         H5T_NATIVE_INT64, all, 0, n)
-                      : pd_fail(PD_ERR_NOMEM, "out of memory checking ids");
-    if (s == PD_OK)
-        s = check_unique_ids(f->name, all, n);
-    free(all);
+    lo = pd_comm_min(lo);
+    hi = -pd_comm_min(-hi); /* ids are at least 1: no overflow */
+    const int64_t width = hi >= lo ? (hi - lo) / P + 1 : 1;
+    int64_t *count = calloc((size_t)P * 2, sizeof(int64_t)), *at = malloc((size_t)P * sizeof(int64_t));
+    int64_t *sent = malloc((size_t)(m > 0 ? m : 1) * sizeof(int64_t)), *got = NULL;
+    pd_status s = count && at && sent ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory checking ids");
+    s = pd_comm_agree(s);
+    int64_t nget = 0, twice = INT64_MAX;
+    if (s == PD_OK) {
+        for (int64_t i = 0; i < m; i++)
+            count[(p->id[i] - lo) / width]++;
+        for (int r = 0, k = 0; r < P; k += count[r], r++)
+            at[r] = k;
+        for (int64_t i = 0; i < m; i++)
+            sent[at[(p->id[i] - lo) / width]++] = p->id[i];
+        pd_comm_counts_to(count, count + P);
+        for (int r = 0; r < P; r++)
+            nget += count[P + r];
+        got = malloc((size_t)(nget > 0 ? nget : 1) * sizeof(int64_t));
+        s = pd_comm_agree(got ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory checking ids"));
+    }
+    if (s == PD_OK) {
+        pd_comm_alltoall_int(sent, count, got, count + P);
+        qsort(got, (size_t)nget, sizeof *got, cmp_int64);
+        for (int64_t i = 1; i < nget && twice == INT64_MAX; i++)
+            if (got[i] == got[i - 1])
+                twice = got[i];
+        twice = pd_comm_min(twice);
+        if (twice != INT64_MAX)
+            s = pd_fail(PD_ERR_FORMAT, "'%s': particle id %lld appears twice", f->name,
+                        (long long)twice);
+    }
+    free(count);
+    free(at);
+    free(sent);
+    free(got);
     return s;
 }
 

@@ -224,10 +224,11 @@ static double *slice_history(const pd_particles *p, const pd_bonds *b, const dou
  * are its bonds' (sliced from the restart's).  Collective (the contact
  * list's build). */
 static pd_status piece_restore(const pd_particles *p, const pd_bonds *b, pd_sim *sim,
-                               int64_t step, const pd_restart *r, double *const v[3])
+                               int64_t step, const pd_restart *r, int64_t r_first,
+                               double *const v[3])
 {
     const pd_piece *pc = sim->piece;
-    const int64_t g = pc->first - p->first; /* the piece's first row in p */
+    const int64_t g = pc->first - r_first; /* the piece's first row in r, v */
     pd_restart mine = *r;
     double *vel[3];
     for (int d = 0; d < 3; d++) {
@@ -404,20 +405,32 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
 }
 
 pd_status pd_sim_piece_new(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
-                           int64_t step, const pd_restart *r, double *const v[3],
                            const uint64_t *intact, pd_sim **out)
 {
     pd_sim *sim = NULL;
     pd_status s = pd_comm_agree(piece_cut(p, b, sc, intact ? intact : b->intact, &sim));
-    if (s == PD_OK && r)
-        s = piece_restore(p, b, sim, step, r, v);
-    if (s != PD_OK) {
-        pd_sim_free(sim);
+    if (s != PD_OK)
         return s;
-    }
     pd_piece_ghosts_rest(sim);
     *out = sim;
     return PD_OK;
+}
+
+void pd_sim_piece_rows(const pd_sim *sim, int64_t *g0, int64_t *g1)
+{
+    const pd_piece *pc = sim->piece;
+    *g0 = pc ? pc->first : 0;
+    *g1 = pc ? pc->first + pc->p->n : sim->n;
+}
+
+pd_status pd_sim_piece_restore(pd_sim *sim, const pd_particles *p, const pd_bonds *b,
+                               int64_t step, const pd_restart *r, int64_t r_first,
+                               double *const v[3])
+{
+    pd_status s = piece_restore(p, b, sim, step, r, r_first, v);
+    if (s == PD_OK)
+        pd_piece_ghosts_rest(sim);
+    return s;
 }
 
 int64_t pd_sim_halo_bytes(const pd_sim *sim)
