@@ -943,6 +943,8 @@ struct held {
     int64_t iterations;      /* --relax: the iterations of its load steps */
     int64_t nofail;          /* particles of the --no-failure sets */
     int rows;                /* on MPI ranks each read its own rows' bonds */
+    pd_particles shape;      /* the body's count, dimension, spacing and
+                                thickness, for the log (no arrays)       */
 };
 
 static void release(struct held *h)
@@ -991,13 +993,13 @@ static int options(int argc, char **argv, struct options *o)
 static void log_scene(const struct options *o, const struct held *h, int64_t first,
                       int64_t nsteps)
 {
-    const pd_particles *p = h->p;
+    const pd_particles *p = &h->shape;
     const pd_scene *sc = &o->spec.sc;
     const pd_sim *sim = h->piece ? h->piece : h->sim; /* what the whole body's run would be */
     fprintf(stderr,
             PROG ": %lld particles, %lld bonds; effects: %s\n" PROG
                  ": dt %.6g s (stable step %.6g s, seed 004 eq. 46), %lld steps%s\n",
-            (long long)pd_body_count(p), (long long)(h->nbonds / 2), pd_sim_effects(sim), sc->dt,
+            (long long)p->n, (long long)(h->nbonds / 2), pd_sim_effects(sim), sc->dt,
             sc->dt_stable, (long long)nsteps, o->restart ? " more" : "");
     const char *wait = getenv("OMP_WAIT_POLICY"), *spin = getenv("GOMP_SPINCOUNT");
     if (pd_comm_mpi()) /* the MPI build: ranks x threads */
@@ -1133,6 +1135,11 @@ static int start(struct options *o, struct held *h, int64_t *first)
     else if (s == PD_OK && (s = pd_read_particles(h->in, &h->p)) == PD_OK)
         s = pd_read_bonds_compact(h->in, h->p, &h->b);
     h->rows = rows;
+    if (s == PD_OK) { /* the body's figures for the log, whatever is cut */
+        h->shape = (pd_particles){.n = pd_body_count(h->p), .spacing = h->p->spacing,
+                                  .dimension = h->p->dimension, .thickness = h->p->thickness};
+        h->shape.total = h->shape.own_hi = h->shape.n;
+    }
     if (ranks) /* the scene's figures below are taken over the ranks */
         s = cli_agreed(s);
     if (s == PD_OK)
@@ -1159,16 +1166,20 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_sim_restore(h->sim, *first, &h->r, h->v0, h->bits0);
     if (ranks) /* this rank's piece of the body, without the whole body's run */
         s = cli_agreed(s);
-    if (s == PD_OK && ranks)
+    /* a window of the body of lists: the piece takes it over (its bonds then
+     * in the piece alone) */
+    const int64_t n = h->p ? pd_body_count(h->p) : 0, nread = h->b ? h->b->count : 0;
+    if (s == PD_OK && rows)
+        s = pd_sim_piece_take(&h->p, &h->b, sc, restart ? h->bits0 : NULL, &h->piece);
+    else if (s == PD_OK && ranks)
         s = pd_sim_piece_new(h->p, h->b, sc, restart ? h->bits0 : NULL, &h->piece);
     if (restart && ranks) { /* the piece's rows of the last frame and restart slot */
         int64_t g0 = 0, g1 = 0;
         s = cli_agreed(s);
         if (s == PD_OK) {
             pd_sim_piece_rows(h->piece, &g0, &g1);
-            s = pd_run_file_load_rows(h->in, pd_body_count(h->p), g0, g1 - g0,
-                                      rows ? first_bond : 0, rows ? h->b->count : -1, &h->r,
-                                      h->v0);
+            s = pd_run_file_load_rows(h->in, n, g0, g1 - g0, rows ? first_bond : 0,
+                                      rows ? nread : -1, &h->r, h->v0);
         }
         s = cli_agreed(s);
         if (s == PD_OK)
@@ -1191,21 +1202,17 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_file_create_ranks(o->output, &h->out);
     /* the whole body's bonds: a piece that read its own rows' writes them */
     pd_part part = {0};
-    if (rows) { /* (collective) */
+    if (rows) { /* the piece's own rows (collective) */
         s = cli_agreed(s);
-        if (s == PD_OK) { /* the window's own rows */
-            const int64_t lo = h->p->own_lo, hi = h->p->own_hi;
-            part = (pd_part){lo, h->p->first + lo, hi - lo, pd_body_count(h->p),
-                             h->b->offset[lo], 0, h->b->offset[hi] - h->b->offset[lo], 0};
-        }
-        part.bond0 = pd_comm_below(part.bonds);
-        part.nbonds = pd_comm_total(part.bonds);
+        if (s == PD_OK)
+            pd_sim_part(h->piece, &part);
     }
     h->nbonds = rows ? part.nbonds : h->b ? h->b->count : 0;
     const pd_sim *run = h->piece ? h->piece : h->sim;
     const char *effects = run ? pd_sim_effects(run) : NULL;
     if (s == PD_OK && rows)
-        s = pd_run_file_start_part(h->out, restart, restart ? h->out : h->in, h->p, h->b, &part,
+        s = pd_run_file_start_part(h->out, restart, restart ? h->out : h->in,
+                                   pd_sim_particles(h->piece), pd_sim_bonds(h->piece), &part,
                                    h->sets, sc, effects, h->cmdline ? h->cmdline : PROG, h->text,
                                    *first);
     else if (s == PD_OK)
@@ -1395,8 +1402,8 @@ static int run_main(int argc, char **argv)
                      "its ghosts%s; halo of at most %.3g MB a rank a step; every rank writes "
                      "its rows of '%s' (parallel HDF5)\n",
                 pd_comm_size(), (long long)rows,
-                h.rows ? ", each read with its own rows' particles and bonds alone" : "", (double)halo / 1e6,
-                o.output);
+                h.rows ? ", each read with its own rows' particles and bonds alone" : "",
+                (double)halo / 1e6, o.output);
     if (h.piece)
         drop_whole(&h);
     const pd_sim *sim = h.piece ? h.piece : h.sim;

@@ -74,7 +74,7 @@ pd_status pd_read_body_ranks(const pd_file *f, const pd_scene *sc, pd_particles 
 
 /* Every frame of the run laid out (pd_frame_steps: the steps after `first`
  * that get one, and step 0 itself in a new run, `fresh`). */
-static pd_status plan_frames(pd_file *out, const pd_particles *p, int64_t nbonds,
+static pd_status plan_frames(pd_file *out, int64_t n, int64_t nbonds,
                              const pd_scene *sc, unsigned fields, int64_t first, int fresh)
 {
     const int64_t m = pd_frame_steps(sc, first, fresh, NULL);
@@ -88,7 +88,7 @@ static pd_status plan_frames(pd_file *out, const pd_particles *p, int64_t nbonds
     pd_frame_steps(sc, first, fresh, steps);
     for (int64_t k = 0; k < m; k++)
         times[k] = (double)steps[k] * sc->dt;
-    pd_status s = pd_plan_frames(out, pd_body_count(p), nbonds, m, steps, times, fields);
+    pd_status s = pd_plan_frames(out, n, nbonds, m, steps, times, fields);
     free(steps);
     free(times);
     return s;
@@ -170,7 +170,7 @@ static pd_status run_file_start(pd_file *out, int restart, const pd_file *from,
                                 const char *cmdline, const char *text, int64_t first)
 {
     pd_status s;
-    const int64_t nbonds = part ? part->nbonds : b->count;
+    const int64_t nbonds = part ? part->nbonds : b->count, n = part ? part->n : p->n;
     if (restart) {
         /* the same file goes on: unfinished frames out, the scene and the
          * history say what was added */
@@ -180,7 +180,7 @@ static pd_status run_file_start(pd_file *out, int restart, const pd_file *from,
     } else if (part) { /* the model, each rank its part's bonds */
         s = pd_write_header(out, from, cmdline);
         if (s == PD_OK)
-            s = p->window ? pd_write_particles_part(out, part, p) : pd_write_particles(out, p);
+            s = pd_write_particles_part(out, part, p);
         if (s == PD_OK)
             s = pd_write_bonds_part(out, part, b);
         if (s == PD_OK)
@@ -192,7 +192,7 @@ static pd_status run_file_start(pd_file *out, int restart, const pd_file *from,
     /* every frame laid out now, then the file under its final name: a run
      * killed at any moment leaves it readable with its complete frames */
     if (s == PD_OK)
-        s = plan_frames(out, p, nbonds, sc,
+        s = plan_frames(out, n, nbonds, sc,
                         sc->fields | (sc->has_projectile ? PD_FRAME_PROJECTILE : 0) |
                             (sc->damping > 0 && !sc->relax ? PD_FRAME_DAMPING : 0),
                         first, !restart);
@@ -203,7 +203,7 @@ static pd_status run_file_start(pd_file *out, int restart, const pd_file *from,
      * one (a kill before it is complete leaves no frame to go on from) */
     const int slots = restart || pd_frame_steps(sc, first, !restart, NULL) > 1 ? 2 : 1;
     if (s == PD_OK)
-        s = pd_plan_restart(out, pd_body_count(p), sc->has_failure, sc->has_contact, slots);
+        s = pd_plan_restart(out, n, sc->has_failure, sc->has_contact, slots);
     if (s == PD_OK && sc->has_projectile)
         s = pd_plan_restart_projectile(out);
     if (s == PD_OK && sc->damping > 0 && !sc->relax)

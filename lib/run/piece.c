@@ -93,6 +93,83 @@ static pd_status slice_bonds(const pd_particles *p, const pd_bonds *b, const uin
     return PD_OK;
 }
 
+/* The window p, b of a body (pd_read_body_ranks) cut in place to its rows
+ * [g0, g1), as slice_particles and slice_bonds would copy them (the
+ * pre-crack bits kept too), with the states `intact` gives its bonds
+ * (intact may be b->intact): a piece that takes the window over holds no
+ * second copy of its bonds.  *keep gets a bit for each of b's bonds, set
+ * when kept. */
+static pd_status cut_window(pd_particles *p, pd_bonds *b, const uint64_t *intact, int64_t g0,
+                            int64_t g1, uint64_t **keep)
+{
+    const int64_t m = g1 - g0;
+    *keep = calloc((size_t)pd_bits_words(b->count) + 1, sizeof(uint64_t));
+    if (*keep == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for a piece of the body");
+    for (int d = 0; d < 3; d++)
+        memmove(p->x[d], p->x[d] + g0, (size_t)m * sizeof(double));
+    memmove(p->volume, p->volume + g0, (size_t)m * sizeof(double));
+    memmove(p->density, p->density + g0, (size_t)m * sizeof(double));
+    memmove(p->radius, p->radius + g0, (size_t)m * sizeof(double));
+    memmove(p->material, p->material + g0, (size_t)m * sizeof(int32_t));
+    memmove(p->id, p->id + g0, (size_t)m * sizeof(int64_t));
+    p->n = p->total = p->own_hi = m;
+    p->first = p->own_lo = 0;
+    p->window = 0;
+    /* bond k' <= k goes where bond k was: each bit read before it is written */
+    int64_t k = 0, lo = b->offset[g0];
+    for (int64_t i = g0; i < g1; i++) {
+        const int64_t hi = b->offset[i + 1];
+        for (int64_t q = lo; q < hi; q++) {
+            const int64_t j = b->neighbor[q];
+            if (j < g0 || j >= g1)
+                continue;
+            (*keep)[q >> 6] |= UINT64_C(1) << (q & 63);
+            b->neighbor[k] = (int32_t)(j - g0);
+            b->length[k] = b->length[q];
+            b->vfactor[k] = b->vfactor[q];
+            const uint64_t bit = UINT64_C(1) << (k & 63);
+            b->intact[k >> 6] = pd_bond_intact(intact, q) ? b->intact[k >> 6] | bit
+                                                          : b->intact[k >> 6] & ~bit;
+            if (b->precrack)
+                b->precrack[k >> 6] = pd_bond_intact(b->precrack, q)
+                                          ? b->precrack[k >> 6] | bit
+                                          : b->precrack[k >> 6] & ~bit;
+            k++;
+        }
+        b->offset[i - g0 + 1] = k;
+        lo = hi;
+    }
+    b->offset[0] = 0;
+    const int64_t words = pd_bits_words(k) + 1;
+    for (int64_t w = pd_bits_words(k); w < words; w++) /* past the last bond: clear */
+        b->intact[w] = b->precrack ? (b->precrack[w] = 0) : 0;
+    if (k & 63) {
+        const uint64_t mask = (UINT64_C(1) << (k & 63)) - 1;
+        b->intact[(k - 1) >> 6] &= mask;
+        if (b->precrack)
+            b->precrack[(k - 1) >> 6] &= mask;
+    }
+    b->n = m;
+    b->count = k;
+    /* the arrays shrunk to the piece (a failed shrink keeps them) */
+    const size_t c = (size_t)(k > 0 ? k : 1);
+    void *q;
+    if ((q = realloc(b->neighbor, c * sizeof(int32_t))))
+        b->neighbor = q;
+    if ((q = realloc(b->length, c * sizeof(double))))
+        b->length = q;
+    if ((q = realloc(b->vfactor, c * sizeof(double))))
+        b->vfactor = q;
+    if ((q = realloc(b->intact, (size_t)words * sizeof(uint64_t))))
+        b->intact = q;
+    if (b->precrack && (q = realloc(b->precrack, (size_t)words * sizeof(uint64_t))))
+        b->precrack = q;
+    if ((q = realloc(b->offset, (size_t)(m + 1) * sizeof(int64_t))))
+        b->offset = q;
+    return PD_OK;
+}
+
 /* A lattice body's piece keeps its families compact, as the whole body
  * does (no per-bond arrays; pd_bonds_compact on the piece's particles):
  * each family the stencil's partners within the piece, which must be the
@@ -219,6 +296,18 @@ static double *slice_history(const pd_particles *p, const pd_bonds *b, const dou
     return h;
 }
 
+/* The bond history of a piece cut from a window (cut_window) from the
+ * window's, hw (w values a bond): its kept bonds', in order.  NULL: out of
+ * memory. */
+static double *kept_history(const pd_piece *pc, const double *hw, int w)
+{
+    double *h = malloc((size_t)(pc->b->count > 0 ? pc->b->count : 1) * (size_t)w * sizeof(double));
+    for (int64_t q = 0, k = 0; h && q < pc->keep_count; q++)
+        if (pd_bond_intact(pc->keep, q)) /* a set bit: kept */
+            memcpy(h + (k++) * w, hw + q * w, (size_t)w * sizeof(double));
+    return h;
+}
+
 /* The piece goes on from the restart data r of the body p (of its rows,
  * and its bonds' history), at `step`, with velocities v; its bond states
  * are its bonds' (sliced from the restart's).  Collective (the contact
@@ -242,16 +331,19 @@ static pd_status piece_restore(const pd_particles *p, const pd_bonds *b, pd_sim 
     mine.bond_history = NULL;
     mine.history_bonds = 0;
     int bad = 0;
-    const int history = r->bond_history != NULL && r->history_bonds == b->count;
+    const int64_t count = pc->keep ? pc->keep_count : b->count; /* the bonds read */
+    const int history = r->bond_history != NULL && r->history_bonds == count;
     if (history) {
-        mine.bond_history = slice_history(p, b, r->bond_history, r->history_width, pc, &bad);
+        mine.bond_history = pc->keep ? kept_history(pc, r->bond_history, r->history_width)
+                                     : slice_history(p, b, r->bond_history, r->history_width,
+                                                     pc, &bad);
         mine.history_bonds = pc->b->count;
     }
     pd_status s = PD_OK;
     if (r->bond_history && !history)
         s = pd_fail(PD_ERR_FORMAT, "the restart data have a bond history of %lld directed "
                                    "bonds, the body %lld",
-                    (long long)r->history_bonds, (long long)b->count);
+                    (long long)r->history_bonds, (long long)count);
     else if (history && mine.bond_history == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory for the bond history of a piece");
     else if (bad)
@@ -263,12 +355,28 @@ static pd_status piece_restore(const pd_particles *p, const pd_bonds *b, pd_sim 
     return s;
 }
 
+/* The AVX-512 rows' contact gap of the body p, b over this rank's own rows
+ * [lo, hi) of p and the other ranks' (pd_half_gap_rows; collective), after
+ * st, this rank's state. */
+static pd_status window_gap(const pd_particles *p, const pd_bonds *b, int64_t lo, int64_t hi,
+                            pd_status st, double *gap)
+{
+    pd_half_bonds h;
+    memset(&h, 0, sizeof h);
+    st = pd_comm_agree(st == PD_OK ? pd_half_build(b, &h) : st);
+    if (st == PD_OK)
+        st = pd_half_gap_rows(&h, b, p, lo, hi, 1, gap);
+    pd_half_free(&h);
+    return st;
+}
+
 /* This rank's piece of the body p, b (bond states `intact`) under the
  * scene sc, at rest at step 0, with the whole body's figures.  p may be a
  * window of the body (pd_read_body_ranks): then it holds the piece's rows,
  * b their bonds, and the body is walked as a bond list. */
-static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
-                           const uint64_t *intact, pd_sim **out)
+static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, pd_particles **tp,
+                           pd_bonds **tb, const pd_scene *sc, const uint64_t *intact,
+                           pd_sim **out)
 {
     *out = NULL;
     const int P = pd_comm_size(), me = pd_comm_rank();
@@ -311,6 +419,13 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
         return pd_fail(PD_ERR_NOMEM, "out of memory for the pieces of the body");
     }
     const int64_t n = pd_body_count(p), w0 = p->first; /* p's rows: [w0, w0 + p->n) */
+    /* the whole body's figures, before a window taken over is cut: the box
+     * outside which a particle is lost, and the contact cap of the AVX-512
+     * rows (collective for a window) */
+    double box_lo[3], box_hi[3];
+    pd_lost_box(p, sc->lost_margin, box_lo, box_hi);
+    const double cap = pd_half_contact_cap(p);
+    double gap = 0;
     if (grid) {
         int thick;
         pd_grid_blocks(plan, start, pc->axis, &thick);
@@ -352,8 +467,23 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
         if (pc->first < w0 || g1 > w0 + p->n ||
             (p->window && (w0 + p->own_lo != start[K[me]] || w0 + p->own_hi != start[K[me + 1]])))
             st = pd_fail(PD_ERR_INVALID, "a piece of the body is not cut as it was read");
-        else if ((pc->p = slice_particles(p, pc->first - w0, g1 - w0)) == NULL || !pc->buf ||
-                 !pc->sum3)
+        else if (!pc->buf || !pc->sum3)
+            st = pd_fail(PD_ERR_NOMEM, "out of memory for a piece of the body");
+        /* the AVX-512 rows' contact gap over the ranks' own rows, before a
+         * window taken over is cut (collective) */
+        if (tp && sc->has_contact)
+            st = window_gap(p, b, pc->first + pc->own_lo - w0, pc->first + pc->own_hi - w0, st,
+                            &gap);
+        if (st == PD_OK && tp) { /* the window becomes the piece */
+            pc->keep_count = b->count; /* the window's bonds, before the cut */
+            st = cut_window(*tp, *tb, intact, pc->first - w0, g1 - w0, &pc->keep);
+            if (st == PD_OK) {
+                pc->p = *tp;
+                pc->b = *tb;
+                *tp = NULL;
+                *tb = NULL;
+            }
+        } else if (st == PD_OK && (pc->p = slice_particles(p, pc->first - w0, g1 - w0)) == NULL)
             st = pd_fail(PD_ERR_NOMEM, "out of memory for a piece of the body");
         /* the stencil walks a lattice body's compact families: the piece's
          * stay compact too; else its lists */
@@ -384,17 +514,16 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, const pd_sc
         st = pd_fail(PD_ERR_NOMEM, "out of memory for a piece of the body");
     /* the whole body's figures: the box outside which a particle is lost,
      * and the AVX-512 rows' contact gap and cap */
-    pd_lost_box(p, sc->lost_margin, sim->box_lo, sim->box_hi);
+    memcpy(sim->box_lo, box_lo, sizeof box_lo);
+    memcpy(sim->box_hi, box_hi, sizeof box_hi);
     if (sim->half.contact) { /* over the ranks' own rows (collective) */
-        pd_half_bonds h;
-        memset(&h, 0, sizeof h);
         int64_t lo, hi;
         pd_sim_owned(sim, &lo, &hi);
-        st = pd_comm_agree(st == PD_OK ? pd_half_build(b, &h) : st);
-        if (st == PD_OK)
-            st = pd_half_gap_rows(&h, b, p, lo - w0, hi - w0, 1, &sim->half.gap);
-        pd_half_free(&h);
-        sim->half.contact_cap = pd_half_contact_cap(p);
+        if (tp) /* found before the window was cut */
+            sim->half.gap = gap;
+        else
+            st = window_gap(p, b, lo - w0, hi - w0, st, &sim->half.gap);
+        sim->half.contact_cap = cap;
     }
     if (st != PD_OK) {
         pd_sim_free(sim);
@@ -408,7 +537,21 @@ pd_status pd_sim_piece_new(const pd_particles *p, const pd_bonds *b, const pd_sc
                            const uint64_t *intact, pd_sim **out)
 {
     pd_sim *sim = NULL;
-    pd_status s = pd_comm_agree(piece_cut(p, b, sc, intact ? intact : b->intact, &sim));
+    pd_status s = pd_comm_agree(piece_cut(p, b, NULL, NULL, sc, intact ? intact : b->intact, &sim));
+    if (s != PD_OK)
+        return s;
+    pd_piece_ghosts_rest(sim);
+    *out = sim;
+    return PD_OK;
+}
+
+pd_status pd_sim_piece_take(pd_particles **p, pd_bonds **b, const pd_scene *sc,
+                            const uint64_t *intact, pd_sim **out)
+{
+    pd_sim *sim = NULL;
+    if (!(*p)->window || pd_bonds_has_lists(*b) == 0)
+        return pd_comm_agree(pd_fail(PD_ERR_INVALID, "a piece takes over a window of bond lists"));
+    pd_status s = pd_comm_agree(piece_cut(*p, *b, p, b, sc, intact ? intact : (*b)->intact, &sim));
     if (s != PD_OK)
         return s;
     pd_piece_ghosts_rest(sim);

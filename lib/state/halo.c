@@ -21,6 +21,7 @@ void pd_piece_free(pd_piece *pc)
     free(pc->sum3);
     pd_particles_free(pc->p);
     pd_bonds_free(pc->b);
+    free(pc->keep);
     free(pc);
 }
 

@@ -127,6 +127,11 @@ typedef struct pd_piece {
                                whole body's first, not the piece's)          */
     pd_particles *p;        /* the piece's particles and bonds (owned)      */
     pd_bonds *b;
+    uint64_t *keep;         /* a piece cut in place from a window of the body
+                               (pd_sim_piece_take): which of the window's
+                               keep_count bonds it kept, a bit each, for a
+                               restart's bond history; NULL once restored  */
+    int64_t keep_count;
 } pd_piece;
 
 /* The state of a run.  Every per-particle array has n entries in the
