@@ -416,27 +416,48 @@ pd_status pd_h5_read_data(hid_t loc, const char *file, const char *name, const p
     return s;
 }
 
+/* open_checked, and the dataset's rank (1 or 2) and its fixed dimensions
+ * checked: dims its extent. */
+static pd_status open_rows(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
+                           hid_t *d, hid_t *fs, int *rank, hsize_t dims[2])
+{
+    pd_status s = open_checked(loc, file, name, form, d, fs, rank);
+    if (s != PD_OK)
+        return s;
+    dims[0] = 0;
+    dims[1] = 1;
+    if (*rank < 1 || *rank > 2)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has rank %d, expected 1 or 2", file, name,
+                    *rank);
+    else if (H5Sget_simple_extent_dims(*fs, dims, NULL) < 0)
+        s = pd_fail(PD_ERR_FORMAT, "'%s': cannot read dataset '%s'", file, name);
+    for (int r = 0; r < *rank && s == PD_OK; r++)
+        if (form->dims[r] != 0 && dims[r] != form->dims[r])
+            s = pd_fail(PD_ERR_FORMAT,
+                        "'%s': dataset '%s' has %llu entries along axis %d, expected %llu",
+                        file, name, (unsigned long long)dims[r], r,
+                        (unsigned long long)form->dims[r]);
+    if (s != PD_OK) {
+        H5Sclose(*fs);
+        H5Dclose(*d);
+    }
+    return s;
+}
+
 pd_status pd_h5_rows(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
                      int64_t *rows)
 {
     hid_t d, fs;
     int rank;
+    hsize_t dims[2];
     *rows = 0;
-    pd_status s = open_checked(loc, file, name, form, &d, &fs, &rank);
+    pd_status s = open_rows(loc, file, name, form, &d, &fs, &rank, dims);
     if (s != PD_OK)
         return s;
-    hsize_t dims[2] = {0, 1};
-    if (rank < 1 || rank > 2 || H5Sget_simple_extent_dims(fs, dims, NULL) < 0)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': cannot read dataset '%s'", file, name);
-    else if (rank == 2 && form->dims[1] != 0 && dims[1] != form->dims[1])
-        s = pd_fail(PD_ERR_FORMAT,
-                    "'%s': dataset '%s' has %llu entries along axis %d, expected %llu", file,
-                    name, (unsigned long long)dims[1], 1, (unsigned long long)form->dims[1]);
-    else
-        *rows = (int64_t)dims[0];
+    *rows = (int64_t)dims[0];
     H5Sclose(fs);
     H5Dclose(d);
-    return s;
+    return PD_OK;
 }
 
 pd_status pd_h5_read_rows(hid_t loc, const char *file, const char *name, const pd_h5_form *form,
@@ -444,26 +465,13 @@ pd_status pd_h5_read_rows(hid_t loc, const char *file, const char *name, const p
 {
     hid_t d, fs;
     int rank;
-    pd_status s = open_checked(loc, file, name, form, &d, &fs, &rank);
+    hsize_t dims[2];
+    pd_status s = open_rows(loc, file, name, form, &d, &fs, &rank, dims);
     if (s != PD_OK)
         return s;
-    hsize_t dims[2] = {0, 1};
-    if (rank < 1 || rank > 2)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has rank %d, expected 1 or 2", file, name,
-                    rank);
-    else if (H5Sget_simple_extent_dims(fs, dims, NULL) < 0)
-        s = pd_fail(PD_ERR_FORMAT, "'%s': cannot read dataset '%s'", file, name);
-    else if (form->dims[0] != 0 && dims[0] != form->dims[0])
-        s = pd_fail(PD_ERR_FORMAT,
-                    "'%s': dataset '%s' has %llu entries along axis %d, expected %llu", file,
-                    name, (unsigned long long)dims[0], 0, (unsigned long long)form->dims[0]);
-    else if (row0 < 0 || rows < 0 || (uint64_t)(row0 + rows) > (uint64_t)dims[0])
+    if (row0 < 0 || rows < 0 || (uint64_t)(row0 + rows) > (uint64_t)dims[0])
         s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has %llu entries, rows up to %lld wanted",
                     file, name, (unsigned long long)dims[0], (long long)(row0 + rows));
-    else if (rank == 2 && form->dims[1] != 0 && dims[1] != form->dims[1])
-        s = pd_fail(PD_ERR_FORMAT, "'%s': dataset '%s' has %llu entries along axis 1, expected "
-                    "%llu", file, name, (unsigned long long)dims[1],
-                    (unsigned long long)form->dims[1]);
     if (s == PD_OK && rows > 0) {
         hsize_t start[2] = {(hsize_t)row0, 0}, count[2] = {(hsize_t)rows, dims[1]};
         hid_t ms = H5Screate_simple(rank, count, NULL);

@@ -313,6 +313,17 @@ pd_status pd_check_ids_ranks(const pd_file *f, const pd_particles *p)
     return s;
 }
 
+/* The attributes of /particles (g). */
+static pd_status write_particle_attrs(hid_t g, const pd_particles *p)
+{
+    pd_status s = pd_h5_write_attr_doubles(g, "spacing", &p->spacing, 1);
+    if (s == PD_OK)
+        s = pd_h5_write_attr_int(g, "dimension", p->dimension);
+    if (s == PD_OK && p->dimension == 2)
+        s = pd_h5_write_attr_doubles(g, "thickness", &p->thickness, 1);
+    return s;
+}
+
 pd_status pd_write_particles(pd_file *f, const pd_particles *p)
 {
     hid_t g = pd_h5_create_group(f->fid, "/particles");
@@ -338,11 +349,8 @@ pd_status pd_write_particles(pd_file *f, const pd_particles *p)
         (s = pd_h5_write_data(g, "material", H5T_STD_I32LE, H5T_NATIVE_INT32, 1, d1,
                               p->material)) == PD_OK &&
         (s = pd_h5_write_data(g, "id", H5T_STD_I64LE, H5T_NATIVE_INT64, 1, d1, p->id)) ==
-            PD_OK &&
-        (s = pd_h5_write_attr_doubles(g, "spacing", &p->spacing, 1)) == PD_OK)
-        s = pd_h5_write_attr_int(g, "dimension", p->dimension);
-    if (s == PD_OK && p->dimension == 2)
-        s = pd_h5_write_attr_doubles(g, "thickness", &p->thickness, 1);
+            PD_OK)
+        s = write_particle_attrs(g, p);
     free(pos);
     H5Gclose(g);
     return s;
@@ -379,11 +387,8 @@ pd_status pd_write_particles_part(pd_file *f, const pd_part *pt, const pd_partic
             PD_OK &&
         (s = pd_h5_write_rows(g, "material", H5T_NATIVE_INT32, p->material + lo, pt->first,
                               m)) == PD_OK &&
-        (s = pd_h5_write_rows(g, "id", H5T_NATIVE_INT64, p->id + lo, pt->first, m)) == PD_OK &&
-        (s = pd_h5_write_attr_doubles(g, "spacing", &p->spacing, 1)) == PD_OK)
-        s = pd_h5_write_attr_int(g, "dimension", p->dimension);
-    if (s == PD_OK && p->dimension == 2)
-        s = pd_h5_write_attr_doubles(g, "thickness", &p->thickness, 1);
+        (s = pd_h5_write_rows(g, "id", H5T_NATIVE_INT64, p->id + lo, pt->first, m)) == PD_OK)
+        s = write_particle_attrs(g, p);
     free(pos);
     H5Gclose(g);
     return s;

@@ -37,6 +37,18 @@
 #include "models/model.h"
 #include "stencil/grid.h"
 
+/* Rows [g0, g0 + n) of p into rows [0, n) of q (q may be p). */
+static void move_rows(pd_particles *q, const pd_particles *p, int64_t g0, int64_t n)
+{
+    for (int d = 0; d < 3; d++)
+        memmove(q->x[d], p->x[d] + g0, (size_t)n * sizeof(double));
+    memmove(q->volume, p->volume + g0, (size_t)n * sizeof(double));
+    memmove(q->density, p->density + g0, (size_t)n * sizeof(double));
+    memmove(q->radius, p->radius + g0, (size_t)n * sizeof(double));
+    memmove(q->material, p->material + g0, (size_t)n * sizeof(int32_t));
+    memmove(q->id, p->id + g0, (size_t)n * sizeof(int64_t));
+}
+
 /* The whole body's rows [g0, g1) as particles of their own. */
 static pd_particles *slice_particles(const pd_particles *p, int64_t g0, int64_t g1)
 {
@@ -44,13 +56,7 @@ static pd_particles *slice_particles(const pd_particles *p, int64_t g0, int64_t 
     pd_particles *q = pd_particles_new(n);
     if (q == NULL)
         return NULL;
-    for (int d = 0; d < 3; d++)
-        memcpy(q->x[d], p->x[d] + g0, (size_t)n * sizeof(double));
-    memcpy(q->volume, p->volume + g0, (size_t)n * sizeof(double));
-    memcpy(q->density, p->density + g0, (size_t)n * sizeof(double));
-    memcpy(q->radius, p->radius + g0, (size_t)n * sizeof(double));
-    memcpy(q->material, p->material + g0, (size_t)n * sizeof(int32_t));
-    memcpy(q->id, p->id + g0, (size_t)n * sizeof(int64_t));
+    move_rows(q, p, g0, n);
     q->spacing = p->spacing;
     q->dimension = p->dimension;
     q->thickness = p->thickness;
@@ -106,13 +112,7 @@ static pd_status cut_window(pd_particles *p, pd_bonds *b, const uint64_t *intact
     *keep = calloc((size_t)pd_bits_words(b->count) + 1, sizeof(uint64_t));
     if (*keep == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for a piece of the body");
-    for (int d = 0; d < 3; d++)
-        memmove(p->x[d], p->x[d] + g0, (size_t)m * sizeof(double));
-    memmove(p->volume, p->volume + g0, (size_t)m * sizeof(double));
-    memmove(p->density, p->density + g0, (size_t)m * sizeof(double));
-    memmove(p->radius, p->radius + g0, (size_t)m * sizeof(double));
-    memmove(p->material, p->material + g0, (size_t)m * sizeof(int32_t));
-    memmove(p->id, p->id + g0, (size_t)m * sizeof(int64_t));
+    move_rows(p, p, g0, m);
     p->n = p->total = p->own_hi = m;
     p->first = p->own_lo = 0;
     p->window = 0;
