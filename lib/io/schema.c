@@ -277,7 +277,8 @@ pd_status pd_check_ids_ranks(const pd_file *f, const pd_particles *p)
     lo = pd_comm_min(lo);
     hi = -pd_comm_min(-hi); /* ids are at least 1: no overflow */
     const int64_t width = hi >= lo ? (hi - lo) / P + 1 : 1;
-    int64_t *count = calloc((size_t)P * 2, sizeof(int64_t)), *at = malloc((size_t)P * sizeof(int64_t));
+    int64_t *count = calloc((size_t)P * 2, sizeof(int64_t));
+    int64_t *at = malloc((size_t)P * sizeof(int64_t));
     int64_t *sent = malloc((size_t)(m > 0 ? m : 1) * sizeof(int64_t)), *got = NULL;
     pd_status s = count && at && sent ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory checking ids");
     s = pd_comm_agree(s);
