@@ -105,6 +105,28 @@ static pd_status last_frame(pd_file *f, int64_t *nframes, char ***names, pd_fram
     return s;
 }
 
+/* The bond states of frame `name` (pd_run_file_load_state). */
+static pd_status load_state(pd_file *f, const char *name, const pd_bonds *b, int64_t first_bond,
+                            uint64_t **bits)
+{
+    if ((*bits = calloc((size_t)pd_bits_words(b->count) + 1, 8)) == NULL)
+        return pd_fail(PD_ERR_NOMEM, "out of memory");
+    return first_bond >= 0 ? pd_read_frame_state_rows(f, name, first_bond, b->count, *bits)
+                           : pd_read_frame_state(f, name, b->count, *bits);
+}
+
+/* The rows of frame `name` and of the restart slot of its step
+ * (pd_run_file_load_rows). */
+static pd_status load_rows(pd_file *f, const char *name, int64_t step, int64_t n, int64_t g0,
+                           int64_t m, int64_t k0, int64_t nb, pd_restart *r, double *v[3])
+{
+    for (int d = 0; d < 3; d++)
+        if ((v[d] = malloc((size_t)(m > 0 ? m : 1) * sizeof(double))) == NULL)
+            return pd_fail(PD_ERR_NOMEM, "out of memory");
+    pd_status s = pd_read_frame_vectors_rows(f, name, n, g0, m, NULL, v);
+    return s == PD_OK ? pd_read_restart_rows(f, n, g0, m, step, k0, nb, r) : s;
+}
+
 pd_status pd_run_file_load_state(pd_file *f, const pd_bonds *b, int64_t first_bond,
                                  int64_t *step, uint64_t **bits)
 {
@@ -112,12 +134,8 @@ pd_status pd_run_file_load_state(pd_file *f, const pd_bonds *b, int64_t first_bo
     char **names = NULL;
     pd_frame_info fi;
     pd_status s = last_frame(f, &nframes, &names, &fi);
-    if (s == PD_OK && (*bits = calloc((size_t)pd_bits_words(b->count) + 1, 8)) == NULL)
-        s = pd_fail(PD_ERR_NOMEM, "out of memory");
     if (s == PD_OK)
-        s = first_bond >= 0
-                ? pd_read_frame_state_rows(f, names[nframes - 1], first_bond, b->count, *bits)
-                : pd_read_frame_state(f, names[nframes - 1], b->count, *bits);
+        s = load_state(f, names[nframes - 1], b, first_bond, bits);
     if (s == PD_OK)
         *step = fi.step;
     pd_frames_free_list(nframes, names);
@@ -131,13 +149,8 @@ pd_status pd_run_file_load_rows(pd_file *f, int64_t n, int64_t g0, int64_t m, in
     char **names = NULL;
     pd_frame_info fi;
     pd_status s = last_frame(f, &nframes, &names, &fi);
-    for (int d = 0; d < 3 && s == PD_OK; d++)
-        if ((v[d] = malloc((size_t)(m > 0 ? m : 1) * sizeof(double))) == NULL)
-            s = pd_fail(PD_ERR_NOMEM, "out of memory");
     if (s == PD_OK)
-        s = pd_read_frame_vectors_rows(f, names[nframes - 1], n, g0, m, NULL, v);
-    if (s == PD_OK)
-        s = pd_read_restart_rows(f, n, g0, m, fi.step, k0, nb, r);
+        s = load_rows(f, names[nframes - 1], fi.step, n, g0, m, k0, nb, r, v);
     pd_frames_free_list(nframes, names);
     return s;
 }
@@ -145,8 +158,18 @@ pd_status pd_run_file_load_rows(pd_file *f, int64_t n, int64_t g0, int64_t m, in
 pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int64_t *step,
                            pd_restart *r, double *v[3], uint64_t **bits)
 {
-    pd_status s = pd_run_file_load_state(f, b, -1, step, bits);
-    return s == PD_OK ? pd_run_file_load_rows(f, p->n, 0, p->n, 0, -1, r, v) : s;
+    int64_t nframes = 0; /* the frames listed once */
+    char **names = NULL;
+    pd_frame_info fi;
+    pd_status s = last_frame(f, &nframes, &names, &fi);
+    if (s == PD_OK)
+        s = load_state(f, names[nframes - 1], b, -1, bits);
+    if (s == PD_OK)
+        s = load_rows(f, names[nframes - 1], fi.step, p->n, 0, p->n, 0, -1, r, v);
+    if (s == PD_OK)
+        *step = fi.step;
+    pd_frames_free_list(nframes, names);
+    return s;
 }
 
 pd_status pd_write_model(pd_file *out, const pd_file *from, const char *cmdline,
