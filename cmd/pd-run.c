@@ -942,7 +942,9 @@ struct held {
     int64_t nbonds;          /* the whole body's directed bonds */
     int64_t iterations;      /* --relax: the iterations of its load steps */
     int64_t nofail;          /* particles of the --no-failure sets */
-    int rows;                /* on MPI ranks each read its own rows' bonds */
+    int rows;                /* on MPI ranks each read a window of the body:
+                                1 its own rows' bonds, 2 a lattice's
+                                (pd_body_read)                           */
     pd_particles shape;      /* the body's count, dimension, spacing and
                                 thickness, for the log (no arrays)       */
 };
@@ -1124,16 +1126,16 @@ static int start(struct options *o, struct held *h, int64_t *first)
      * the ranks have their pieces) */
     pd_status s = restart && !ranks ? pd_file_update(o->restart, o->output, &h->in)
                                     : pd_file_open(restart ? o->restart : o->input, &h->in);
-    /* on MPI ranks a body of bond lists off any lattice: each rank its
-     * piece's rows, particles and bonds (collective) */
-    int rows = 0;
-    int64_t first_bond = 0;
+    /* on MPI ranks each rank its piece's rows, particles and bonds, as a
+     * window of the body where it can (collective) */
+    pd_body_read w = {0};
     if (ranks)
         s = cli_agreed(s);
     if (s == PD_OK && ranks)
-        s = pd_read_body_ranks(h->in, &o->spec.sc, &h->p, &h->b, &rows, &first_bond);
+        s = pd_read_body_ranks(h->in, &o->spec, &h->p, &h->b, &w);
     else if (s == PD_OK && (s = pd_read_particles(h->in, &h->p)) == PD_OK)
         s = pd_read_bonds_compact(h->in, h->p, &h->b);
+    const int rows = w.rows;
     h->rows = rows;
     if (s == PD_OK) { /* the body's figures for the log, whatever is cut */
         h->shape = (pd_particles){.n = pd_body_count(h->p), .spacing = h->p->spacing,
@@ -1153,7 +1155,7 @@ static int start(struct options *o, struct held *h, int64_t *first)
     if (s == PD_OK && !restart)
         s = pd_scene_inspect(&o->spec, h->p, h->b, &h->report);
     if (s == PD_OK && restart) { /* on MPI ranks the bond states now, the rows below */
-        s = ranks ? pd_run_file_load_state(h->in, h->b, rows ? first_bond : -1, first, &h->bits0)
+        s = ranks ? pd_run_file_load_state(h->in, h->b, &w, first, &h->bits0)
                   : pd_run_file_load(h->in, h->p, h->b, first, &h->r, h->v0, &h->bits0);
         sc->steps += *first; /* --steps N more */
     }
@@ -1169,7 +1171,7 @@ static int start(struct options *o, struct held *h, int64_t *first)
     /* a window of the body of lists: the piece takes it over (its bonds then
      * in the piece alone) */
     const int64_t n = h->p ? pd_body_count(h->p) : 0, nread = h->b ? h->b->count : 0;
-    if (s == PD_OK && rows)
+    if (s == PD_OK && rows == 1)
         s = pd_sim_piece_take(&h->p, &h->b, sc, restart ? h->bits0 : NULL, &h->piece);
     else if (s == PD_OK && ranks)
         s = pd_sim_piece_new(h->p, h->b, sc, restart ? h->bits0 : NULL, &h->piece);
@@ -1178,8 +1180,8 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = cli_agreed(s);
         if (s == PD_OK) {
             pd_sim_piece_rows(h->piece, &g0, &g1);
-            s = pd_run_file_load_rows(h->in, n, g0, g1 - g0, rows ? first_bond : 0,
-                                      rows ? nread : -1, &h->r, h->v0);
+            s = pd_run_file_load_rows(h->in, n, g0, g1 - g0, rows == 1 ? w.first_bond : 0,
+                                      rows == 1 ? nread : -1, &h->r, h->v0);
         }
         s = cli_agreed(s);
         if (s == PD_OK)
@@ -1402,7 +1404,9 @@ static int run_main(int argc, char **argv)
                      "its ghosts%s; halo of at most %.3g MB a rank a step; every rank writes "
                      "its rows of '%s' (parallel HDF5)\n",
                 pd_comm_size(), (long long)rows,
-                h.rows ? ", each read with its own rows' particles and bonds alone" : "",
+                h.rows == 1   ? ", each read with its own rows' particles and bonds alone"
+                : h.rows == 2 ? ", each read as its own window of the lattice"
+                              : "",
                 (double)halo / 1e6, o.output);
     if (h.piece)
         drop_whole(&h);

@@ -342,6 +342,17 @@ int pd_family_offsets(const pd_bonds *b, const pd_particles *p, int32_t (*d)[3],
  * ascending, then bonds) whose bit in `bits` differs from that of its
  * mirror j->i; -1 when there is none, -2 when out of memory, -3 for lists. */
 int64_t pd_family_asymmetric(const pd_bonds *b, const uint64_t *bits);
+/* The same over rows [lo, hi) of b alone, whose partners' families are
+ * whole. */
+int64_t pd_family_asymmetric_rows(const pd_bonds *b, const uint64_t *bits, int64_t lo, int64_t hi);
+/* pd_family_offsets of a body spread over MPI ranks as windows of compact
+ * families (collective): each rank walks its own rows of p, b
+ * ([p->own_lo, p->own_hi), whose families are whole); the offsets in the
+ * table's order (b->stencil), the whole body's figures on every rank.
+ * Returns the number of offsets, or -1 (on every rank) when a rank's b is
+ * not compact, an array is NULL or memory ran out. */
+int pd_family_offsets_ranks(const pd_bonds *b, const pd_particles *p, int32_t (*d)[3],
+                            double *len, double *nu, double *spread);
 /* Does b hold its families as lists (1), or compact (0)? */
 static inline int pd_bonds_has_lists(const pd_bonds *b)
 {
@@ -721,6 +732,17 @@ void pd_comm_barrier(void);
  * bonds it reads (pd_read_bonds_rows); [*o0, *o1) those it owns. */
 pd_status pd_piece_rows(int64_t n, int64_t span, int64_t *g0, int64_t *g1, int64_t *o0,
                         int64_t *o1);
+/* The same of a body on a lattice whose bonds are the table st, from each
+ * rank's share of its rows (collective): the blocks of outer planes the
+ * stencil would cut it into, were its rows in lattice order; rows[0..1]
+ * this rank's piece's rows, rows[2..3] its own, rows[4..5] the piece and a
+ * block more on each side (the window whose compact families are whole in
+ * the piece).  0 (on every rank) when the shares are off any lattice. */
+int pd_piece_lattice_rows(const pd_particles *share, const pd_stencil *st, int64_t rows[6]);
+/* Does the stencil plan of the windows p, b of a lattice body
+ * (pd_grid_plan_window) find the stencil, and cut the body as p is cut
+ * (pd_piece_lattice_rows)?  Collective; then pd_sim_piece_new cuts it so. */
+int pd_piece_lattice_fits(const pd_particles *p, const pd_bonds *b, const pd_scene *sc);
 /* On several ranks, is the body p walked as a bond list under the scene sc
  * whatever its bonds (off any lattice), so that each rank may read its own
  * rows' bonds alone? */
@@ -1352,17 +1374,45 @@ int pd_file_bonds_listed(const pd_file *f);
 pd_status pd_read_bonds_span(const pd_file *f, int64_t n, int64_t r0, int64_t r1, int64_t *span);
 pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0, int64_t g1,
                              pd_bonds **out, int64_t *first_bond);
-/* The body a run of the scene sc on several MPI ranks reads
+/* A lattice body's /bonds as a stencil: pd_read_stencil, its table (NULL
+ * when the file has none, or one pd_read_bonds_compact would refuse).
+ * pd_read_bonds_window (collective): the compact families of the window p
+ * (pd_read_particles_rows) of a body on MPI ranks, whose rows [r0, r1) are
+ * a piece's (their families whole in p: pd_piece_lattice_rows), their
+ * state and pre-crack bits from the file (the other rows' bits set);
+ * *first_bond the body's index of row r0's first bond.  Each rank checks
+ * its own rows' bonds as pd_read_bonds_compact checks the body's, and the
+ * ranks the body's count; *out NULL (on every rank) where that does not
+ * show the file to be as pd_read_bonds_compact wants it (the caller then
+ * reads it whole, which says why). */
+pd_stencil *pd_read_stencil(const pd_file *f);
+pd_status pd_read_bonds_window(const pd_file *f, const pd_particles *p, int64_t r0, int64_t r1,
+                               pd_bonds **out, int64_t *first_bond);
+/* What a rank of a run on several MPI ranks read of the body
+ * (pd_read_body_ranks). */
+typedef struct {
+    int rows;           /* 0: the whole body; 1: a window of bond lists (its
+                           piece's rows' bonds alone); 2: a window of a
+                           lattice body's compact families                */
+    int64_t first_bond; /* the body's index of the first bond whose state
+                           was read,                                       */
+    int64_t bond_at;    /* its index among the window's bonds,             */
+    int64_t bonds;      /* and the bonds read from it on                   */
+} pd_body_read;
+/* The body a run of the scene o on several MPI ranks reads
  * (lib/io/runfile.c; collective): each rank checks its share of the
  * particles' rows (and the ids over the ranks); where the body's bonds are
  * lists walked as a bond list (pd_piece_reads_rows), each reads its
  * piece's rows alone (pd_piece_rows): the particles they reach as a window
  * (pd_read_particles_rows, owning its own rows) and their bonds
- * (pd_read_bonds_rows), *rows then 1 and *first_bond the whole body's
- * index of their first bond; else the whole body (pd_read_particles,
- * pd_read_bonds_compact). */
-pd_status pd_read_body_ranks(const pd_file *f, const pd_scene *sc, pd_particles **p,
-                             pd_bonds **b, int *rows, int64_t *first_bond);
+ * (pd_read_bonds_rows); where they are a lattice's stencil, each reads
+ * the window of its piece and a block more on each side
+ * (pd_piece_lattice_rows, pd_read_bonds_window), when the windows show
+ * the file to be as the whole body's reader wants it and the stencil to
+ * cut it as the windows are cut (pd_piece_lattice_fits); else the whole
+ * body (pd_read_particles, pd_read_bonds_compact). */
+pd_status pd_read_body_ranks(const pd_file *f, const pd_scene_spec *o, pd_particles **p,
+                             pd_bonds **b, pd_body_read *w);
 pd_status pd_write_bonds(pd_file *f, const pd_bonds *b);
 /* The bond lists of a part of the body (pd_part: rows [first, first +
  * rows), whose bonds are the body's [bond0, bond0 + bonds)) from b, a
@@ -1499,13 +1549,12 @@ pd_status pd_run_file_start_part(pd_file *out, int restart, const pd_file *from,
 pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b, int64_t *step,
                            pd_restart *r, double *v[3], uint64_t **bits);
 /* The same in two parts, for a piece on MPI ranks: the step and the bond
- * states of b's bonds (the whole body's [first_bond, first_bond +
- * b->count) where first_bond >= 0, b then a piece's rows' bonds,
- * pd_read_body_ranks; else every bond), before the piece is cut; then
- * the rows [g0, g0 + m) of the body's n of the frame's velocities and of
- * the restart slot, with the bond history of bonds [k0, k0 + nb) (every
- * bond's where nb < 0). */
-pd_status pd_run_file_load_state(pd_file *f, const pd_bonds *b, int64_t first_bond,
+ * states of b's bonds (of a window, w: the body's bonds [w->first_bond,
+ * w->first_bond + w->bonds) into b's from w->bond_at on; w NULL or whole:
+ * every bond), before the piece is cut; then the rows [g0, g0 + m) of
+ * the body's n of the frame's velocities and of the restart slot, with
+ * the bond history of bonds [k0, k0 + nb) (every bond's where nb < 0). */
+pd_status pd_run_file_load_state(pd_file *f, const pd_bonds *b, const pd_body_read *w,
                                  int64_t *step, uint64_t **bits);
 pd_status pd_run_file_load_rows(pd_file *f, int64_t n, int64_t g0, int64_t m, int64_t k0,
                                 int64_t nb, pd_restart *r, double *v[3]);
@@ -1586,9 +1635,10 @@ pd_status pd_read_frame_vectors_rows(const pd_file *f, const char *name, int64_t
 /* Bond state bits of a frame (count bonds) into a words array. */
 pd_status pd_read_frame_state(const pd_file *f, const char *name, int64_t count,
                               uint64_t *intact);
-/* Bits [k0, k0 + count) of them into bits [0, count) of intact. */
+/* Bits [k0, k0 + count) of them into bits [at, at + count) of intact
+ * (with at 0, intact cleared first; else its other bits left). */
 pd_status pd_read_frame_state_rows(const pd_file *f, const char *name, int64_t k0, int64_t count,
-                                   uint64_t *intact);
+                                   uint64_t *intact, int64_t at);
 /* Optional scalar field (N) of a frame, e.g. "damage"; *present = 0 when
  * absent (not an error). */
 pd_status pd_read_frame_scalar(const pd_file *f, const char *name, const char *field,

@@ -253,6 +253,61 @@ with h5py.File('bodys.h5') as f, h5py.File('badvol.h5', 'w') as g:
     refused_alike badvol.h5 --scene impact.scene
 }
 
+@test "mpi: a lattice body, each rank reading its own window of the stencil: sets, a pre-crack, the projectile, and a file the windows cannot vouch for read whole, refused as one rank refuses it" {
+    impact_body
+    sets_body
+    run -0 mpi 3 --threads 1 --scene impact.scene --steps 1 bodys.h5 -o w.h5
+    assert_line --partial "each read as its own window of the lattice"
+    assert_line --partial "lattice stencil"
+    same_on_ranks "2 3" 1 --scene impact.scene --no-failure rim --damping 1e4,core bodys.h5
+    sed '/^indenter/d' impact.scene >bc.scene
+    local proj=--projectile=sphere,0,0.0051,0,0.005,0.01,0,-300,0
+    same_on_ranks "3" 1 --scene bc.scene "$proj" --displacement-bc core,y,-1e-5 --steps 200 \
+        bodys.h5
+    run -0 pd-run --threads 1 --scene bc.scene "$proj" --steps 1 bodys.h5 -o l1.h5
+    local line
+    line=$(printf '%s\n' "${lines[@]}" | grep "first contact at")
+    [ -n "$line" ]
+    run -0 mpi 3 --threads 1 --scene bc.scene "$proj" --steps 1 bodys.h5 -o l3.h5
+    assert_line "$line"
+    # a pre-crack across the planes where the pieces meet: /bonds/precrack
+    # written by every rank's rows
+    pd-bonds --horizon 0.0030001 -q --crack rect,-0.01,-0.003,0.0005,0.02,0,0,0,0.004,0 \
+        lat.h5 -o crack.h5
+    same_on_ranks "2 3" 1 --scene impact.scene crack.h5
+    run -0 "$PY" -c "
+import h5py
+with h5py.File('np3.h5') as f:
+    assert f['bonds'].attrs['form'] == 'stencil' and 'precrack' in f['bonds']"
+    # files the windows cannot vouch for: read whole, the serial line
+    "$PY" -c "
+import h5py
+def copy(name):
+    f = h5py.File('body.h5'); g = h5py.File(name, 'w')
+    for k in f: f.copy(k, g)
+    for a, v in f.attrs.items(): g.attrs[a] = v
+    return g
+with copy('asym.h5') as g: # a bond broken on one side only
+    s = g['bonds/state']; k = len(s) * 2 // 3; s[k] = s[k] & 0xf7
+with copy('count.h5') as g:
+    g['bonds'].attrs['count'] = g['bonds'].attrs['count'] + 2
+with copy('off.h5') as g: # a particle a third of a spacing off its site
+    x = g['particles/position']; k = len(x) * 5 // 6; x[k, 0] = x[k, 0] + 3e-4
+with copy('badcrack.h5') as g: # pre-cracked but intact
+    n = g['bonds'].attrs['count']
+    g['bonds/precrack'] = bytearray((n + 7) // 8); g['bonds/precrack'][len(g['bonds/state']) // 3] = 1
+with copy('order.h5') as g: # two rows' sites swapped: off the stencil's lattice order
+    x = g['particles/position']; n = len(x); a, b = x[10], x[n - 10]; x[10] = b; x[n - 10] = a"
+    refused_alike asym.h5 --scene impact.scene
+    refused_alike count.h5 --scene impact.scene
+    refused_alike off.h5 --scene impact.scene
+    refused_alike badcrack.h5 --scene impact.scene
+    # the serial program walks the rows out of order as lists; MPI ranks
+    # need them in lattice order, and say so
+    run -1 mpi 3 --threads 1 -q --steps 1 --scene impact.scene order.h5 -o bad.h5
+    assert_line "pd-run: error: on MPI ranks the particles must be in lattice order, as pd-bonds writes them"
+}
+
 @test "mpi: lost particles, taken on whichever rank owns them, the same bits" {
     impact_body
     same_on_ranks "2 4" 1 --scene impact.scene --lost-margin 0.002 body.h5

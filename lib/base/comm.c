@@ -234,6 +234,18 @@ void pd_comm_add(double *x, int64_t n)
         MPI_Allreduce(MPI_IN_PLACE, x, (int)n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
 }
 
+void pd_comm_add_int(int64_t *x, int64_t n)
+{
+    if (pd_comm_size() > 1)
+        MPI_Allreduce(MPI_IN_PLACE, x, (int)n, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+}
+
+void pd_comm_min_int(int64_t *x, int64_t n)
+{
+    if (pd_comm_size() > 1)
+        MPI_Allreduce(MPI_IN_PLACE, x, (int)n, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
+}
+
 void pd_comm_box(double lo[3], double hi[3])
 {
     if (pd_comm_size() == 1)
@@ -392,6 +404,18 @@ double pd_comm_chain_out(double sum)
 }
 
 void pd_comm_add(double *x, int64_t n)
+{
+    (void)x;
+    (void)n;
+}
+
+void pd_comm_add_int(int64_t *x, int64_t n)
+{
+    (void)x;
+    (void)n;
+}
+
+void pd_comm_min_int(int64_t *x, int64_t n)
 {
     (void)x;
     (void)n;

@@ -37,6 +37,10 @@ double pd_comm_chain_out(double sum);
 /* Element-wise sums of n doubles over the ranks, in place (exact where
  * each element is non-zero on one rank at most). */
 void pd_comm_add(double *x, int64_t n);
+/* Element-wise sums, and smallest values, of n int64 over the ranks, in
+ * place. */
+void pd_comm_add_int(int64_t *x, int64_t n);
+void pd_comm_min_int(int64_t *x, int64_t n);
 /* Rank 0's `bytes` at buf into every rank's. */
 void pd_comm_bcast(void *buf, int64_t bytes);
 /* Send `ns` doubles to rank `to` and receive `nr` from rank `from` (either

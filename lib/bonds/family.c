@@ -10,6 +10,7 @@
 #include <float.h>
 #include <math.h>
 
+#include "base/comm.h"
 #include "bonds/sites.h"
 
 double pd_partial_volume(double len, double horizon, double r)
@@ -256,6 +257,61 @@ int pd_family_offsets(const pd_bonds *b, const pd_particles *p, int32_t (*d)[3],
     return bs->nk;
 }
 
+int pd_family_offsets_ranks(const pd_bonds *b, const pd_particles *p, int32_t (*d)[3],
+                            double *len, double *nu, double *spread)
+{
+    const struct pd_bond_sites *bs = b->sites;
+    const pd_stencil *st = b->stencil;
+    const int nk = st ? st->nk : 0;
+    int64_t *first = malloc((size_t)(nk > 0 ? nk : 1) * sizeof(int64_t));
+    double *v = malloc((size_t)(nk > 0 ? 2 * nk : 1) * sizeof(double));
+    int *walk = malloc((size_t)(nk > 0 ? nk : 1) * sizeof(int));
+    int ok = first && v && walk && bs && !pd_bonds_has_lists(b) && d && len && nu && spread;
+    for (int t = 0; t < nk && ok; t++) { /* the table's offset t in the walk */
+        walk[t] = -1;
+        for (int k = 0; k < bs->nk && walk[t] < 0; k++)
+            if (memcmp(bs->d[k], st->d[t], sizeof st->d[t]) == 0)
+                walk[t] = k;
+        ok = walk[t] >= 0;
+    }
+    if (pd_comm_min(ok) == 0) { /* every rank, or none, goes on */
+        free(first);
+        free(v);
+        free(walk);
+        return -1;
+    }
+    /* each offset's first row over the ranks' own rows, which are whole */
+    for (int t = 0; t < nk; t++) {
+        first[t] = INT64_MAX;
+        for (int64_t i = p->own_lo; i < p->own_hi && first[t] == INT64_MAX; i++)
+            if (bs->pad[bs->at[i] + bs->delta[walk[t]]] >= 0)
+                first[t] = p->first + i;
+    }
+    pd_comm_min_int(first, nk);
+    /* its bond's length and factor from the rank that owns it (the
+     * others' zeros add nothing) */
+    for (int t = 0; t < nk; t++) {
+        const int64_t i = first[t] - p->first;
+        v[2 * t] = v[2 * t + 1] = 0;
+        if (i >= p->own_lo && i < p->own_hi)
+            pd_bond_geometry(p, i, bs->pad[bs->at[i] + bs->delta[walk[t]]], b->horizon,
+                             &v[2 * t], &v[2 * t + 1]);
+    }
+    pd_comm_add(v, 2 * nk);
+    const double dev = pd_comm_max(bs->dev), xmax = pd_comm_max(bs->xmax);
+    for (int t = 0; t < nk; t++) {
+        memcpy(d[t], st->d[t], sizeof d[t]);
+        const int none = first[t] == INT64_MAX;
+        len[t] = none ? NAN : v[2 * t];
+        nu[t] = none ? NAN : v[2 * t + 1];
+        spread[t] = none ? NAN : 4 * dev + 32 * DBL_EPSILON * (len[t] + xmax);
+    }
+    free(first);
+    free(v);
+    free(walk);
+    return nk;
+}
+
 /* The first directed bond of rows [i0, i1) whose bit differs from its
  * reverse's (INT64_MAX: none), the partner's rank in its family a
  * popcount of its offsets' mask (mask, W words a particle; neg: each
@@ -300,6 +356,11 @@ asym_rows_popcnt(const pd_bonds *b, const uint64_t *bits, const uint64_t *mask, 
 
 int64_t pd_family_asymmetric(const pd_bonds *b, const uint64_t *bits)
 {
+    return pd_family_asymmetric_rows(b, bits, 0, b->n);
+}
+
+int64_t pd_family_asymmetric_rows(const pd_bonds *b, const uint64_t *bits, int64_t lo, int64_t hi)
+{
     if (pd_bonds_has_lists(b) || b->sites == NULL)
         return -3;
     const struct pd_bond_sites *bs = b->sites;
@@ -333,8 +394,8 @@ int64_t pd_family_asymmetric(const pd_bonds *b, const uint64_t *bits)
     const int64_t chunk = 4096;
     int64_t first = INT64_MAX;
 #pragma omp parallel for schedule(static) reduction(min : first)
-    for (int64_t c = 0; c < (b->n + chunk - 1) / chunk; c++) {
-        const int64_t i0 = c * chunk, i1 = i0 + chunk < b->n ? i0 + chunk : b->n;
+    for (int64_t c = 0; c < (hi - lo + chunk - 1) / chunk; c++) {
+        const int64_t i0 = lo + c * chunk, i1 = i0 + chunk < hi ? i0 + chunk : hi;
         int64_t f;
 #if defined(__x86_64__) && defined(__GNUC__)
         if (popcnt)

@@ -35,8 +35,8 @@
 
 double pd_projectile_default_k(const pd_particles *p, const pd_bonds *b, const pd_scene *s)
 {
-    double smax = 0;
-    for (int64_t i = 0; i < b->n; i++)
+    double smax = 0; /* a window: its own rows (pd_read_body_ranks) */
+    for (int64_t i = p->window ? p->own_lo : 0; i < (p->window ? p->own_hi : b->n); i++)
         smax = fmax(smax, pd_scene_has_laws(s) ? pd_bond_stiffness_laws(p, b, s, i)
                                                : pd_bond_stiffness(p, b, s->c, i));
     return smax / (2.0 * PD_PROJECTILE_DEPTH * p->spacing);

@@ -12,15 +12,58 @@
 
 #include "base/comm.h"
 #include "io/h5util.h"
+#include "models/model.h"
 #include "pd.h"
+#include "stencil/grid.h"
 
-pd_status pd_read_body_ranks(const pd_file *f, const pd_scene *sc, pd_particles **pout,
-                             pd_bonds **bout, int *rows, int64_t *first_bond)
+/* A lattice body's windows (pd_read_body_ranks): *p, *b NULL (on every
+ * rank) where they cannot stand for the whole body. */
+static pd_status read_lattice_window(const pd_file *f, const pd_scene *sc,
+                                     const pd_particles *share, pd_particles **pout,
+                                     pd_bonds **bout, pd_body_read *w)
 {
+    const pd_model *model = pd_model_of(sc->model);
+    if (model == NULL || model->stencil(sc) == PD_STENCIL_NONE || sc->bond_list)
+        return PD_OK; /* the same on every rank: no stencil walks it */
+    pd_stencil *st = pd_read_stencil(f);
+    int64_t r[6]; /* the piece's rows, its own, the window's */
+    int ok = pd_comm_min(st != NULL) == 1 && pd_piece_lattice_rows(share, st, r);
+    pd_stencil_free(st);
+    pd_particles *p = NULL;
+    pd_bonds *b = NULL;
+    int64_t first = 0;
+    pd_status s = ok ? pd_comm_agree(pd_read_particles_rows(f, pd_body_count(share), r[4], r[5],
+                                                             &p))
+                     : PD_OK;
+    if (s == PD_OK && ok) {
+        p->own_lo = r[2] - r[4];
+        p->own_hi = r[3] - r[4];
+        s = pd_read_bonds_window(f, p, r[0] - r[4], r[1] - r[4], &b, &first);
+    }
+    if (s == PD_OK && b && pd_piece_lattice_fits(p, b, sc)) {
+        *pout = p;
+        *bout = b;
+        *w = (pd_body_read){2, first, b->offset[r[0] - r[4]], b->offset[r[1] - r[4]] -
+                                                                  b->offset[r[0] - r[4]]};
+        return PD_OK;
+    }
+    pd_particles_free(p);
+    pd_bonds_free(b);
+    return s;
+}
+
+pd_status pd_read_body_ranks(const pd_file *f, const pd_scene_spec *o, pd_particles **pout,
+                             pd_bonds **bout, pd_body_read *w)
+{
+    /* the scene as far as the stencil's walk is concerned: with its laws,
+     * which pd_scene_resolve gives it later */
+    pd_scene scene = o->sc;
+    scene.nlaws = o->nlaws;
+    scene.laws = o->laws;
+    const pd_scene *sc = &scene;
     *pout = NULL;
     *bout = NULL;
-    *rows = 0;
-    *first_bond = 0;
+    *w = (pd_body_read){0, 0, 0, 0};
     /* each rank its share of the rows, checked: the ids over the ranks, and
      * whether the body is off any lattice (collective) */
     const int64_t P = pd_comm_size(), me = pd_comm_rank();
@@ -32,9 +75,16 @@ pd_status pd_read_body_ranks(const pd_file *f, const pd_scene *sc, pd_particles 
     s = pd_comm_agree(s);
     if (s == PD_OK)
         s = pd_comm_agree(pd_check_ids_ranks(f, share));
-    if (s == PD_OK)
-        *rows = pd_file_bonds_listed(f) && pd_piece_reads_rows(share, sc);
-    if (s != PD_OK || !*rows) { /* the whole body (a lattice's stencil) */
+    const int lists = s == PD_OK && pd_file_bonds_listed(f);
+    if (s == PD_OK && lists)
+        w->rows = pd_piece_reads_rows(share, sc);
+    else if (s == PD_OK && P > 1) /* a lattice's stencil: windows where they show it */
+        s = read_lattice_window(f, sc, share, pout, bout, w);
+    if (s != PD_OK || *pout) {
+        pd_particles_free(share);
+        return s;
+    }
+    if (!w->rows) { /* the whole body (a lattice's stencil) */
         pd_particles_free(share);
         if (s == PD_OK)
             s = pd_read_particles(f, pout);
@@ -44,7 +94,7 @@ pd_status pd_read_body_ranks(const pd_file *f, const pd_scene *sc, pd_particles 
     }
     /* the largest span of a bond, each rank over its share of the rows;
      * then this rank's piece: its rows' bonds, and the particles they reach */
-    int64_t span = 1, g0 = 0, g1 = 0, o0 = 0, o1 = 0;
+    int64_t span = 1, g0 = 0, g1 = 0, o0 = 0, o1 = 0, first_bond = 0;
     s = pd_file_has_bonds(f) ? PD_OK
                              : pd_fail(PD_ERR_FORMAT, "'%s' has no /bonds (run pd-bonds first)",
                                        f->name);
@@ -62,13 +112,14 @@ pd_status pd_read_body_ranks(const pd_file *f, const pd_scene *sc, pd_particles 
     if (s == PD_OK) {
         p->own_lo = o0 - p->first;
         p->own_hi = o1 - p->first;
-        s = pd_read_bonds_rows(f, p, g0, g1, bout, first_bond);
+        s = pd_read_bonds_rows(f, p, g0, g1, bout, &first_bond);
     }
     if (s != PD_OK) {
         pd_particles_free(p);
         return s;
     }
     *pout = p;
+    *w = (pd_body_read){1, first_bond, 0, (*bout)->count};
     return PD_OK;
 }
 
@@ -106,13 +157,14 @@ static pd_status last_frame(pd_file *f, int64_t *nframes, char ***names, pd_fram
 }
 
 /* The bond states of frame `name` (pd_run_file_load_state). */
-static pd_status load_state(pd_file *f, const char *name, const pd_bonds *b, int64_t first_bond,
-                            uint64_t **bits)
+static pd_status load_state(pd_file *f, const char *name, const pd_bonds *b,
+                            const pd_body_read *w, uint64_t **bits)
 {
     if ((*bits = calloc((size_t)pd_bits_words(b->count) + 1, 8)) == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory");
-    return first_bond >= 0 ? pd_read_frame_state_rows(f, name, first_bond, b->count, *bits)
-                           : pd_read_frame_state(f, name, b->count, *bits);
+    return w && w->rows ? pd_read_frame_state_rows(f, name, w->first_bond, w->bonds, *bits,
+                                                   w->bond_at)
+                        : pd_read_frame_state(f, name, b->count, *bits);
 }
 
 /* The rows of frame `name` and of the restart slot of its step
@@ -127,7 +179,7 @@ static pd_status load_rows(pd_file *f, const char *name, int64_t step, int64_t n
     return s == PD_OK ? pd_read_restart_rows(f, n, g0, m, step, k0, nb, r) : s;
 }
 
-pd_status pd_run_file_load_state(pd_file *f, const pd_bonds *b, int64_t first_bond,
+pd_status pd_run_file_load_state(pd_file *f, const pd_bonds *b, const pd_body_read *w,
                                  int64_t *step, uint64_t **bits)
 {
     int64_t nframes = 0;
@@ -135,7 +187,7 @@ pd_status pd_run_file_load_state(pd_file *f, const pd_bonds *b, int64_t first_bo
     pd_frame_info fi;
     pd_status s = last_frame(f, &nframes, &names, &fi);
     if (s == PD_OK)
-        s = load_state(f, names[nframes - 1], b, first_bond, bits);
+        s = load_state(f, names[nframes - 1], b, w, bits);
     if (s == PD_OK)
         *step = fi.step;
     pd_frames_free_list(nframes, names);
@@ -163,7 +215,7 @@ pd_status pd_run_file_load(pd_file *f, const pd_particles *p, const pd_bonds *b,
     pd_frame_info fi;
     pd_status s = last_frame(f, &nframes, &names, &fi);
     if (s == PD_OK)
-        s = load_state(f, names[nframes - 1], b, -1, bits);
+        s = load_state(f, names[nframes - 1], b, NULL, bits);
     if (s == PD_OK)
         s = load_rows(f, names[nframes - 1], fi.step, p->n, 0, p->n, 0, -1, r, v);
     if (s == PD_OK)

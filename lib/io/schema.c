@@ -587,10 +587,25 @@ static pd_status check_bonds(const char *fn, const pd_particles *p, const pd_bon
     return check_bond_rows(fn, b, 0, b->n, 0, 0);
 }
 
-/* Is every bond of compact families as check_bonds wants it (length
- * positive, finite and within the horizon, volume factor in (0, 1])?  Each
+/* Are the nk offsets' bonds of lengths len (their first bonds', NaN: none)
+ * within `spread` of them bound to be as check_bonds wants them (length
+ * positive, finite and within the horizon, volume factor in (0, 1]), the
+ * smallest radius rmin? */
+static int lengths_bound(int nk, const double *len, const double *spread, double horizon,
+                         double rmin)
+{
+    int ok = rmin > 0 && isfinite(rmin);
+    for (int k = 0; k < nk && ok; k++) /* nu in (0, 1] while len < horizon + r */
+        ok = isnan(len[k]) || (len[k] - spread[k] > 0 &&
+                               len[k] + spread[k] <= horizon * (1 + 1e-9) &&
+                               len[k] + spread[k] < horizon + 0.5 * rmin);
+    return ok;
+}
+
+/* Is every bond of compact families as check_bonds wants it?  Each
  * offset's bonds are bound to its first one's length within its spread
- * (pd_family_offsets): 1 when the bounds settle it for all, else 0. */
+ * (pd_family_offsets): 1 when the bounds settle it for all, else 0.  A
+ * window of the body (pd_read_bonds_window): over the ranks (collective). */
 static int compact_lengths_bound(const pd_particles *p, const pd_bonds *b)
 {
     const int nk = b->stencil ? b->stencil->nk : 0;
@@ -598,15 +613,16 @@ static int compact_lengths_bound(const pd_particles *p, const pd_bonds *b)
     double *len = malloc((size_t)(nk > 0 ? nk : 1) * sizeof(double));
     double *nu = malloc((size_t)(nk > 0 ? nk : 1) * sizeof(double));
     double *spread = malloc((size_t)(nk > 0 ? nk : 1) * sizeof(double));
-    int ok = d && len && nu && spread && pd_family_offsets(b, p, d, len, nu, spread) == nk;
+    int ok = d && len && nu && spread;
+    if (p->window) /* every rank takes part */
+        ok = pd_family_offsets_ranks(b, p, d, len, nu, spread) == nk;
+    else
+        ok = ok && pd_family_offsets(b, p, d, len, nu, spread) == nk;
     double rmin = INFINITY;
-    for (int64_t i = 0; i < p->n && ok; i++)
+    for (int64_t i = p->own_lo; i < p->own_hi; i++)
         rmin = fmin(rmin, p->radius[i]);
-    ok = ok && rmin > 0 && isfinite(rmin);
-    for (int k = 0; k < nk && ok; k++) /* nu in (0, 1] while len < horizon + r */
-        ok = isnan(len[k]) || (len[k] - spread[k] > 0 &&
-                               len[k] + spread[k] <= b->horizon * (1 + 1e-9) &&
-                               len[k] + spread[k] < b->horizon + 0.5 * rmin);
+    rmin = -pd_body_max(p, -rmin);
+    ok = ok && lengths_bound(nk, len, spread, b->horizon, rmin);
     free(d);
     free(len);
     free(nu);
@@ -795,11 +811,11 @@ static pd_status read_list_bonds(const pd_file *f, const pd_particles *p, pd_bon
     return PD_OK;
 }
 
-/* /bonds as a stencil (pd_stencil, lib/bonds/stencil.c): the table of
- * offsets and its lattice, checked, then the families it expands to. */
-static pd_status read_stencil_bonds(const pd_file *f, hid_t g, const pd_particles *p,
-                                    double horizon, int lists, pd_bonds **out)
+/* The table of /bonds as a stencil (pd_stencil, lib/bonds/stencil.c): its
+ * offsets and its lattice, checked. */
+static pd_status read_stencil_table(const pd_file *f, hid_t g, double horizon, pd_stencil **out)
 {
+    *out = NULL;
     const char *fn = f->name;
     const int R = PD_STENCIL_REACH, w = 2 * R + 1;
     pd_h5_form df = {H5T_INTEGER, 4, 2, {0, 3}};
@@ -872,9 +888,23 @@ static pd_status read_stencil_bonds(const pd_file *f, hid_t g, const pd_particle
                                        "opposite", fn, dk[0], dk[1], dk[2]);
     }
     free(seen);
+    if (s == PD_OK)
+        *out = st;
+    else
+        pd_stencil_free(st);
+    return s;
+}
+
+/* /bonds as a stencil (the table checked, read_stencil_table), expanded to
+ * lists or kept compact. */
+static pd_status read_stencil_bonds(const pd_file *f, hid_t g, const pd_particles *p,
+                                    double horizon, int lists, pd_bonds **out)
+{
+    pd_stencil *st = NULL;
+    pd_status s = read_stencil_table(f, g, horizon, &st);
     if (s == PD_OK && (s = lists ? pd_bonds_expand(p, st, horizon, out)
                                  : pd_bonds_compact(p, st, horizon, out)) != PD_OK)
-        s = pd_fail(s, "'%s': %s", fn, pd_errmsg());
+        s = pd_fail(s, "'%s': %s", f->name, pd_errmsg());
     pd_stencil_free(st);
     return s;
 }
@@ -1019,23 +1049,28 @@ pd_status pd_read_bonds_span(const pd_file *f, int64_t n, int64_t r0, int64_t r1
     return s;
 }
 
-/* Bits [k0, k1) of a dataset of bits packed as /bonds/state into bits
- * [0, k1 - k0) of words (cleared first). */
+/* Bits [k0, k1) of a dataset of bits packed as /bonds/state (of `total`
+ * bits, 0: not checked) into bits [at, at + k1 - k0) of words: with at 0,
+ * words cleared first; else the other bits left as they are. */
 static pd_status read_bit_rows(const pd_file *f, const char *name, int64_t k0, int64_t k1,
-                               uint64_t *words)
+                               int64_t total, uint64_t *words, int64_t at)
 {
-    memset(words, 0, (size_t)(pd_bits_words(k1 - k0) + 1) * sizeof(uint64_t));
+    if (at == 0)
+        memset(words, 0, (size_t)(pd_bits_words(k1 - k0) + 1) * sizeof(uint64_t));
     if (k1 <= k0)
         return PD_OK;
     const int64_t b0 = k0 / 8, nbytes = (k1 + 7) / 8 - b0;
     uint8_t *bytes = malloc((size_t)nbytes);
-    const pd_h5_form bf = {H5T_INTEGER, 1, 1, {0, 0}};
+    const pd_h5_form bf = {H5T_INTEGER, 1, 1, {(hsize_t)((total + 7) / 8), 0}};
     pd_status s = bytes ? pd_h5_read_rows(f->fid, f->name, name, &bf, H5T_NATIVE_UINT8, bytes, b0,
                                           nbytes)
                         : pd_fail(PD_ERR_NOMEM, "out of memory for the bonds' states");
-    for (int64_t k = k0; k < k1 && s == PD_OK; k++)
-        if ((bytes[k / 8 - b0] >> (k % 8)) & 1)
-            words[(k - k0) >> 6] |= UINT64_C(1) << ((k - k0) & 63);
+    for (int64_t k = k0; k < k1 && s == PD_OK; k++) {
+        const int64_t q = at + k - k0;
+        const uint64_t bit = UINT64_C(1) << (q & 63);
+        words[q >> 6] = (bytes[k / 8 - b0] >> (k % 8)) & 1 ? words[q >> 6] | bit
+                                                          : words[q >> 6] & ~bit;
+    }
     free(bytes);
     return s;
 }
@@ -1105,14 +1140,14 @@ pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0
                 b->neighbor[k] = (int32_t)(j - e0);
         }
     if (s == PD_OK)
-        s = read_bit_rows(f, "/bonds/state", k0, k1, b->intact);
+        s = read_bit_rows(f, "/bonds/state", k0, k1, 0, b->intact, 0);
     if (s == PD_OK && k1 > k0 && pd_h5_has_link(f->fid, "/bonds/precrack")) {
         if ((b->precrack = malloc((size_t)(pd_bits_words(k1 - k0) + 1) * sizeof(uint64_t))) ==
             NULL)
             s = pd_fail(PD_ERR_NOMEM, "out of memory for the pre-crack");
         else /* kept when none of these rows' is: the file's /bonds/precrack
                 is written again by every rank's rows */
-            s = read_bit_rows(f, "/bonds/precrack", k0, k1, b->precrack);
+            s = read_bit_rows(f, "/bonds/precrack", k0, k1, 0, b->precrack, 0);
     }
     if (b)
         b->horizon = horizon;
@@ -1123,6 +1158,95 @@ pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0
     if (s != PD_OK) {
         pd_bonds_free(b);
         return s;
+    }
+    *out = b;
+    *first_bond = k0;
+    return PD_OK;
+}
+
+/* /bonds's horizon, declared count and table when they are a stencil, as
+ * read_bonds checks them (NULL *st: they are not, or not as it wants). */
+static void stencil_header(const pd_file *f, double *horizon, int64_t *declared,
+                           pd_stencil **st)
+{
+    *st = NULL;
+    hid_t g = pd_file_has_bonds(f) ? H5Gopen2(f->fid, "/bonds", H5P_DEFAULT) : -1;
+    char *form = NULL;
+    const int ok = g >= 0 && f->version >= 2 &&
+                   pd_h5_read_attr_double(g, "horizon", horizon) == PD_OK && *horizon > 0 &&
+                   isfinite(*horizon) && pd_h5_has_attr(g, "form") &&
+                   pd_h5_read_attr_string(g, "form", &form) == PD_OK &&
+                   strcmp(form, "stencil") == 0 &&
+                   pd_h5_read_attr_int(g, "count", declared) == PD_OK;
+    if (ok && read_stencil_table(f, g, *horizon, st) != PD_OK)
+        *st = NULL;
+    free(form);
+    if (g >= 0)
+        H5Gclose(g);
+}
+
+pd_stencil *pd_read_stencil(const pd_file *f)
+{
+    double horizon = 0;
+    int64_t declared = 0;
+    pd_stencil *st = NULL;
+    stencil_header(f, &horizon, &declared, &st);
+    return st;
+}
+
+/* Are the window's own rows' bonds as check_bonds and check_precrack want
+ * them (their lengths over the ranks, both sides' bits), its pre-crack
+ * none on any rank?  (collective) */
+static int window_checked(const pd_particles *p, const pd_bonds *b, int *cracked)
+{
+    const int64_t lo = p->own_lo, hi = p->own_hi, k0 = b->offset[lo], k1 = b->offset[hi];
+    int ok = compact_lengths_bound(p, b);
+    ok = ok && pd_family_asymmetric_rows(b, b->intact, lo, hi) == -1 &&
+         (!b->precrack || pd_family_asymmetric_rows(b, b->precrack, lo, hi) == -1);
+    *cracked = 0;
+    for (int64_t k = k0; b->precrack && k < k1; k++) { /* pre-cracked and intact */
+        *cracked |= pd_bond_intact(b->precrack, k);
+        ok = ok && !(pd_bond_intact(b->precrack, k) && pd_bond_intact(b->intact, k));
+    }
+    *cracked = pd_comm_or(*cracked);
+    return pd_comm_min(ok) == 1;
+}
+
+pd_status pd_read_bonds_window(const pd_file *f, const pd_particles *p, int64_t r0, int64_t r1,
+                               pd_bonds **out, int64_t *first_bond)
+{
+    *out = NULL;
+    *first_bond = 0;
+    double horizon = 0;
+    int64_t declared = -1;
+    pd_stencil *st = NULL;
+    pd_bonds *b = NULL;
+    stencil_header(f, &horizon, &declared, &st);
+    int ok = st && pd_bonds_compact(p, st, horizon, &b) == PD_OK && !pd_bonds_has_lists(b);
+    pd_stencil_free(st);
+    ok = pd_comm_min(ok) == 1; /* every rank, or none, goes on */
+    /* the body's count, from the own rows' whole families; row r0's first
+     * bond's index in the body */
+    const int64_t *off = ok ? b->offset : NULL;
+    const int64_t own = ok ? off[p->own_hi] - off[p->own_lo] : 0, total = pd_comm_total(own);
+    const int64_t k0 = ok ? pd_comm_below(own) - (off[p->own_lo] - off[r0]) : 0,
+                  k1 = ok ? k0 + off[r1] - off[r0] : 0;
+    ok = ok && total == declared && total > 0;
+    /* the bits of rows [r0, r1) */
+    if (ok)
+        ok = read_bit_rows(f, "/bonds/state", k0, k1, total, b->intact, off[r0]) == PD_OK;
+    if (ok && pd_h5_has_link(f->fid, "/bonds/precrack"))
+        ok = (b->precrack = calloc((size_t)pd_bits_words(b->count) + 1, sizeof(uint64_t))) &&
+             read_bit_rows(f, "/bonds/precrack", k0, k1, total, b->precrack, off[r0]) == PD_OK;
+    int cracked = 0;
+    ok = pd_comm_min(ok) == 1 && window_checked(p, b, &cracked);
+    if (ok && !cracked) { /* all clear is the same as absent (read_precrack) */
+        free(b->precrack);
+        b->precrack = NULL;
+    }
+    if (!ok) {
+        pd_bonds_free(b);
+        return PD_OK;
     }
     *out = b;
     *first_bond = k0;
@@ -1195,14 +1319,16 @@ pd_status pd_write_bonds_part(pd_file *f, const pd_part *pt, const pd_bonds *b)
     if (g < 0)
         return pd_fail(PD_ERR_IO, "cannot create /bonds");
     const int last = pt->first + pt->rows == pt->n; /* writes offset[n] too */
+    const int lists = b->stencil == NULL; /* else the stencil, as write_families */
     const int64_t k0 = pt->klo, shift = pt->bond0 - pt->klo;
     hsize_t dn[1] = {(hsize_t)pt->n + 1}, db[1] = {(hsize_t)pt->nbonds},
             ds[1] = {(hsize_t)((pt->nbonds + 7) / 8)};
     int64_t *off = malloc((size_t)(pt->rows + 1) * sizeof(int64_t));
     /* b's rows are the body's shifted as the part's (a window's) */
     const int64_t row0 = pt->first - pt->lo;
-    int32_t *nb = row0 != 0 ? malloc((size_t)(pt->bonds > 0 ? pt->bonds : 1) * sizeof(int32_t))
-                            : NULL;
+    int32_t *nb = lists && row0 != 0
+                      ? malloc((size_t)(pt->bonds > 0 ? pt->bonds : 1) * sizeof(int32_t))
+                      : NULL;
     for (int64_t k = 0; nb && k < pt->bonds; k++)
         nb[k] = (int32_t)(b->neighbor[k0 + k] + row0);
     int64_t at = 0, count = 0, pat = 0, pcount = 0;
@@ -1214,27 +1340,31 @@ pd_status pd_write_bonds_part(pd_file *f, const pd_part *pt, const pd_bonds *b)
     if (f->ranks > 1)
         cracked = pd_comm_or(cracked);
     uint8_t *pbytes = cracked ? state_bytes(f, pt, b->precrack, &pat, &pcount) : NULL;
-    pd_status s = off && (bytes || pt->nbonds == 0) && (pbytes || !cracked) && (nb || !row0)
+    pd_status s = off && (bytes || pt->nbonds == 0) && (pbytes || !cracked) &&
+                          (nb || !row0 || !lists)
                       ? PD_OK
                       : pd_fail(PD_ERR_NOMEM, "out of memory");
     if (f->ranks > 1)
         s = pd_comm_agree(s);
     for (int64_t i = 0; off && i <= pt->rows; i++)
         off[i] = b->offset[pt->lo + i] + shift;
-    if (s == PD_OK && (s = pd_h5_reserve_data(g, "offset", H5T_STD_I64LE, 1, dn)) == PD_OK &&
+    if (s == PD_OK && !lists) /* the table, as pd_write_bonds writes it */
+        s = write_families(g, b);
+    if (s == PD_OK && lists &&
+        (s = pd_h5_reserve_data(g, "offset", H5T_STD_I64LE, 1, dn)) == PD_OK &&
         (s = pd_h5_reserve_data(g, "neighbor", H5T_STD_I32LE, 1, db)) == PD_OK &&
         (s = pd_h5_reserve_data(g, "length", H5T_IEEE_F64LE, 1, db)) == PD_OK &&
         (s = pd_h5_reserve_data(g, "volume_factor", H5T_IEEE_F64LE, 1, db)) == PD_OK &&
-        (s = pd_h5_reserve_data(g, "state", H5T_STD_U8LE, 1, ds)) == PD_OK &&
-        (!cracked || (s = pd_h5_reserve_data(g, "precrack", H5T_STD_U8LE, 1, ds)) == PD_OK) &&
         (s = pd_h5_write_rows(g, "offset", H5T_NATIVE_INT64, off, pt->first,
                               pt->rows + last)) == PD_OK &&
         (s = pd_h5_write_rows(g, "neighbor", H5T_NATIVE_INT32, nb ? nb : b->neighbor + k0,
                               pt->bond0, pt->bonds)) == PD_OK &&
         (s = pd_h5_write_rows(g, "length", H5T_NATIVE_DOUBLE, b->length + k0, pt->bond0,
-                              pt->bonds)) == PD_OK &&
-        (s = pd_h5_write_rows(g, "volume_factor", H5T_NATIVE_DOUBLE, b->vfactor + k0,
-                              pt->bond0, pt->bonds)) == PD_OK &&
+                              pt->bonds)) == PD_OK)
+        s = pd_h5_write_rows(g, "volume_factor", H5T_NATIVE_DOUBLE, b->vfactor + k0, pt->bond0,
+                             pt->bonds);
+    if (s == PD_OK && (s = pd_h5_reserve_data(g, "state", H5T_STD_U8LE, 1, ds)) == PD_OK &&
+        (!cracked || (s = pd_h5_reserve_data(g, "precrack", H5T_STD_U8LE, 1, ds)) == PD_OK) &&
         (s = pd_h5_write_rows(g, "state", H5T_NATIVE_UINT8, bytes, at, count)) == PD_OK &&
         (!cracked ||
          (s = pd_h5_write_rows(g, "precrack", H5T_NATIVE_UINT8, pbytes, pat, pcount)) == PD_OK) &&
@@ -1831,11 +1961,11 @@ pd_status pd_read_frame_vectors_rows(const pd_file *f, const char *name, int64_t
 }
 
 pd_status pd_read_frame_state_rows(const pd_file *f, const char *name, int64_t k0, int64_t count,
-                                   uint64_t *intact)
+                                   uint64_t *intact, int64_t at)
 {
     char path[256];
     pd_status s = frame_path(name, "state", path, sizeof path);
-    return s == PD_OK ? read_bit_rows(f, path, k0, k0 + count, intact) : s;
+    return s == PD_OK ? read_bit_rows(f, path, k0, k0 + count, 0, intact, at) : s;
 }
 
 pd_status pd_read_frame_state(const pd_file *f, const char *name, int64_t count, uint64_t *intact)

@@ -1038,7 +1038,10 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
                            ? fmax(3.0 * s->bulk_modulus, 10.0 * G - 3.0 * s->bulk_modulus)
                            : fabs(3.0 * s->bulk_modulus - 5.0 * G);
     double best = INFINITY;
-    for (int64_t i = 0; i < n; i++) {
+    /* a window's own rows (pd_read_body_ranks), whose partners' families
+     * are whole; the other rows' are their ranks' */
+    const int64_t lo = p->window ? p->own_lo : 0, hi = p->window ? p->own_hi : n;
+    for (int64_t i = lo; i < hi; i++) {
         double sum = 0;
         pd_bond_iter it;
         for (pd_family_start(b, p, i, &it); pd_family_next(&it);) {

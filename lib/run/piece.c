@@ -187,6 +187,11 @@ static pd_status slice_compact(const pd_particles *p, const pd_bonds *b, const u
         return s == PD_ERR_NOMEM ? s : PD_OK;
     }
     memset(c->intact, 0, (size_t)pd_bits_words(c->count) * sizeof(uint64_t));
+    if (b->precrack &&
+        (c->precrack = calloc((size_t)pd_bits_words(c->count) + 1, sizeof(uint64_t))) == NULL) {
+        pd_bonds_free(c);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the pre-crack of a piece");
+    }
     int same = 1;
     for (int64_t i = 0; i < q->n && same; i++) {
         pd_bond_iter it, jt;
@@ -197,6 +202,8 @@ static pd_status slice_compact(const pd_particles *p, const pd_bonds *b, const u
             same = pd_family_next(&jt) && jt.j == it.j - g0;
             if (same && pd_bond_intact(intact, it.q))
                 c->intact[jt.q >> 6] |= UINT64_C(1) << (jt.q & 63);
+            if (same && c->precrack && pd_bond_intact(b->precrack, it.q))
+                c->precrack[jt.q >> 6] |= UINT64_C(1) << (jt.q & 63);
         }
         same = same && !pd_family_next(&jt);
     }
@@ -246,28 +253,108 @@ int pd_piece_reads_rows(const pd_particles *p, const pd_scene *sc)
     return pd_comm_size() > 1 && model && !pd_grid_possible(p, sc, model->stencil(sc));
 }
 
+/* This rank's rows of a body of n rows in nb blocks (block k's first row
+ * start[k], start[nb] = n), cut as cut_ranks cuts it: rows[0..1] its
+ * piece's, rows[2..3] its own, rows[4..5] the piece and a block more on
+ * each side. */
+static pd_status piece_rows_at(int64_t n, int64_t nb, const int64_t *start, int64_t rows[6])
+{
+    const int P = pd_comm_size(), me = pd_comm_rank();
+    int64_t *K = malloc((size_t)(P + 1) * sizeof(int64_t));
+    pd_status s = K ? cut_ranks(n, nb, start, P, K)
+                    : pd_fail(PD_ERR_NOMEM, "out of memory for the pieces");
+    if (s == PD_OK) {
+        const int64_t L = piece_first_block(K, me), U = K[me + 1] + 1 < nb ? K[me + 1] + 1 : nb;
+        rows[0] = start[L];
+        rows[1] = start[U];
+        rows[2] = start[K[me]];
+        rows[3] = start[K[me + 1]];
+        rows[4] = start[L > 0 ? L - 1 : 0];
+        rows[5] = start[U + 1 < nb ? U + 1 : nb];
+    }
+    free(K);
+    return s;
+}
+
 pd_status pd_piece_rows(int64_t n, int64_t span, int64_t *g0, int64_t *g1, int64_t *o0,
                         int64_t *o1)
 {
-    const int P = pd_comm_size(), me = pd_comm_rank();
-    int64_t nb = 0;
+    int64_t nb = 0, rows[6];
     const int64_t block = pd_half_block_of(n, span, &nb);
     int64_t *start = malloc((size_t)(nb + 1) * sizeof(int64_t));
-    int64_t *K = malloc((size_t)(P + 1) * sizeof(int64_t));
-    pd_status s = start && K ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for the pieces");
+    pd_status s = start ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for the pieces");
     for (int64_t k = 0; s == PD_OK && k <= nb; k++)
         start[k] = k * block < n ? k * block : n;
     if (s == PD_OK)
-        s = cut_ranks(n, nb, start, P, K);
+        s = piece_rows_at(n, nb, start, rows);
     if (s == PD_OK) {
-        *g0 = start[piece_first_block(K, me)];
-        *g1 = start[K[me + 1] + 1 < nb ? K[me + 1] + 1 : nb];
-        *o0 = start[K[me]];
-        *o1 = start[K[me + 1]];
+        *g0 = rows[0];
+        *g1 = rows[1];
+        *o0 = rows[2];
+        *o1 = rows[3];
     }
     free(start);
-    free(K);
     return s;
+}
+
+int pd_piece_lattice_rows(const pd_particles *share, const pd_stencil *st, int64_t rows[6])
+{
+    int32_t *lc[3];
+    for (int a = 0; a < 3; a++)
+        lc[a] = malloc((size_t)(share->n > 0 ? share->n : 1) * sizeof(int32_t));
+    int axis[3], ok = pd_comm_min(lc[0] && lc[1] && lc[2]) == 1;
+    if (ok) /* the whole body's lattice, over the ranks' shares (collective) */
+        ok = pd_comm_min(pd_lattice_coords(share, axis, lc)) == 1;
+    /* blocks of outer planes as thick as the table reaches along them */
+    int thick = 1;
+    for (int k = 0; ok && k < st->nk; k++)
+        thick = abs(st->d[k][axis[2]]) > thick ? abs(st->d[k][axis[2]]) : thick;
+    int64_t lo = INT32_MAX, hi = INT32_MAX, nb = 0;
+    for (int64_t i = 0; ok && i < share->n; i++) {
+        lo = lc[2][i] < lo ? lc[2][i] : lo;
+        hi = -lc[2][i] < hi ? -lc[2][i] : hi;
+    }
+    if (ok) {
+        lo = pd_comm_min(lo);
+        hi = -pd_comm_min(hi);
+        nb = (hi - lo + thick) / thick;
+    }
+    int64_t *start = ok ? calloc((size_t)nb + 1, sizeof(int64_t)) : NULL;
+    if (ok)
+        ok = pd_comm_min(start != NULL) == 1;
+    if (ok) { /* each block's first row, were the rows in lattice order */
+        for (int64_t i = 0; i < share->n; i++)
+            start[(lc[2][i] - lo) / thick + 1]++;
+        pd_comm_add_int(start, nb + 1);
+        for (int64_t k = 1; k <= nb; k++)
+            start[k] += start[k - 1];
+        ok = pd_comm_min(piece_rows_at(pd_body_count(share), nb, start, rows) == PD_OK) == 1;
+    }
+    free(start);
+    for (int a = 0; a < 3; a++)
+        free(lc[a]);
+    return ok;
+}
+
+int pd_piece_lattice_fits(const pd_particles *p, const pd_bonds *b, const pd_scene *sc)
+{
+    const pd_model *model = pd_model_of(sc->model);
+    pd_grid *plan = NULL;
+    int ok = pd_grid_plan_window(p, b, sc, model->stencil(sc), &plan) == PD_OK && plan;
+    ok = pd_comm_min(ok) == 1; /* pd_grid_plan_window: NULL on every rank, or none */
+    const int64_t nb = ok ? pd_grid_blocks(plan, NULL, NULL, NULL) : 0;
+    int64_t *start = malloc((size_t)(nb + 1) * sizeof(int64_t)), rows[6];
+    ok = pd_comm_min(ok && start) == 1;
+    if (ok) { /* the plan cuts the body as p was cut */
+        pd_grid_blocks(plan, start, NULL, NULL);
+        ok = piece_rows_at(pd_body_count(p), nb, start, rows) == PD_OK &&
+             rows[2] == p->first + p->own_lo && rows[3] == p->first + p->own_hi &&
+             rows[4] == p->first && rows[5] == p->first + p->n;
+        ok = pd_comm_min(ok) == 1;
+    }
+    free(start);
+    pd_grid_free(plan);
+    return ok;
 }
 
 /* The piece's bond history (VES, EPS) from the whole body's hw, w values
@@ -387,7 +474,12 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, pd_particle
      * lattice stencil's blocks, else the bond list's), without its run:
      * the first row of each block, and the end */
     pd_grid *plan = NULL;
-    pd_status st = p->window ? PD_OK : pd_grid_plan(p, b, sc, model->stencil(sc), &plan);
+    const int compact = !pd_bonds_has_lists(b) && b->stencil; /* a window: of a lattice */
+    pd_status st = !p->window ? pd_grid_plan(p, b, sc, model->stencil(sc), &plan)
+                   : compact  ? pd_grid_plan_window(p, b, sc, model->stencil(sc), &plan)
+                              : PD_OK;
+    if (st == PD_OK && p->window && compact && plan == NULL) /* pd_read_body_ranks found it */
+        st = pd_fail(PD_ERR_INVALID, "the windows of a lattice body find no stencil");
     if (st != PD_OK)
         return st;
     const int grid = plan != NULL;
@@ -431,7 +523,7 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, pd_particle
         pd_grid_blocks(plan, start, pc->axis, &thick);
         pc->table = plan;
         double hi[3];
-        pd_particles_bounds(p, pc->origin, hi);
+        pd_body_bounds(p, pc->origin, hi); /* a window: over the ranks (collective) */
     } else {
         pc->half_block = block;
         for (int64_t k = 0; k <= nb; k++)
@@ -488,7 +580,7 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, pd_particle
         /* the stencil walks a lattice body's compact families: the piece's
          * stay compact too; else its lists */
         if (st == PD_OK && grid && !pd_bonds_has_lists(b) && b->stencil)
-            st = slice_compact(p, b, intact, pc->p, pc->first, &pc->b);
+            st = slice_compact(p, b, intact, pc->p, pc->first - w0, &pc->b);
         if (st == PD_OK && pc->b == NULL)
             st = slice_bonds(p, b, intact, pc->first - w0, g1 - w0, &pc->b);
     }

@@ -75,6 +75,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/comm.h"
 #include "stencil/grid_impl.h"
 
 void pd_grid_free(pd_grid *G)
@@ -151,13 +152,33 @@ static inline int64_t gidx_of(const int64_t *inv, int64_t i)
     return inv ? inv[i] : i;
 }
 
+/* Is every bond of each of the nk offsets d (x, y, z, with their first
+ * bonds' length and nu, NaN: no bond, and spread, pd_family_offsets)
+ * bound to have its first bond's nu within half of GRID_NU_TOL?  Then the
+ * walk of build_stencil would find the same values and pass its check.
+ * dg gets the offsets in grid axes. */
+static int table_bound(const pd_grid *G, double r, double horizon, int nk, int32_t (*d)[3],
+                       const double *len, const double *nu, const double *spread,
+                       int32_t (*dg)[3])
+{
+    int ok = 1;
+    for (int k = 0; k < nk && ok; k++) {
+        for (int a = 0; a < 3; a++)
+            dg[k][a] = d[k][G->axis[a]];
+        if (isnan(len[k]))
+            continue;
+        const double lo = pd_partial_volume(len[k] + spread[k], horizon, r),
+                     hi = pd_partial_volume(len[k] - spread[k], horizon, r);
+        ok = fabs(lo - nu[k]) <= 0.5 * GRID_NU_TOL * nu[k] &&
+             fabs(hi - nu[k]) <= 0.5 * GRID_NU_TOL * nu[k];
+    }
+    return ok;
+}
+
 /* Compact families' offsets in grid axes (dg, in b->stencil's count)
- * with their first bonds' length and nu (NaN: no bond), when every bond
- * of an offset is bound to have its first bond's nu within half of
- * GRID_NU_TOL (pd_family_offsets' spread): the walk of build_stencil
- * would find the same values and pass its check.  Returns the number of
- * offsets, 0 when a bound does not settle it (then the walk decides), -1
- * when out of memory. */
+ * with their first bonds' length and nu (NaN: no bond), when table_bound
+ * settles them.  Returns the number of offsets, 0 when a bound does not
+ * settle it (then the walk decides), -1 when out of memory. */
 static int table_offsets(const pd_grid *G, const pd_particles *p, const pd_bonds *b,
                          int32_t (*dg)[3], double *len, double *nu)
 {
@@ -169,45 +190,22 @@ static int table_offsets(const pd_grid *G, const pd_particles *p, const pd_bonds
         free(spread);
         return -1;
     }
-    int ok = pd_family_offsets(b, p, d, len, nu, spread) == nk;
-    const double r = p->radius[0]; /* equal radii (pd_grid_new) */
-    for (int k = 0; k < nk && ok; k++) {
-        for (int a = 0; a < 3; a++)
-            dg[k][a] = d[k][G->axis[a]];
-        if (isnan(len[k]))
-            continue;
-        const double lo = pd_partial_volume(len[k] + spread[k], b->horizon, r),
-                     hi = pd_partial_volume(len[k] - spread[k], b->horizon, r);
-        ok = fabs(lo - nu[k]) <= 0.5 * GRID_NU_TOL * nu[k] &&
-             fabs(hi - nu[k]) <= 0.5 * GRID_NU_TOL * nu[k];
-    }
+    /* equal radii (pd_grid_new) */
+    const int ok = pd_family_offsets(b, p, d, len, nu, spread) == nk &&
+                   table_bound(G, p->radius[0], b->horizon, nk, d, len, nu, spread, dg);
     free(d);
     free(spread);
     return ok ? nk : 0;
 }
 
-/* The stencil from the file's bonds: every offset a bond has, with its
- * length and nu from the first bond of it (and nu checked on all; of
- * compact families, from their table and its bound, table_offsets).
- * Returns 0 when the bonds are not a stencil. */
-static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
+/* The stencil from the table of nt offsets tg (grid axes) with their
+ * lengths tl and factors tn (NaN: no bond), or with nt = 0 from the walk
+ * of the file's bonds: every offset a bond has, with its length and nu
+ * from the first bond of it (and nu checked on all).  Returns 0 when the
+ * bonds are not a stencil. */
+static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b, int nt,
+                         int32_t (*tg)[3], const double *tl, const double *tn)
 {
-    int nt = 0; /* offsets from the table, or 0: the walk */
-    int32_t(*tg)[3] = NULL;
-    double *tl = NULL, *tn = NULL;
-    if (!pd_bonds_has_lists(b) && b->stencil) {
-        const size_t nk = (size_t)b->stencil->nk;
-        tg = malloc(nk * sizeof *tg);
-        tl = malloc(nk * sizeof(double));
-        tn = malloc(nk * sizeof(double));
-        nt = tg && tl && tn ? table_offsets(G, p, b, tg, tl, tn) : -1;
-        if (nt < 0) {
-            free(tg);
-            free(tl);
-            free(tn);
-            return -1;
-        }
-    }
     int reach = 0;
     for (int k = 0; k < nt; k++)
         for (int a = 0; a < 3 && !isnan(tl[k]); a++)
@@ -220,12 +218,8 @@ static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
                 reach = d > reach ? d : reach;
             }
     }
-    if (reach > GRID_REACH_MAX) {
-        free(tg);
-        free(tl);
-        free(tn);
+    if (reach > GRID_REACH_MAX)
         return 0;
-    }
     G->reach = reach;
     const int w = 2 * reach + 1;
     G->lookup = malloc((size_t)w * w * w * sizeof(int16_t));
@@ -234,9 +228,6 @@ static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
     if (!G->lookup || !nu || !len) {
         free(nu);
         free(len);
-        free(tg);
-        free(tl);
-        free(tn);
         return -1;
     }
     for (int q = 0; q < w * w * w; q++) {
@@ -251,9 +242,6 @@ static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
             nu[at] = tn[k];
             len[at] = tl[k];
         }
-    free(tg);
-    free(tl);
-    free(tn);
     for (int64_t i = 0; i < b->n && ok && nt == 0; i++) {
         pd_bond_iter it;
         for (pd_family_start(b, p, i, &it); ok && pd_family_next(&it);) {
@@ -315,6 +303,27 @@ static int build_stencil(pd_grid *G, const pd_particles *p, const pd_bonds *b)
     free(nu);
     free(len);
     return ok && nk > 0;
+}
+
+/* build_stencil of the file's bonds b: from their table (of compact
+ * families, table_offsets) where it settles them, else from the walk. */
+static int stencil_of_bonds(pd_grid *G, const pd_particles *p, const pd_bonds *b)
+{
+    int nt = 0; /* offsets from the table, or 0: the walk */
+    int32_t(*tg)[3] = NULL;
+    double *tl = NULL, *tn = NULL;
+    if (!pd_bonds_has_lists(b) && b->stencil) {
+        const size_t nk = (size_t)b->stencil->nk;
+        tg = malloc(nk * sizeof *tg);
+        tl = malloc(nk * sizeof(double));
+        tn = malloc(nk * sizeof(double));
+        nt = tg && tl && tn ? table_offsets(G, p, b, tg, tl, tn) : -1;
+    }
+    const int ok = nt < 0 ? -1 : build_stencil(G, p, b, nt, tg, tl, tn);
+    free(tg);
+    free(tl);
+    free(tn);
+    return ok;
 }
 
 typedef struct {
@@ -611,7 +620,7 @@ static int grid_lay(pd_grid *G, const pd_particles *p, const pd_bonds *b, const 
     }
     free(order);
     if (ok > 0)
-        ok = build_stencil(G, p, b);
+        ok = stencil_of_bonds(G, p, b);
     if (ok > 0 && piece && piece->table) { /* the whole body's table */
         const pd_grid *W = piece->table;
         ok = W->nk == G->nk && W->reach == G->reach &&
@@ -696,6 +705,95 @@ int pd_grid_possible(const pd_particles *p, const pd_scene *sc, pd_stencil_kind 
         free(lc[d]);
     /* out of memory: maybe; a window: on every rank's rows */
     return p->window ? pd_comm_min(ok != 0) == 1 : ok != 0;
+}
+
+/* The whole body's blocks of a plan over windows (pd_grid_plan_window):
+ * their first rows in G->run (one block a run), counted over the ranks'
+ * own rows; 0 for a sparse body, as build_segments finds it. */
+static int window_blocks(pd_grid *G, const pd_particles *p)
+{
+    int64_t lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX}, hi[3] = {INT32_MAX, INT32_MAX, INT32_MAX};
+    for (int a = 0; a < 3; a++)
+        for (int64_t i = 0; i < p->n; i++) {
+            lo[a] = G->lc[a][i] < lo[a] ? G->lc[a][i] : lo[a];
+            hi[a] = -G->lc[a][i] < hi[a] ? -G->lc[a][i] : hi[a];
+        }
+    pd_comm_min_int(lo, 3); /* the windows hold every row */
+    pd_comm_min_int(hi, 3);
+    for (int a = 0; a < 3; a++)
+        hi[a] = -hi[a];
+    const int64_t n = pd_body_count(p), nmid = hi[1] - lo[1] + 1, nout = hi[2] - lo[2] + 1;
+    if (nmid * nout > GRID_SPARSE_ROWS * n + GRID_SPARSE_SLACK)
+        return 0;
+    int thick = 0;
+    for (int k = 0; k < G->nk; k++)
+        thick = G->off[k][2] > thick ? G->off[k][2] : thick;
+    G->thick = thick = thick > 0 ? thick : 1;
+    G->nblocks = (hi[2] - lo[2] + thick) / thick;
+    int64_t *count = calloc((size_t)G->nblocks + 1, sizeof(int64_t));
+    G->block_run = malloc(((size_t)G->nblocks + 1) * sizeof(int64_t));
+    G->run = malloc(((size_t)G->nblocks + 1) * sizeof *G->run);
+    const int ok = pd_comm_min(count && G->block_run && G->run);
+    for (int64_t i = p->own_lo; ok && i < p->own_hi; i++)
+        count[(G->lc[2][i] - lo[2]) / thick + 1]++;
+    if (ok)
+        pd_comm_add_int(count, G->nblocks + 1);
+    for (int64_t blk = 0; ok && blk <= G->nblocks; blk++) {
+        G->block_run[blk] = blk;
+        G->run[blk] = (grid_run){.start = blk > 0 ? G->run[blk - 1].start + count[blk] : 0};
+    }
+    free(count);
+    return ok ? 1 : -1;
+}
+
+pd_status pd_grid_plan_window(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
+                              pd_stencil_kind kind, pd_grid **out)
+{
+    *out = NULL;
+    if (!window_candidate(p, sc, kind) || b->stencil == NULL)
+        return PD_OK;
+    const int nk = b->stencil->nk;
+    pd_grid *G = calloc(1, sizeof *G);
+    int32_t(*d)[3] = malloc((size_t)nk * sizeof *d), (*tg)[3] = malloc((size_t)nk * sizeof *tg);
+    double *len = malloc((size_t)nk * sizeof(double)), *nu = malloc((size_t)nk * sizeof(double)),
+           *spread = malloc((size_t)nk * sizeof(double));
+    for (int a = 0; G && a < 3; a++)
+        G->lc[a] = malloc((size_t)(p->n > 0 ? p->n : 1) * sizeof(int32_t));
+    int ok = pd_comm_min(G && d && tg && len && nu && spread && G->lc[0] && G->lc[1] && G->lc[2])
+                 ? 1
+                 : -1;
+    /* on the lattice, and the rows in its order: each window's, and so
+     * across the ranks (a window holds the rows below its own) */
+    if (ok > 0)
+        ok = pd_lattice_coords(p, G->axis, G->lc);
+    for (int64_t i = 1; ok > 0 && i < p->n; i++) {
+        int a = 2;
+        while (a > 0 && G->lc[a][i] == G->lc[a][i - 1])
+            a--;
+        ok = G->lc[a][i] > G->lc[a][i - 1];
+    }
+    ok = (int)pd_comm_min(ok);
+    /* the table, its first bonds over the ranks; then the blocks */
+    if (ok > 0 && pd_family_offsets_ranks(b, p, d, len, nu, spread) != nk)
+        ok = -1;
+    if (ok > 0)
+        ok = table_bound(G, p->radius[0], b->horizon, nk, d, len, nu, spread, tg);
+    if (ok > 0)
+        ok = build_stencil(G, p, b, nk, tg, len, nu);
+    ok = (int)pd_comm_min(ok); /* out of memory on one rank: on every one */
+    if (ok > 0)
+        ok = window_blocks(G, p);
+    free(d);
+    free(tg);
+    free(len);
+    free(nu);
+    free(spread);
+    if (ok <= 0) {
+        pd_grid_free(G);
+        return ok < 0 ? pd_fail(PD_ERR_NOMEM, "out of memory for the lattice bonds") : PD_OK;
+    }
+    *out = G;
+    return PD_OK;
 }
 
 pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)

@@ -26,6 +26,16 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out);
  * when pd_grid_new would find none. */
 pd_status pd_grid_plan(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
                        pd_stencil_kind kind, pd_grid **out);
+/* The same plan of a body spread over MPI ranks as windows of compact
+ * families (collective): each rank's p, b its window, whose own rows
+ * [p->own_lo, p->own_hi) have whole families and whose rows reach the
+ * rows below its own; the whole body's table and blocks (the blocks' first
+ * rows only: no runs or segments).  *out NULL (on every rank) where the
+ * windows cannot show that pd_grid_plan of the whole body would find this
+ * stencil: its rows out of lattice order, a bound on the table that does
+ * not settle it, a sparse body. */
+pd_status pd_grid_plan_window(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
+                              pd_stencil_kind kind, pd_grid **out);
 /* 0 when no stencil of `kind` can walk the body p under the scene sc,
  * whatever its bonds (its particles are off any lattice, say): a piece of
  * it on MPI ranks may then read its own rows alone.  p may be a window of
