@@ -171,9 +171,10 @@ static pd_status cut_window(pd_particles *p, pd_bonds *b, const uint64_t *intact
 }
 
 /* A lattice body's piece keeps its families compact, as the whole body
- * does (no per-bond arrays; pd_bonds_compact on the piece's particles):
- * each family the stencil's partners within the piece, which must be the
- * whole family's in its order, with the states `intact` gives them.  *out
+ * does (no per-bond arrays; pd_bonds_compact on the piece's particles q,
+ * rows [g0, g0 + q->n) of p): each family the stencil's partners within
+ * the piece, which must be the whole family's in its order, with the
+ * states `intact` gives them (and b's pre-crack bits).  *out
  * NULL when they are not (the piece's lattice walked in another order):
  * the caller then takes the lists. */
 static pd_status slice_compact(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
@@ -340,7 +341,7 @@ int pd_piece_lattice_fits(const pd_particles *p, const pd_bonds *b, const pd_sce
 {
     const pd_model *model = pd_model_of(sc->model);
     pd_grid *plan = NULL;
-    int ok = pd_grid_plan_window(p, b, sc, model->stencil(sc), &plan) == PD_OK && plan;
+    int ok = model && pd_grid_plan_window(p, b, sc, model->stencil(sc), &plan) == PD_OK && plan;
     ok = pd_comm_min(ok) == 1; /* pd_grid_plan_window: NULL on every rank, or none */
     const int64_t nb = ok ? pd_grid_blocks(plan, NULL, NULL, NULL) : 0;
     int64_t *start = malloc((size_t)(nb + 1) * sizeof(int64_t)), rows[6];
