@@ -232,7 +232,7 @@ refused_alike() {
         --projectile=sphere,0,0.004,0,0.005,0.01,0,-300,0
     refused_alike bodys.h5 --scene impact.scene --material 3,c=1e22
     "$PY" -c "
-import h5py
+import h5py, numpy
 with h5py.File('bodys.h5') as f, h5py.File('badset.h5', 'w') as g:
     for k in f: f.copy(k, g)
     for a, v in f.attrs.items(): g.attrs[a] = v
@@ -247,8 +247,19 @@ with h5py.File('bodys.h5') as f, h5py.File('dupid.h5', 'w') as g:
 with h5py.File('bodys.h5') as f, h5py.File('badvol.h5', 'w') as g:
     for k in f: f.copy(k, g)
     for a, v in f.attrs.items(): g.attrs[a] = v
-    g['particles/volume'][len(g['particles/volume']) * 5 // 6] = -1"
+    g['particles/volume'][len(g['particles/volume']) * 5 // 6] = -1
+for name, ds, extra in (('longstate.h5', 'state', 255), ('longlen.h5', 'length', 1e-3)):
+    with h5py.File('bodys.h5') as f, h5py.File(name, 'w') as g:
+        for k in f: f.copy(k, g)
+        for a, v in f.attrs.items(): g.attrs[a] = v
+        v = g['bonds'][ds][()]
+        del g['bonds'][ds]
+        g['bonds'][ds] = numpy.append(v, numpy.array([extra], dtype=v.dtype))"
     refused_alike badset.h5 --scene impact.scene --damping 1e4,rim
+    # a dataset of the bonds longer than /bonds/offset says, though no
+    # rank's rows reach its end
+    refused_alike longstate.h5 --scene impact.scene
+    refused_alike longlen.h5 --scene impact.scene
     refused_alike dupid.h5 --scene impact.scene
     refused_alike badvol.h5 --scene impact.scene
 }

@@ -993,11 +993,12 @@ int pd_file_bonds_listed(const pd_file *f)
     return lists;
 }
 
-/* Rows [r0, r1] of /bonds/offset into off (r1 - r0 + 1 entries), checked
- * to rise (and to start at 0). */
-static pd_status read_offset_rows(const pd_file *f, int64_t r0, int64_t r1, int64_t *off)
+/* Rows [r0, r1] of /bonds/offset (n + 1 rows) into off (r1 - r0 + 1
+ * entries), checked to rise (and to start at 0). */
+static pd_status read_offset_rows(const pd_file *f, int64_t n, int64_t r0, int64_t r1,
+                                  int64_t *off)
 {
-    const pd_h5_form of = {H5T_INTEGER, 8, 1, {0, 0}};
+    const pd_h5_form of = {H5T_INTEGER, 8, 1, {(hsize_t)n + 1, 0}};
     pd_status s = pd_h5_read_rows(f->fid, f->name, "/bonds/offset", &of, H5T_NATIVE_INT64, off,
                                   r0, r1 - r0 + 1);
     if (s == PD_OK && r0 == 0 && off[0] != 0)
@@ -1017,7 +1018,7 @@ pd_status pd_read_bonds_span(const pd_file *f, int64_t n, int64_t r0, int64_t r1
     int64_t *off = malloc((size_t)(r1 - r0 + 1) * sizeof(int64_t));
     int32_t *nb = NULL;
     int64_t cap = 0;
-    pd_status s = off ? read_offset_rows(f, r0, r1, off)
+    pd_status s = off ? read_offset_rows(f, n, r0, r1, off)
                       : pd_fail(PD_ERR_NOMEM, "out of memory for the bonds' offsets");
     const pd_h5_form nf = {H5T_INTEGER, 4, 1, {0, 0}};
     for (int64_t i = r0; i < r1 && s == PD_OK;) { /* whole rows, about SPAN_CHUNK bonds */
@@ -1102,8 +1103,11 @@ pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0
     int64_t *off = malloc((size_t)(g1 - g0 + 1) * sizeof(int64_t));
     if (s == PD_OK && off == NULL)
         s = pd_fail(PD_ERR_NOMEM, "out of memory for the bonds' offsets");
+    int64_t total = 0; /* the body's bonds: every dataset's length, as read_bonds wants it */
     if (s == PD_OK)
-        s = read_offset_rows(f, g0, g1, off);
+        s = read_offset_rows(f, n, g0, g1, off);
+    if (s == PD_OK)
+        s = read_offset_rows(f, n, n, n, &total);
     const int64_t k0 = s == PD_OK ? off[0] : 0, k1 = s == PD_OK ? off[g1 - g0] : 0;
     pd_bonds *b = s == PD_OK ? pd_bonds_alloc(p->n, k1 - k0) : NULL;
     if (s == PD_OK && b == NULL)
@@ -1114,9 +1118,10 @@ pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0
     }
     free(off);
     const char *names[3] = {"/bonds/neighbor", "/bonds/length", "/bonds/volume_factor"};
-    const pd_h5_form forms[3] = {{H5T_INTEGER, 4, 1, {0, 0}},
-                                 {H5T_FLOAT, 8, 1, {0, 0}},
-                                 {H5T_FLOAT, 8, 1, {0, 0}}};
+    const hsize_t len = total > 0 ? (hsize_t)total : 0; /* none: any (then empty) */
+    const pd_h5_form forms[3] = {{H5T_INTEGER, 4, 1, {len, 0}},
+                                 {H5T_FLOAT, 8, 1, {len, 0}},
+                                 {H5T_FLOAT, 8, 1, {len, 0}}};
     const hid_t types[3] = {H5T_NATIVE_INT32, H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE};
     for (int a = 0; a < 3 && s == PD_OK; a++)
         s = pd_h5_read_rows(f->fid, fn, names[a], &forms[a], types[a],
@@ -1140,14 +1145,14 @@ pd_status pd_read_bonds_rows(const pd_file *f, const pd_particles *p, int64_t g0
                 b->neighbor[k] = (int32_t)(j - e0);
         }
     if (s == PD_OK)
-        s = read_bit_rows(f, "/bonds/state", k0, k1, 0, b->intact, 0);
+        s = read_bit_rows(f, "/bonds/state", k0, k1, total, b->intact, 0);
     if (s == PD_OK && k1 > k0 && pd_h5_has_link(f->fid, "/bonds/precrack")) {
         if ((b->precrack = malloc((size_t)(pd_bits_words(k1 - k0) + 1) * sizeof(uint64_t))) ==
             NULL)
             s = pd_fail(PD_ERR_NOMEM, "out of memory for the pre-crack");
         else /* kept when none of these rows' is: the file's /bonds/precrack
                 is written again by every rank's rows */
-            s = read_bit_rows(f, "/bonds/precrack", k0, k1, 0, b->precrack, 0);
+            s = read_bit_rows(f, "/bonds/precrack", k0, k1, total, b->precrack, 0);
     }
     if (b)
         b->horizon = horizon;
