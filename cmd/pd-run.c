@@ -1168,10 +1168,10 @@ static int start(struct options *o, struct held *h, int64_t *first)
         s = pd_sim_restore(h->sim, *first, &h->r, h->v0, h->bits0);
     if (ranks) /* this rank's piece of the body, without the whole body's run */
         s = cli_agreed(s);
-    /* a window of the body of lists: the piece takes it over (its bonds then
-     * in the piece alone) */
+    /* a window of the body: the piece takes it over (its bonds then in the
+     * piece alone) */
     const int64_t n = h->p ? pd_body_count(h->p) : 0, nread = h->b ? h->b->count : 0;
-    if (s == PD_OK && rows == 1)
+    if (s == PD_OK && rows)
         s = pd_sim_piece_take(&h->p, &h->b, sc, restart ? h->bits0 : NULL, &h->piece);
     else if (s == PD_OK && ranks)
         s = pd_sim_piece_new(h->p, h->b, sc, restart ? h->bits0 : NULL, &h->piece);

@@ -1505,10 +1505,11 @@ void pd_restart_free(pd_restart *r);
  * refused with PD_ERR_INVALID. */
 pd_status pd_sim_piece_new(const pd_particles *p, const pd_bonds *b, const pd_scene *sc,
                            const uint64_t *intact, pd_sim **piece);
-/* The same for a window of the body of bond lists (pd_read_body_ranks):
- * the piece takes *p and *b over, cutting them to its rows in place (no
- * second copy of its bonds), and sets them NULL; a restart's
- * pd_sim_piece_restore then takes them NULL. */
+/* The same for a window of the body (pd_read_body_ranks): the piece
+ * takes *p and *b over, and sets them NULL: a window of bond lists cut to
+ * its rows in place (no second copy of its bonds), a lattice's window
+ * freed once the piece's rows are sliced from it, before the piece's run
+ * is built; a restart's pd_sim_piece_restore then takes them NULL. */
 pd_status pd_sim_piece_take(pd_particles **p, pd_bonds **b, const pd_scene *sc,
                             const uint64_t *intact, pd_sim **piece);
 /* The body's rows [*g0, *g1) the piece holds (its own and its ghosts). */

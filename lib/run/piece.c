@@ -419,8 +419,9 @@ static pd_status piece_restore(const pd_particles *p, const pd_bonds *b, pd_sim 
     mine.bond_history = NULL;
     mine.history_bonds = 0;
     int bad = 0;
-    const int64_t count = pc->keep ? pc->keep_count : b->count; /* the bonds read */
-    const int history = r->bond_history != NULL && r->history_bonds == count;
+    /* the bonds read (a window taken over: kept, or none of a lattice's) */
+    const int64_t count = pc->keep ? pc->keep_count : b ? b->count : 0;
+    const int history = r->bond_history != NULL && (pc->keep || b) && r->history_bonds == count;
     if (history) {
         mine.bond_history = pc->keep ? kept_history(pc, r->bond_history, r->history_width)
                                      : slice_history(p, b, r->bond_history, r->history_width,
@@ -567,7 +568,8 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, pd_particle
         if (tp && sc->has_contact)
             st = window_gap(p, b, pc->first + pc->own_lo - w0, pc->first + pc->own_hi - w0, st,
                             &gap);
-        if (st == PD_OK && tp) { /* the window becomes the piece */
+        const int cut = tp && pd_bonds_has_lists(b); /* a window of lists: cut in place */
+        if (st == PD_OK && cut) { /* the window becomes the piece */
             pc->keep_count = b->count; /* the window's bonds, before the cut */
             st = cut_window(*tp, *tb, intact, pc->first - w0, g1 - w0, &pc->keep);
             if (st == PD_OK) {
@@ -584,6 +586,15 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, pd_particle
             st = slice_compact(p, b, intact, pc->p, pc->first - w0, &pc->b);
         if (st == PD_OK && pc->b == NULL)
             st = slice_bonds(p, b, intact, pc->first - w0, g1 - w0, &pc->b);
+        if (st == PD_OK && tp && !cut) { /* a lattice's window, sliced: it goes before the
+                                            piece's run is built */
+            pd_particles_free(*tp);
+            pd_bonds_free(*tb);
+            *tp = NULL;
+            *tb = NULL;
+            p = NULL;
+            b = NULL;
+        }
     }
     free(start);
     free(K);
@@ -642,8 +653,8 @@ pd_status pd_sim_piece_take(pd_particles **p, pd_bonds **b, const pd_scene *sc,
                             const uint64_t *intact, pd_sim **out)
 {
     pd_sim *sim = NULL;
-    if (!(*p)->window || pd_bonds_has_lists(*b) == 0)
-        return pd_comm_agree(pd_fail(PD_ERR_INVALID, "a piece takes over a window of bond lists"));
+    if (!(*p)->window)
+        return pd_comm_agree(pd_fail(PD_ERR_INVALID, "a piece takes over a window of the body"));
     pd_status s = pd_comm_agree(piece_cut(*p, *b, p, b, sc, intact ? intact : (*b)->intact, &sim));
     if (s != PD_OK)
         return s;
