@@ -619,7 +619,7 @@ static int compact_lengths_bound(const pd_particles *p, const pd_bonds *b)
     else
         ok = ok && pd_family_offsets(b, p, d, len, nu, spread) == nk;
     double rmin = INFINITY;
-    for (int64_t i = p->own_lo; i < p->own_hi; i++)
+    for (int64_t i = p->window ? p->own_lo : 0; i < (p->window ? p->own_hi : p->n); i++)
         rmin = fmin(rmin, p->radius[i]);
     rmin = -pd_body_max(p, -rmin);
     ok = ok && lengths_bound(nk, len, spread, b->horizon, rmin);
