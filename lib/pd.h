@@ -540,6 +540,12 @@ pd_status pd_lattice_order(const pd_particles *p, int64_t **order);
  * pd_lattice_coords gives them): the old index of each new position
  * (malloc'd), or NULL when out of memory. */
 int64_t *pd_lattice_sort(int64_t n, int32_t *const lc[3]);
+/* The first row of each of nb blocks of `thick` outer planes from plane lo
+ * (start[nb]: every row), were the rows in lattice order: the rows
+ * [i0, i1) of outer coordinates `outer` counted under each block, the
+ * counts summed over the MPI ranks (collective); start has nb + 1. */
+void pd_lattice_block_starts(const int32_t *outer, int64_t i0, int64_t i1, int64_t lo, int thick,
+                             int64_t nb, int64_t *start);
 /* A site within PD_LATTICE_TOL spacings of the lattice is on it. */
 #define PD_LATTICE_TOL 1e-6
 

@@ -23,6 +23,7 @@
 
 #include <gsl/gsl_rng.h>
 
+#include "base/comm.h"
 #include "pd.h"
 
 static int site_in_body(const pd_region *regions, int nregions, const double x[3])
@@ -316,4 +317,15 @@ int pd_region_rounding(const pd_region *r, double h, const double origin[3], con
         snprintf(text + used, len - used, "; %d more face%s like it", more, more > 1 ? "s" : "");
     }
     return found > 0;
+}
+
+void pd_lattice_block_starts(const int32_t *outer, int64_t i0, int64_t i1, int64_t lo, int thick,
+                             int64_t nb, int64_t *start)
+{
+    memset(start, 0, (size_t)(nb + 1) * sizeof(int64_t));
+    for (int64_t i = i0; i < i1; i++) /* the rows below each block's first plane */
+        start[(outer[i] - lo) / thick + 1]++;
+    pd_comm_add_int(start, nb + 1);
+    for (int64_t k = 1; k <= nb; k++)
+        start[k] += start[k - 1];
 }

@@ -320,15 +320,11 @@ int pd_piece_lattice_rows(const pd_particles *share, const pd_stencil *st, int64
         hi = -pd_comm_min(hi);
         nb = (hi - lo + thick) / thick;
     }
-    int64_t *start = ok ? calloc((size_t)nb + 1, sizeof(int64_t)) : NULL;
+    int64_t *start = ok ? malloc(((size_t)nb + 1) * sizeof(int64_t)) : NULL;
     if (ok)
         ok = pd_comm_min(start != NULL) == 1;
     if (ok) { /* each block's first row, were the rows in lattice order */
-        for (int64_t i = 0; i < share->n; i++)
-            start[(lc[2][i] - lo) / thick + 1]++;
-        pd_comm_add_int(start, nb + 1);
-        for (int64_t k = 1; k <= nb; k++)
-            start[k] += start[k - 1];
+        pd_lattice_block_starts(lc[2], 0, share->n, lo, thick, nb, start);
         ok = pd_comm_min(piece_rows_at(pd_body_count(share), nb, start, rows) == PD_OK) == 1;
     }
     free(start);

@@ -730,19 +730,17 @@ static int window_blocks(pd_grid *G, const pd_particles *p)
         thick = G->off[k][2] > thick ? G->off[k][2] : thick;
     G->thick = thick = thick > 0 ? thick : 1;
     G->nblocks = (hi[2] - lo[2] + thick) / thick;
-    int64_t *count = calloc((size_t)G->nblocks + 1, sizeof(int64_t));
+    int64_t *start = malloc(((size_t)G->nblocks + 1) * sizeof(int64_t));
     G->block_run = malloc(((size_t)G->nblocks + 1) * sizeof(int64_t));
     G->run = malloc(((size_t)G->nblocks + 1) * sizeof *G->run);
-    const int ok = pd_comm_min(count && G->block_run && G->run);
-    for (int64_t i = p->own_lo; ok && i < p->own_hi; i++)
-        count[(G->lc[2][i] - lo[2]) / thick + 1]++;
+    const int ok = pd_comm_min(start && G->block_run && G->run);
     if (ok)
-        pd_comm_add_int(count, G->nblocks + 1);
+        pd_lattice_block_starts(G->lc[2], p->own_lo, p->own_hi, lo[2], thick, G->nblocks, start);
     for (int64_t blk = 0; ok && blk <= G->nblocks; blk++) {
         G->block_run[blk] = blk;
-        G->run[blk] = (grid_run){.start = blk > 0 ? G->run[blk - 1].start + count[blk] : 0};
+        G->run[blk] = (grid_run){.start = start[blk]};
     }
-    free(count);
+    free(start);
     return ok ? 1 : -1;
 }
 
