@@ -24,6 +24,12 @@ typedef struct {
     int64_t walk;      /* blocks the bond list's kernel walks: nblocks, or
                           (a piece of a body on MPI ranks) up to its own
                           last                                           */
+    int64_t walk_lo;   /* the first block it walks: 0, or (a piece) the
+                          block below its own; the blocks below that put
+                          no force on its rows                           */
+    int64_t clip;      /* 0, or (that piece, when walk_lo is not its own)
+                          its first own row: block walk_lo is walked from
+                          its first row with a partner at or above it    */
     double *released;  /* nblocks: energy of the bonds broken in a block
                           in this step, J (summed in block order)        */
     int64_t *cursor;   /* scratch of the weights' set-up (pmb.c, lps.c)    */

@@ -11,13 +11,18 @@
  *   - Ghosts.  A piece is its own blocks, the block above them (whose
  *     particles are partners of its last block's bonds) and the one or two
  *     below (an even count of blocks below it, so that its blocks keep the
- *     whole body's phases).  It walks the bonds of the blocks below again
- *     rather than receiving the forces they put on its own particles: each
- *     of its own particles then gets every bond's force, in the whole
- *     body's order, and so the same bits.  Both walks of a bond see the
- *     same positions and s0 and break it alike.  The ghosts' own forces
- *     lack bonds; they are set to rest after the forces, and their
- *     positions and s0 come from their owners before the next ones.
+ *     whole body's phases).  It walks again the bonds of the block below
+ *     its own that reach its own particles (the stencil's with a partner
+ *     of its own, the bond list's from the block's first row with one;
+ *     no bond of the block below that reaches them) rather than receiving
+ *     the forces they put on them: each of its own particles then gets
+ *     every bond's force, in the whole body's order, and so the same
+ *     bits.  Both walks of a bond see the same positions and s0 and break
+ *     it alike.  The ghosts' own forces lack bonds, and their bonds with
+ *     each other are not walked (their states here are stale; only its
+ *     own rows' are read or written); the ghosts are set to rest after
+ *     the forces, and their positions and s0 come from their owners
+ *     before the next ones.
  *   - Sums over the body (energies, the indenter's force, the energy of
  *     broken bonds and of lost particles) are taken in the whole body's
  *     order: pd_comm_sum_fixed, pd_sim_add_released, in rank order.
@@ -222,13 +227,23 @@ static int64_t piece_first_block(const int64_t *K, int r)
     return r == 0 ? 0 : (K[r] - 1) - ((K[r] - 1) & 1);
 }
 
+/* The share of a block whose bonds a rank above the first walks again,
+ * below its own: of the stencil's, those of the block below with a
+ * partner of its own (a plane p of a block of T reaches the next with the
+ * offsets whose outer component is at least T - p: mean |d_outer| / T of
+ * the bonds, 0.38 at delta = 3 h); of the bond list's, the block below
+ * from its first row with such a partner on (about the rows a bond spans,
+ * one block). */
+#define PIECE_DUP_GRID 0.4
+#define PIECE_DUP_LIST 1.0
+
 /* The P ranks' blocks of a body of n rows in nb blocks (block k's first
  * row start[k], start[nb] = n): rank r owns blocks [K[r], K[r + 1]), two
  * at least each, about as many rows walked each, a rank above the first
- * walking one or two blocks below its own again (1.5 blocks of rows on
- * average, dup): rank 0 owns W rows, the others W - dup,
- * W = (n + (P - 1) dup) / P. */
-static pd_status cut_ranks(int64_t n, int64_t nb, const int64_t *start, int P, int64_t *K)
+ * walking dup_blocks of a block below its own again (dup rows): rank 0
+ * owns W rows, the others W - dup, W = (n + (P - 1) dup) / P. */
+static pd_status cut_ranks(int64_t n, int64_t nb, const int64_t *start, int P, double dup_blocks,
+                           int64_t *K)
 {
     if (nb < 2 * (int64_t)P)
         return pd_fail(PD_ERR_INVALID,
@@ -237,7 +252,7 @@ static pd_status cut_ranks(int64_t n, int64_t nb, const int64_t *start, int P, i
                        (long long)nb, P, (long long)(nb / 2), nb / 2 == 1 ? "" : "s");
     K[0] = 0;
     K[P] = nb;
-    const double dup = 1.5 * (double)n / (double)(nb > 0 ? nb : 1);
+    const double dup = dup_blocks * (double)n / (double)(nb > 0 ? nb : 1);
     const double W = ((double)n + (P - 1) * dup) / P;
     for (int r = 1; r < P; r++) {
         int64_t k = K[r - 1] + 2;
@@ -257,12 +272,13 @@ int pd_piece_reads_rows(const pd_particles *p, const pd_scene *sc)
 /* This rank's rows of a body of n rows in nb blocks (block k's first row
  * start[k], start[nb] = n), cut as cut_ranks cuts it: rows[0..1] its
  * piece's, rows[2..3] its own, rows[4..5] the piece and a block more on
- * each side. */
-static pd_status piece_rows_at(int64_t n, int64_t nb, const int64_t *start, int64_t rows[6])
+ * each side; dup_blocks as cut_ranks takes it. */
+static pd_status piece_rows_at(int64_t n, int64_t nb, const int64_t *start, double dup_blocks,
+                               int64_t rows[6])
 {
     const int P = pd_comm_size(), me = pd_comm_rank();
     int64_t *K = malloc((size_t)(P + 1) * sizeof(int64_t));
-    pd_status s = K ? cut_ranks(n, nb, start, P, K)
+    pd_status s = K ? cut_ranks(n, nb, start, P, dup_blocks, K)
                     : pd_fail(PD_ERR_NOMEM, "out of memory for the pieces");
     if (s == PD_OK) {
         const int64_t L = piece_first_block(K, me), U = K[me + 1] + 1 < nb ? K[me + 1] + 1 : nb;
@@ -287,7 +303,7 @@ pd_status pd_piece_rows(int64_t n, int64_t span, int64_t *g0, int64_t *g1, int64
     for (int64_t k = 0; s == PD_OK && k <= nb; k++)
         start[k] = k * block < n ? k * block : n;
     if (s == PD_OK)
-        s = piece_rows_at(n, nb, start, rows);
+        s = piece_rows_at(n, nb, start, PIECE_DUP_LIST, rows);
     if (s == PD_OK) {
         *g0 = rows[0];
         *g1 = rows[1];
@@ -325,7 +341,8 @@ int pd_piece_lattice_rows(const pd_particles *share, const pd_stencil *st, int64
         ok = pd_comm_min(start != NULL) == 1;
     if (ok) { /* each block's first row, were the rows in lattice order */
         pd_lattice_block_starts(lc[2], 0, share->n, lo, thick, nb, start);
-        ok = pd_comm_min(piece_rows_at(pd_body_count(share), nb, start, rows) == PD_OK) == 1;
+        ok = pd_comm_min(piece_rows_at(pd_body_count(share), nb, start, PIECE_DUP_GRID, rows) ==
+                         PD_OK) == 1;
     }
     free(start);
     for (int a = 0; a < 3; a++)
@@ -344,7 +361,7 @@ int pd_piece_lattice_fits(const pd_particles *p, const pd_bonds *b, const pd_sce
     ok = pd_comm_min(ok && start) == 1;
     if (ok) { /* the plan cuts the body as p was cut */
         pd_grid_blocks(plan, start, NULL, NULL);
-        ok = piece_rows_at(pd_body_count(p), nb, start, rows) == PD_OK &&
+        ok = piece_rows_at(pd_body_count(p), nb, start, PIECE_DUP_GRID, rows) == PD_OK &&
              rows[2] == p->first + p->own_lo && rows[3] == p->first + p->own_hi &&
              rows[4] == p->first && rows[5] == p->first + p->n;
         ok = pd_comm_min(ok) == 1;
@@ -527,7 +544,7 @@ static pd_status piece_cut(const pd_particles *p, const pd_bonds *b, pd_particle
         for (int64_t k = 0; k <= nb; k++)
             start[k] = k * pc->half_block < n ? k * pc->half_block : n;
     }
-    st = cut_ranks(n, nb, start, P, K);
+    st = cut_ranks(n, nb, start, P, grid ? PIECE_DUP_GRID : PIECE_DUP_LIST, K);
     if (st == PD_OK) {
         for (int r = 0; r < P; r++) {
             pc->rows[r] = start[K[r + 1]] - start[K[r]];

@@ -113,6 +113,29 @@ static pd_status own_lists(pd_sim *sim)
     return s;
 }
 
+/* A piece walked as a bond list (lib/run/piece.c): the half bonds cut into
+ * the whole body's blocks, walked from the block below its own (a bond
+ * spans one block at most), from that block's first row with a partner of
+ * its own, up to its own last block (the one above is ghosts, whose forces
+ * are not wanted).  The rows skipped put no force on its own. */
+static pd_status piece_half_blocks(pd_sim *sim)
+{
+    const pd_piece *pc = sim->piece;
+    pd_half_bonds *h = &sim->half;
+    if (pc == NULL || pc->grid)
+        return PD_OK;
+    pd_status st = pd_half_set_block(h, pc->half_block);
+    if (st != PD_OK)
+        return st;
+    if (pc->own_blk_hi < h->nblocks)
+        h->walk = pc->own_blk_hi;
+    if (pc->own_blk_lo > 0) {
+        h->walk_lo = pc->own_blk_lo - 1;
+        h->clip = pc->own_lo;
+    }
+    return PD_OK;
+}
+
 pd_status pd_sim_new(const pd_particles *p, const pd_bonds *b, const pd_scene *s, pd_sim **out)
 {
     return pd_sim_new_cut(p, b, s, NULL, out);
@@ -164,10 +187,8 @@ pd_status pd_sim_new_cut(const pd_particles *p, const pd_bonds *b, const pd_scen
         st = own_lists(sim);
     if (st == PD_OK)
         st = pd_half_build(sim->b, &sim->half);
-    if (st == PD_OK && piece && !piece->grid)
-        st = pd_half_set_block(&sim->half, piece->half_block);
-    if (st == PD_OK && piece && !piece->grid && piece->own_blk_hi < sim->half.nblocks)
-        sim->half.walk = piece->own_blk_hi; /* not the ghosts' block above its own */
+    if (st == PD_OK)
+        st = piece_half_blocks(sim);
     if (st == PD_OK)
         st = no_failure_rows(sim);
     if (st == PD_OK)
@@ -178,10 +199,8 @@ pd_status pd_sim_new_cut(const pd_particles *p, const pd_bonds *b, const pd_scen
         st = own_lists(sim);
         if (st == PD_OK)
             st = pd_half_build(sim->b, &sim->half);
-        if (st == PD_OK && piece && !piece->grid)
-            st = pd_half_set_block(&sim->half, piece->half_block);
-        if (st == PD_OK && piece && !piece->grid && piece->own_blk_hi < sim->half.nblocks)
-            sim->half.walk = piece->own_blk_hi;
+        if (st == PD_OK)
+            st = piece_half_blocks(sim);
     }
     if (st == PD_OK && piece && piece->grid != (sim->grid != NULL))
         st = pd_fail(PD_ERR_INVALID, "a piece of the body is not walked as the whole body is");

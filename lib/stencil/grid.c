@@ -856,6 +856,15 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
     G->walk = G->nblocks; /* a piece: not the ghosts' block above its own */
     if (sim->piece && sim->piece->own_blk_hi < G->nblocks)
         G->walk = sim->piece->own_blk_hi;
+    /* a piece in grid order: from the block below its own on (a bond
+     * reaches one block up at most), and of that block only the bonds
+     * with a partner of its own; they put every force on its rows in the
+     * whole body's order, so the same bits on any count of ranks */
+    G->walk_lo = G->clip = 0;
+    if (sim->piece && sim->piece->own_blk_lo > 0 && G->perm == NULL) {
+        G->walk_lo = sim->piece->own_blk_lo - 1;
+        G->clip = sim->piece->own_lo;
+    }
     pd_grid_sync(sim, G);
 #if PD_AVX512_KERNELS
     G->tile = !lps && G->words == 1 && __builtin_cpu_supports("avx512f") && !getenv("PD_NO_AVX512");

@@ -14,7 +14,8 @@
  * V_i V_j over the intact bonds (lib/models/pmb.c's pmb_energy).  Even blocks,
  * then odd ones, so that no two threads add to one particle. */
 static inline __attribute__((always_inline)) void
-seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, const int contact)
+seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, int64_t cut, double *e,
+           const int contact)
 {
     const double V = sim->p->volume[0];
     const int W = G->words, k = sg->k;
@@ -23,10 +24,10 @@ seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, c
     const double L = G->len[k], iL = G->inv_len[k], dc = G->dc[k];
     const double c = grid_energy_c(G, k, V, contact);
     const double *restrict y0 = sim->y[0], *restrict y1 = sim->y[1], *restrict y2 = sim->y[2];
-    const int64_t shift = sg->shift;
+    const int64_t shift = sg->shift, lo = sg->lo > cut - shift ? sg->lo : cut - shift;
     if (G->perm == NULL && shift >= GRID_SAFE) { /* the two ends never share a vector */
 #pragma omp simd safelen(GRID_SAFE)
-        for (int64_t g = sg->lo; g < sg->hi; g++) {
+        for (int64_t g = lo; g < sg->hi; g++) {
             const int64_t j = g + shift;
             const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];
             const double r2 = dx * dx + dy * dy + dz * dz;
@@ -36,7 +37,7 @@ seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, c
         }
         return;
     }
-    for (int64_t g = sg->lo; g < sg->hi; g++) {
+    for (int64_t g = lo; g < sg->hi; g++) {
         if (!(bits[g * W] & bit))
             continue;
         const int64_t i = G->perm ? G->perm[g] : g;
@@ -51,16 +52,18 @@ seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, double *e, c
     }
 }
 
-/* The pairs of one block (the vector loop where the particles are in grid
- * order and the two ends of a segment's lanes never meet). */
+/* The pairs of one block whose partner is cut or above (grid_cut; the
+ * vector loop where the particles are in grid order and the two ends of a
+ * segment's lanes never meet). */
 PD_VECTOR_CLONES static void block_energy(const pd_sim *sim, int64_t blk, double *e, int contact)
 {
     const pd_grid *G = sim->grid;
+    const int64_t cut = grid_cut(G, blk);
     for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++)
         if (contact)
-            seg_energy(sim, G, &G->seg[si], e, 1);
+            seg_energy(sim, G, &G->seg[si], cut, e, 1);
         else
-            seg_energy(sim, G, &G->seg[si], e, 0);
+            seg_energy(sim, G, &G->seg[si], cut, e, 0);
 }
 
 static void pair_energy(const pd_sim *sim, double *e, const int contact)
@@ -68,7 +71,7 @@ static void pair_energy(const pd_sim *sim, double *e, const int contact)
     const pd_grid *G = sim->grid;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel
-        for (int64_t blk = phase; blk < G->walk; blk += 2)
+        for (int64_t blk = grid_walk0(G, phase); blk < G->walk; blk += 2)
             if (grid_mine(G, blk))
                 block_energy(sim, blk, e, contact);
     }

@@ -99,6 +99,13 @@ struct pd_grid {
                             walk: nblocks, or (a piece) up to its own last:
                             the block above is ghosts, whose forces are
                             not wanted                                    */
+    int64_t walk_lo;     /* the first block they walk: 0, or (a piece in
+                            grid order) the block below its own; the
+                            blocks below that put no force on its rows   */
+    int64_t clip;        /* 0, or (that piece, when walk_lo is not its
+                            own) its first own row: block walk_lo's bonds
+                            are walked only where the partner is at or
+                            above it, the others join ghosts alone        */
     int64_t *block_run;  /* nblocks + 1: block b holds the runs
                             [block_run[b], block_run[b + 1])               */
     double *block_at;    /* nblocks: where a block's middle particle falls
@@ -161,6 +168,23 @@ static inline int64_t block_seg0(const pd_grid *G, int64_t blk)
 static inline int64_t block_start(const pd_grid *G, int64_t blk)
 {
     return G->run[G->block_run[blk]].start;
+}
+
+/* The first block of `phase` (0: even blocks, 1: odd ones) the force and
+ * energy passes walk.  A piece's local block 0 is even in the whole body
+ * too, so its phases are the whole body's. */
+static inline int64_t grid_walk0(const pd_grid *G, int phase)
+{
+    return G->walk_lo + ((G->walk_lo ^ phase) & 1);
+}
+
+/* The first partner row the bonds of block blk are walked for (grid
+ * order): a piece's own first row in the block below its own, else 0.
+ * A bond g-j (j = g + shift) is walked when j >= it: a segment's
+ * particles from max(lo, grid_cut - shift) on. */
+static inline int64_t grid_cut(const pd_grid *G, int64_t blk)
+{
+    return blk == G->walk_lo ? G->clip : 0;
 }
 
 /* Is block blk (of the phase being walked) the calling thread's?  Each

@@ -17,7 +17,8 @@
  * force t_ij of Algorithm 2 is symmetric: equal volumes, nu_ij = nu_ji). */
 
 /* Algorithm 4's term omega |xi| e nu V of bond g-j (0 when broken), added
- * to the sums of both ends. */
+ * to the sums of both ends (the bonds of a block whose partner is cut or
+ * above, grid_cut). */
 #define GRID_THETA_BODY                                                                        \
     do {                                                                                       \
         const int64_t j = g + shift;                                                           \
@@ -36,19 +37,20 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
 {
     const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
     const int W = G->words;
+    const int64_t cut = grid_cut(G, blk);
     for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++) {
         const grid_seg *sg = &G->seg[si];
         const int k = sg->k;
         const uint64_t bit = UINT64_C(1) << (k & 63);
         const uint64_t *restrict mask = G->mask + (k >> 6);
-        const int64_t shift = sg->shift;
+        const int64_t shift = sg->shift, lo = sg->lo > cut - shift ? sg->lo : cut - shift;
         const double len = G->len[k], oml = G->omega[k] * len, nu = G->nu[k];
         if (shift >= GRID_SAFE) {
 #pragma omp simd safelen(GRID_SAFE)
-            for (int64_t g = sg->lo; g < sg->hi; g++)
+            for (int64_t g = lo; g < sg->hi; g++)
                 GRID_THETA_BODY;
         } else
-            for (int64_t g = sg->lo; g < sg->hi; g++)
+            for (int64_t g = lo; g < sg->hi; g++)
                 GRID_THETA_BODY;
     }
 }
@@ -98,6 +100,7 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
         const double *restrict s0 = A->s0;                                                     \
         double *f0 = A->f0, *f1 = A->f1, *f2 = A->f2, *s0n = A->s0n;                           \
         const double s00 = A->s00, alpha = A->alpha;                                           \
+        const int64_t cut = grid_cut(G, blk);                                                  \
         double brk[GRID_CHUNK];                                                                \
         for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++) {             \
             const grid_seg *sg = &G->seg[si];                                                  \
@@ -108,7 +111,8 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
             const double len = G->len[k], il = G->inv_len[k], dc = G->dc[k];                   \
             const double c1 = dil * V * G->nu[k] * G->omega[k] * len,                          \
                          c2 = PD_LPS_SHEAR_FACTOR * shear * V * G->nu[k] * G->omega[k];        \
-            for (int64_t c0 = sg->lo; c0 < sg->hi; c0 += GRID_CHUNK) {                         \
+            for (int64_t c0 = sg->lo > cut - shift ? sg->lo : cut - shift; c0 < sg->hi;         \
+                 c0 += GRID_CHUNK) {                                                           \
                 const int64_t n = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;         \
                 double nbreak = 0, near = 0;                                                   \
                 if (shift >= GRID_SAFE) {                                                      \
@@ -155,7 +159,7 @@ pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode 
         theta[i] = 0.0;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel
-        for (int64_t blk = phase; blk < G->walk; blk += 2)
+        for (int64_t blk = grid_walk0(G, phase); blk < G->walk; blk += 2)
             if (grid_mine(G, blk))
                 lps_theta_block(G, blk, &A, theta, V);
     }
@@ -178,7 +182,7 @@ pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode 
         G->breaks[blk].n = 0;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel reduction(| : bad)
-        for (int64_t blk = phase; blk < G->walk; blk += 2)
+        for (int64_t blk = grid_walk0(G, phase); blk < G->walk; blk += 2)
             if (grid_mine(G, blk))
                 bad |= (failure ? lps_force_block_1 : lps_force_block_0)(
                            G, blk, &A, ta, tb, V, dil, sim->sc.shear_modulus) != 0;

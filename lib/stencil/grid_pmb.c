@@ -48,13 +48,13 @@ static double bond_energy(const pd_sim *sim, const pd_grid *G, int64_t i, int64_
     if (contact)                                                                               \
         near += r < dc ? 1.0 : 0.0
 
-/* The bonds (and contacts) of one segment.  `fused`: one pass that updates
- * both ends as it goes (the shift is at least GRID_SAFE, so the two ends of
- * the lanes of one vector never overlap); otherwise the forces go to
- * scratch first and the two ends are updated in two loops.  Runs shorter
- * than a tile take it. */
+/* The bonds (and contacts) of one segment whose partner is cut or above
+ * (grid_cut).  `fused`: one pass that updates both ends as it goes (the
+ * shift is at least GRID_SAFE, so the two ends of the lanes of one vector
+ * never overlap); otherwise the forces go to scratch first and the two
+ * ends are updated in two loops.  Runs shorter than a tile take it. */
 static inline __attribute__((always_inline)) int
-seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failure,
+seg_bonds(pd_grid *G, const grid_seg *sg, int64_t cut, const grid_arrays *A, const int failure,
           const int contact, const int one_word, const int energy, grid_breaks *bl)
 {
     const int k = sg->k, W = one_word ? 1 : G->words, word = k >> 6;
@@ -70,7 +70,8 @@ seg_bonds(pd_grid *G, const grid_seg *sg, const grid_arrays *A, const int failur
     double brk[GRID_CHUNK], gx[GRID_CHUNK], gy[GRID_CHUNK], gz[GRID_CHUNK], t[GRID_CHUNK];
     double xe[GRID_CHUNK];
     const int fused = shift >= GRID_SAFE;
-    for (int64_t c0 = sg->lo; c0 < sg->hi; c0 += GRID_CHUNK) {
+    for (int64_t c0 = sg->lo > cut - shift ? sg->lo : cut - shift; c0 < sg->hi;
+         c0 += GRID_CHUNK) {
         const int64_t m = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;
         double nbreak = 0, near = 0;
         if (fused) {
@@ -279,7 +280,8 @@ static __mmask8 tile_gone(const pd_grid *G, int64_t g8, int64_t shift, __mmask8 
     } while (0)
 
 /* The bonds (and contacts) of a run at least a tile long (one mask word
- * per particle), a tile of 16 consecutive particles at a time (the last
+ * per particle) whose partner is cut or above (grid_cut), a tile of 16
+ * consecutive particles at a time (the last
  * one moved back to end with the run; its lanes of the tile before are
  * left out).  A tile walks the run's segments (in tile order) with its own
  * positions, forces and new s0 in registers, so that a bond loads and
@@ -290,7 +292,7 @@ static __mmask8 tile_gone(const pd_grid *G, int64_t g8, int64_t shift, __mmask8 
  * without `forces` (and failure) only them, in the same order to the bit
  * (grid_tile_energies). */
 __attribute__((target("avx512f"))) static inline __attribute__((always_inline)) int
-tile_run(pd_grid *G, const grid_run *R, const grid_arrays *A, const int failure,
+tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const int failure,
          const int contact, const int energy, const int forces, grid_breaks *bl)
 {
     const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
@@ -310,7 +312,8 @@ tile_run(pd_grid *G, const grid_run *R, const grid_arrays *A, const int failure,
         }
         for (int64_t q = R->seg0; q < R[1].seg0; q++) {
             const grid_seg *sg = &G->seg[q];
-            const int64_t lo = sg->lo > own ? sg->lo : own;
+            int64_t lo = sg->lo > own ? sg->lo : own;
+            lo = lo > cut - sg->shift ? lo : cut - sg->shift;
             const int64_t hi = sg->hi < g0 + GRID_TILE ? sg->hi : g0 + GRID_TILE;
             if (lo >= hi)
                 continue;
@@ -368,14 +371,15 @@ tile_run(pd_grid *G, const grid_run *R, const grid_arrays *A, const int failure,
     __attribute__((target("avx512f"))) static int name(pd_grid *G, int64_t blk,                \
                                                        const grid_arrays *A)                   \
     {                                                                                          \
+        const int64_t cut = grid_cut(G, blk);                                                  \
         for (int64_t r = G->block_run[blk]; r < G->block_run[blk + 1]; r++) {                  \
             const grid_run *R = &G->run[r];                                                    \
             if (R->len >= GRID_TILE) {                                                         \
-                if (tile_run(G, R, A, failure, contact, energy, 1, &G->breaks[blk]))           \
+                if (tile_run(G, R, cut, A, failure, contact, energy, 1, &G->breaks[blk]))      \
                     return -1;                                                                 \
             } else                                                                             \
                 for (int64_t s = R->seg0; s < R[1].seg0; s++)                                  \
-                    if (seg_bonds(G, &G->seg[s], A, failure, contact, 1, energy,               \
+                    if (seg_bonds(G, &G->seg[s], cut, A, failure, contact, 1, energy,          \
                                   &G->breaks[blk]))                                            \
                         return -1;                                                             \
         }                                                                                      \
@@ -395,14 +399,15 @@ GRID_TILE_BLOCK(grid_tile_111, PD_BONDS_FAILURE, 1, 1)
  * by bond, and with `contact` the contact pairs'.  (But for a bond kept by
  * --no-failure in the step its stretch passed s0: seg_bonds adds it after
  * its chunk, this in its place; the sums then differ in rounding.) */
-static void seg_energies(const pd_grid *G, const grid_seg *sg, const grid_arrays *A,
+static void seg_energies(const pd_grid *G, const grid_seg *sg, int64_t cut, const grid_arrays *A,
                          const int contact)
 {
     const int k = sg->k;
+    const int64_t lo = sg->lo > cut - sg->shift ? sg->lo : cut - sg->shift;
     const uint64_t bit = UINT64_C(1) << k;
     const double L = G->len[k], iL = G->inv_len[k], w = G->w[k], dc = G->dc[k];
     const double ce = grid_energy_c(G, k, A->V, 0);
-    for (int64_t g = sg->lo; g < sg->hi; g++) {
+    for (int64_t g = lo; g < sg->hi; g++) {
         const int64_t j = g + sg->shift;
         GRID_PMB_PAIR(G->mask[g], A->y0[g], A->y1[g], A->y2[g], A->y0[j], A->y1[j], A->y2[j]);
         (void)fs;
@@ -411,8 +416,8 @@ static void seg_energies(const pd_grid *G, const grid_seg *sg, const grid_arrays
         A->eb[g] += x;
         A->eb[j] += x;
     }
-    if (contact)
-        seg_contact(G, sg, A, sg->lo, sg->hi - sg->lo, 1);
+    if (contact && lo < sg->hi)
+        seg_contact(G, sg, A, lo, sg->hi - lo, 1);
 }
 
 /* The energies of one block as its bond pass with energies counts them. */
@@ -420,15 +425,16 @@ __attribute__((target("avx512f"))) static void tile_energy_block(pd_grid *G, int
                                                                  const grid_arrays *A,
                                                                  const int contact)
 {
+    const int64_t cut = grid_cut(G, blk);
     for (int64_t r = G->block_run[blk]; r < G->block_run[blk + 1]; r++) {
         const grid_run *R = &G->run[r];
         if (R->len < GRID_TILE)
             for (int64_t s = R->seg0; s < R[1].seg0; s++)
-                seg_energies(G, &G->seg[s], A, contact);
+                seg_energies(G, &G->seg[s], cut, A, contact);
         else if (contact)
-            tile_run(G, R, A, 0, 1, 1, 0, NULL);
+            tile_run(G, R, cut, A, 0, 1, 1, 0, NULL);
         else
-            tile_run(G, R, A, 0, 0, 1, 0, NULL);
+            tile_run(G, R, cut, A, 0, 0, 1, 0, NULL);
     }
 }
 #endif
@@ -439,8 +445,9 @@ __attribute__((target("avx512f"))) static void tile_energy_block(pd_grid *G, int
 #define GRID_BLOCK(name, failure, contact, one_word, energy)                                  \
     PD_VECTOR_CLONES static int name(pd_grid *G, int64_t blk, const grid_arrays *A)          \
     {                                                                                         \
+        const int64_t cut = grid_cut(G, blk);                                                 \
         for (int64_t s = block_seg0(G, blk); s < block_seg0(G, blk + 1); s++)                 \
-            if (seg_bonds(G, &G->seg[s], A, failure, contact, one_word, energy,               \
+            if (seg_bonds(G, &G->seg[s], cut, A, failure, contact, one_word, energy,          \
                           &G->breaks[blk]))                                                   \
                 return -1;                                                                    \
         return 0;                                                                             \
@@ -508,7 +515,7 @@ int grid_tile_energies(const pd_sim *sim)
     const int contact = G->cmask != NULL;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel
-        for (int64_t blk = phase; blk < G->walk; blk += 2)
+        for (int64_t blk = grid_walk0(G, phase); blk < G->walk; blk += 2)
             if (grid_mine(G, blk))
                 tile_energy_block(G, blk, &A, contact);
     }
@@ -583,7 +590,7 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
         G->breaks[blk].n = 0;
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel reduction(| : bad)
-        for (int64_t blk = phase; blk < G->walk; blk += 2)
+        for (int64_t blk = grid_walk0(G, phase); blk < G->walk; blk += 2)
             if (grid_mine(G, blk))
                 bad |= fn(G, blk, &A) != 0;
     }
@@ -617,7 +624,7 @@ pd_status pd_grid_pmb(pd_sim *sim, pd_bond_mode failure)
          * new s0, with -inf: two passes over the particles fewer. */
         for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel if (!perm)
-            for (int64_t blk = phase; blk < G->walk; blk += 2) {
+            for (int64_t blk = grid_walk0(G, phase); blk < G->walk; blk += 2) {
                 if (!grid_mine(G, blk))
                     continue;
                 if (!perm)
