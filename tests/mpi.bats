@@ -98,9 +98,10 @@ same_on_ranks() {
     run -0 "$PY" "$SAME" one.h5 pipe.h5
 }
 
-@test "mpi: the stencil on 1 to 4 ranks, bit for bit the serial run's, fracture and all" {
+@test "mpi: the stencil on 1 to 4 ranks and on one block a rank, bit for bit the serial run's, fracture and all" {
     impact_body
-    same_on_ranks "1 2 3 4" 1 --scene impact.scene body.h5
+    # 14 ranks: each owns one block of the 14 (odd and even ones first)
+    same_on_ranks "1 2 3 4 14" 1 --scene impact.scene body.h5
     # the disk did break: the check saw fracture, not an elastic run
     run -0 "$PY" -c "
 import h5py
@@ -123,9 +124,10 @@ with h5py.File('np4.h5') as f:
     same_on_ranks "3" 1 --scene impact.scene --fields energy,stress body.h5
 }
 
-@test "mpi: the bond list's AVX-512 rows and its portable loop, two threads a rank, material laws" {
+@test "mpi: the bond list's AVX-512 rows and its portable loop, two threads a rank, one block a rank, material laws" {
     impact_body perturbed
-    same_on_ranks "2 3 4" 1 --scene impact.scene body.h5
+    # 8 ranks: each owns one block of the bond list's 8
+    same_on_ranks "2 3 4 8" 1 --scene impact.scene body.h5
     PD_NO_AVX512=1 same_on_ranks "3" 2 --scene impact.scene body.h5
     impact_body
     same_on_ranks "2" 2 --scene impact.scene --bond-list body.h5
@@ -330,7 +332,7 @@ with h5py.File('np4.h5') as f:
     assert last.attrs['lost_particles'] > 50 and last.attrs['lost_energy'] > 0, dict(last.attrs)"
 }
 
-@test "mpi: more ranks than the body has pairs of blocks is one line and exit 1; a model on stdin or a run file to stdout is a usage error" {
+@test "mpi: more ranks than the body has blocks is one line and exit 1; a model on stdin or a run file to stdout is a usage error" {
     impact_body
     run -2 mpi 2 --scene impact.scene - -o c.h5 <body.h5
     assert_output --partial "the model must be a file"
@@ -340,9 +342,9 @@ with h5py.File('np4.h5') as f:
     run -2 mpi 2 --scene impact.scene body.h5
     assert_output --partial "not '-'"
     [ ! -e c.h5 ]
-    # more ranks than the body has pairs of blocks
-    run -1 mpi 8 --scene impact.scene body.h5 -o c.h5
-    assert_output --partial "cut into 14 blocks and each of the 8 MPI ranks needs two: run it on at most 7 ranks"
+    # more ranks than the body has blocks
+    run -1 mpi 15 --scene impact.scene body.h5 -o c.h5
+    assert_output --partial "cut into 14 blocks and each of the 15 MPI ranks needs one: run it on at most 14 ranks"
     [ "$(grep -c 'pd-run: error' <<<"$output")" -eq 1 ]
     [ ! -e c.h5 ]
 }

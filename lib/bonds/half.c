@@ -133,7 +133,7 @@ pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h)
         row_state(h, b, b->intact, i, 1);
     h->block = pd_half_block_of(n, span, &h->nblocks);
     h->walk = h->nblocks;
-    h->walk_lo = h->clip = 0;
+    h->walk_lo = h->clip = h->blk0 = 0;
     h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
     if (h->released == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");
@@ -151,7 +151,7 @@ pd_status pd_half_set_block(pd_half_bonds *h, int64_t block)
                        (long long)block, (long long)span);
     h->block = block;
     h->nblocks = h->walk = (h->n + block - 1) / block;
-    h->walk_lo = h->clip = 0;
+    h->walk_lo = h->clip = h->blk0 = 0;
     free(h->released);
     h->released = calloc((size_t)(h->nblocks > 0 ? h->nblocks : 1), sizeof(double));
     return h->released ? PD_OK : pd_fail(PD_ERR_NOMEM, "out of memory for the bonds of the run");

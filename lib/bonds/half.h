@@ -27,6 +27,9 @@ typedef struct {
     int64_t walk_lo;   /* the first block it walks: 0, or (a piece) the
                           block below its own; the blocks below that put
                           no force on its rows                           */
+    int64_t blk0;      /* the whole body's block of block 0 (a piece): a
+                          phase walks the blocks of its parity in the
+                          whole body                                     */
     int64_t clip;      /* 0, or (that piece, when walk_lo is not its own)
                           its first own row: block walk_lo is walked from
                           its first row with a partner at or above it    */

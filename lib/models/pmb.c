@@ -541,8 +541,9 @@ static pd_status pmb_rows_init(pd_sim *sim)
     return PD_OK;
 }
 
-/* The blocks of the half bonds: even blocks in parallel, then odd ones (a
- * block writes only to itself and the next).  Every sum is in an order the
+/* The blocks of the half bonds: even blocks in parallel, then odd ones (of
+ * the whole body, pd_half_bonds.blk0; a block writes only to itself and
+ * the next).  Every sum is in an order the
  * blocks fix, whatever the thread count.  A piece's block below its own is
  * walked from its first row with a partner of the piece's own
  * (pd_half_bonds.clip; the partners ascend). */
@@ -550,7 +551,7 @@ static void pmb_blocks(pd_sim *sim, pd_bond_mode failure)
 {
     const pd_half_bonds *h = &sim->half;
     for (int phase = 0; phase < 2; phase++) {
-        const int64_t first = h->walk_lo + ((h->walk_lo ^ phase) & 1);
+        const int64_t first = h->walk_lo + ((h->blk0 + h->walk_lo + phase) & 1);
 #pragma omp parallel for schedule(dynamic, 1)
         for (int64_t blk = first; blk < h->walk; blk += 2) {
             int64_t lo = blk * h->block, hi = lo + h->block < sim->n ? lo + h->block : sim->n;

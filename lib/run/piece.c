@@ -7,15 +7,14 @@
  *     runs of rows, lib/bonds/half.c): a block's bonds write only to the
  *     block and the next, even blocks run before odd ones, and every sum
  *     is taken in an order the blocks fix.  The ranks own whole blocks, in
- *     order, about as many rows each, at least two blocks each.
+ *     order, about as many rows each, at least one block each.
  *   - Ghosts.  A piece is its own blocks, the block above them (whose
- *     particles are partners of its last block's bonds) and the one or two
- *     below (an even count of blocks below it, so that its blocks keep the
- *     whole body's phases).  It walks again the bonds of the block below
- *     its own that reach its own particles (the stencil's with a partner
- *     of its own, the bond list's from the block's first row with one;
- *     no bond of the block below that reaches them) rather than receiving
- *     the forces they put on them: each of its own particles then gets
+ *     particles are partners of its last block's bonds) and the one below.
+ *     Its phases are the whole body's (a block's parity is its whole-body
+ *     index's).  It walks again the bonds of the block below its own that
+ *     reach its own particles (the stencil's with a partner of its own,
+ *     the bond list's from the block's first row with one) rather than
+ *     receiving the forces they put on them: each of its own particles then gets
  *     every bond's force, in the whole body's order, and so the same
  *     bits.  Both walks of a bond see the same positions and s0 and break
  *     it alike.  The ghosts' own forces lack bonds, and their bonds with
@@ -220,11 +219,11 @@ static pd_status slice_compact(const pd_particles *p, const pd_bonds *b, const u
     return PD_OK;
 }
 
-/* The first block of rank r's piece: the block below its own if that is
- * even, else the one below that (rank 0: block 0). */
+/* The first block of rank r's piece: the block below its own (rank 0:
+ * block 0). */
 static int64_t piece_first_block(const int64_t *K, int r)
 {
-    return r == 0 ? 0 : (K[r] - 1) - ((K[r] - 1) & 1);
+    return r == 0 ? 0 : K[r] - 1;
 }
 
 /* The share of a block whose bonds a rank above the first walks again,
@@ -238,25 +237,25 @@ static int64_t piece_first_block(const int64_t *K, int r)
 #define PIECE_DUP_LIST 1.0
 
 /* The P ranks' blocks of a body of n rows in nb blocks (block k's first
- * row start[k], start[nb] = n): rank r owns blocks [K[r], K[r + 1]), two
+ * row start[k], start[nb] = n): rank r owns blocks [K[r], K[r + 1]), one
  * at least each, about as many rows walked each, a rank above the first
  * walking dup_blocks of a block below its own again (dup rows): rank 0
  * owns W rows, the others W - dup, W = (n + (P - 1) dup) / P. */
 static pd_status cut_ranks(int64_t n, int64_t nb, const int64_t *start, int P, double dup_blocks,
                            int64_t *K)
 {
-    if (nb < 2 * (int64_t)P)
+    if (nb < (int64_t)P)
         return pd_fail(PD_ERR_INVALID,
-                       "the body is cut into %lld blocks and each of the %d MPI ranks needs two: "
+                       "the body is cut into %lld block%s and each of the %d MPI ranks needs one: "
                        "run it on at most %lld rank%s",
-                       (long long)nb, P, (long long)(nb / 2), nb / 2 == 1 ? "" : "s");
+                       (long long)nb, nb == 1 ? "" : "s", P, (long long)nb, nb == 1 ? "" : "s");
     K[0] = 0;
     K[P] = nb;
     const double dup = dup_blocks * (double)n / (double)(nb > 0 ? nb : 1);
     const double W = ((double)n + (P - 1) * dup) / P;
     for (int r = 1; r < P; r++) {
-        int64_t k = K[r - 1] + 2;
-        while (k < nb - 2 * (P - r) && (double)start[k] < r * W - (r - 1) * dup)
+        int64_t k = K[r - 1] + 1;
+        while (k < nb - (P - r) && (double)start[k] < r * W - (r - 1) * dup)
             k++;
         K[r] = k;
     }

@@ -127,6 +127,7 @@ static pd_status piece_half_blocks(pd_sim *sim)
     pd_status st = pd_half_set_block(h, pc->half_block);
     if (st != PD_OK)
         return st;
+    h->blk0 = pc->blk0;
     if (pc->own_blk_hi < h->nblocks)
         h->walk = pc->own_blk_hi;
     if (pc->own_blk_lo > 0) {

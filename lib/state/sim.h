@@ -102,7 +102,7 @@ typedef struct pd_piece {
     int64_t n_whole;        /* rows of the whole body                       */
     int64_t first;          /* the whole body's row of local row 0          */
     int64_t own_lo, own_hi; /* local rows owned                             */
-    int64_t blk0;           /* the whole body's block of local block 0 (even) */
+    int64_t blk0;           /* the whole body's block of local block 0      */
     int64_t own_blk_lo, own_blk_hi; /* local blocks owned                   */
     int64_t *rows;          /* ranks: rows each rank owns                    */
     int64_t *own_at;        /* ranks + 1: the whole body's first row each

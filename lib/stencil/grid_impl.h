@@ -170,12 +170,13 @@ static inline int64_t block_start(const pd_grid *G, int64_t blk)
     return G->run[G->block_run[blk]].start;
 }
 
-/* The first block of `phase` (0: even blocks, 1: odd ones) the force and
- * energy passes walk.  A piece's local block 0 is even in the whole body
- * too, so its phases are the whole body's. */
+/* The first block of `phase` (0: even blocks, 1: odd ones, of the whole
+ * body: a piece's local block b is its block blk0 + b) the force and
+ * energy passes walk. */
 static inline int64_t grid_walk0(const pd_grid *G, int phase)
 {
-    return G->walk_lo + ((G->walk_lo ^ phase) & 1);
+    const int64_t b0 = G->blk0 > 0 ? G->blk0 : 0;
+    return G->walk_lo + ((b0 + G->walk_lo + phase) & 1);
 }
 
 /* The first partner row the bonds of block blk are walked for (grid
