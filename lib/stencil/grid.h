@@ -77,6 +77,11 @@ int pd_grid_pair(const pd_grid *g, int64_t i, int64_t j);
  * cleared. */
 pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode failure,
                       void (*mark)(void *ctx, int64_t i, int64_t j), void *ctx);
+/* LPS's elastic energy V_i W*_i of now, J, added to e[i] (lps.c's
+ * energy_row, its sums over the bonds walked as the stencil walks them:
+ * equal to rounding); 1, or 0 when the grid cannot (out of memory, the
+ * masks not to be had): the caller walks the families. */
+int pd_grid_lps_energy(const pd_sim *sim, const double *m, double *e);
 /* The directed state bits of the file's families (b's order) read off
  * the masks (grid_bits.c): 1 when written, 0 when the grid cannot tell
  * (particles not in grid order, more than 64 offsets, masks lagging

@@ -138,6 +138,87 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
 GRID_LPS_BLOCK(lps_force_block_0, 0)
 GRID_LPS_BLOCK(lps_force_block_1, 1)
 
+/* Of one block's intact bonds (with their partner cut or above), both
+ * ends: th += omega |xi| e nu V (GRID_THETA_BODY's) and sq += omega e e nu
+ * V (energy_row's sum). */
+PD_VECTOR_CLONES static void lps_energy_block(const pd_grid *G, int64_t blk, const grid_arrays *A,
+                                              double *th, double *sq, double V)
+{
+    const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
+    const int W = G->words;
+    const int64_t cut = grid_cut(G, blk);
+    for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++) {
+        const grid_seg *sg = &G->seg[si];
+        const int k = sg->k;
+        const uint64_t bit = UINT64_C(1) << (k & 63);
+        const uint64_t *restrict mask = G->mask + (k >> 6);
+        const int64_t shift = sg->shift, lo = sg->lo > cut - shift ? sg->lo : cut - shift;
+        const double len = G->len[k], om = G->omega[k], oml = om * len, nu = G->nu[k];
+#define GRID_ENERGY_BODY                                                                       \
+    do {                                                                                       \
+        const int64_t j = g + shift;                                                           \
+        const double mu = (mask[g * W] & bit) ? 1.0 : 0.0;                                     \
+        const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];               \
+        double e = sqrt(dx * dx + dy * dy + dz * dz) - len;                                    \
+        e = fabs(e) < PD_NEAR_ZERO ? 0.0 : e;                                                  \
+        const double c = mu * (oml * e * V * nu), q = mu * (om * e * e * V * nu);              \
+        th[g] += c;                                                                            \
+        th[j] += c;                                                                            \
+        sq[g] += q;                                                                            \
+        sq[j] += q;                                                                            \
+    } while (0)
+        if (shift >= GRID_SAFE) {
+#pragma omp simd safelen(GRID_SAFE)
+            for (int64_t g = lo; g < sg->hi; g++)
+                GRID_ENERGY_BODY;
+        } else
+            for (int64_t g = lo; g < sg->hi; g++)
+                GRID_ENERGY_BODY;
+#undef GRID_ENERGY_BODY
+    }
+}
+
+int pd_grid_lps_energy(const pd_sim *sim, const double *m, double *e)
+{
+    pd_grid *G = sim->grid;
+    if (G == NULL || G->omega == NULL || G->perm)
+        return 0;
+    if (G->epoch != sim->half.epoch) { /* the masks of the bonds of now */
+        pd_grid_sync((pd_sim *)sim, G);
+        if (G->status != PD_OK)
+            return 0;
+    }
+    const int64_t n = G->n;
+    double *th = calloc((size_t)(n > 0 ? n : 1), sizeof(double));
+    double *sq = calloc((size_t)(n > 0 ? n : 1), sizeof(double));
+    if (th == NULL || sq == NULL) {
+        free(th);
+        free(sq);
+        return 0;
+    }
+    const double V = sim->p->volume[0], K = sim->sc.bulk_modulus, Gs = sim->sc.shear_modulus;
+    const grid_arrays A = {.y0 = sim->y[0], .y1 = sim->y[1], .y2 = sim->y[2]};
+    for (int phase = 0; phase < 2; phase++) {
+#pragma omp parallel
+        for (int64_t blk = grid_walk0(G, phase); blk < G->walk; blk += 2)
+            if (grid_mine(G, blk))
+                lps_energy_block(G, blk, &A, th, sq, V);
+    }
+    /* energy_row's: V_i ((K/2 - 5G/6) theta^2 + 15G/2 sum / m_i) */
+    const double *Vi = sim->p->volume;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++) {
+        if (m[i] == 0.0)
+            continue;
+        const double t = (PD_LPS_DILATATION / m[i]) * th[i];
+        e[i] += Vi[i] * ((0.5 * K - 5.0 * Gs / 6.0) * t * t +
+                         0.5 * PD_LPS_SHEAR_FACTOR * Gs / m[i] * sq[i]);
+    }
+    free(th);
+    free(sq);
+    return 1;
+}
+
 pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode failure,
                       void (*mark)(void *ctx, int64_t i, int64_t j), void *ctx)
 {
