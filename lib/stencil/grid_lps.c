@@ -18,7 +18,8 @@
 
 /* Algorithm 4's term omega |xi| e nu V of bond g-j (0 when broken), added
  * to the sums of both ends (the bonds of a block whose partner is cut or
- * above, grid_cut). */
+ * above, grid_cut); with `energy` also omega e e nu V (energy_row's sum)
+ * to sq. */
 #define GRID_THETA_BODY                                                                        \
     do {                                                                                       \
         const int64_t j = g + shift;                                                           \
@@ -30,10 +31,18 @@
         const double c = mu * (oml * e * V * nu);                                              \
         sum[g] += c;                                                                           \
         sum[j] += c;                                                                           \
+        if (energy) {                                                                          \
+            const double q = mu * (om * e * e * V * nu);                                       \
+            sq[g] += q;                                                                        \
+            sq[j] += q;                                                                        \
+        }                                                                                      \
     } while (0)
 
-PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, const grid_arrays *A,
-                                             double *sum, double V)
+/* The dilatation sums of one block's bonds, and with `energy` the
+ * energy's sums of squared extensions. */
+static inline __attribute__((always_inline)) void
+theta_walk(const pd_grid *G, int64_t blk, const grid_arrays *A, double *sum, double *sq, double V,
+           const int energy)
 {
     const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
     const int W = G->words;
@@ -44,7 +53,7 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
         const uint64_t bit = UINT64_C(1) << (k & 63);
         const uint64_t *restrict mask = G->mask + (k >> 6);
         const int64_t shift = sg->shift, lo = sg->lo > cut - shift ? sg->lo : cut - shift;
-        const double len = G->len[k], oml = G->omega[k] * len, nu = G->nu[k];
+        const double len = G->len[k], om = G->omega[k], oml = om * len, nu = G->nu[k];
         if (shift >= GRID_SAFE) {
 #pragma omp simd safelen(GRID_SAFE)
             for (int64_t g = lo; g < sg->hi; g++)
@@ -53,6 +62,12 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
             for (int64_t g = lo; g < sg->hi; g++)
                 GRID_THETA_BODY;
     }
+}
+
+PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, const grid_arrays *A,
+                                             double *sum, double V)
+{
+    theta_walk(G, blk, A, sum, NULL, V, 0);
 }
 
 /* The pair force of bond g-j (Algorithm 2), its force on g and -it on j,
@@ -139,43 +154,11 @@ GRID_LPS_BLOCK(lps_force_block_0, 0)
 GRID_LPS_BLOCK(lps_force_block_1, 1)
 
 /* Of one block's intact bonds (with their partner cut or above), both
- * ends: th += omega |xi| e nu V (GRID_THETA_BODY's) and sq += omega e e nu
- * V (energy_row's sum). */
+ * ends: th += omega |xi| e nu V and sq += omega e e nu V (energy_row's). */
 PD_VECTOR_CLONES static void lps_energy_block(const pd_grid *G, int64_t blk, const grid_arrays *A,
                                               double *th, double *sq, double V)
 {
-    const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
-    const int W = G->words;
-    const int64_t cut = grid_cut(G, blk);
-    for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++) {
-        const grid_seg *sg = &G->seg[si];
-        const int k = sg->k;
-        const uint64_t bit = UINT64_C(1) << (k & 63);
-        const uint64_t *restrict mask = G->mask + (k >> 6);
-        const int64_t shift = sg->shift, lo = sg->lo > cut - shift ? sg->lo : cut - shift;
-        const double len = G->len[k], om = G->omega[k], oml = om * len, nu = G->nu[k];
-#define GRID_ENERGY_BODY                                                                       \
-    do {                                                                                       \
-        const int64_t j = g + shift;                                                           \
-        const double mu = (mask[g * W] & bit) ? 1.0 : 0.0;                                     \
-        const double dx = y0[j] - y0[g], dy = y1[j] - y1[g], dz = y2[j] - y2[g];               \
-        double e = sqrt(dx * dx + dy * dy + dz * dz) - len;                                    \
-        e = fabs(e) < PD_NEAR_ZERO ? 0.0 : e;                                                  \
-        const double c = mu * (oml * e * V * nu), q = mu * (om * e * e * V * nu);              \
-        th[g] += c;                                                                            \
-        th[j] += c;                                                                            \
-        sq[g] += q;                                                                            \
-        sq[j] += q;                                                                            \
-    } while (0)
-        if (shift >= GRID_SAFE) {
-#pragma omp simd safelen(GRID_SAFE)
-            for (int64_t g = lo; g < sg->hi; g++)
-                GRID_ENERGY_BODY;
-        } else
-            for (int64_t g = lo; g < sg->hi; g++)
-                GRID_ENERGY_BODY;
-#undef GRID_ENERGY_BODY
-    }
+    theta_walk(G, blk, A, th, sq, V, 1);
 }
 
 int pd_grid_lps_energy(const pd_sim *sim, const double *m, double *e)
