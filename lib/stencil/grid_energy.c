@@ -24,7 +24,7 @@ seg_energy(const pd_sim *sim, const pd_grid *G, const grid_seg *sg, int64_t cut,
     const double L = G->len[k], iL = G->inv_len[k], dc = G->dc[k];
     const double c = grid_energy_c(G, k, V, contact);
     const double *restrict y0 = sim->y[0], *restrict y1 = sim->y[1], *restrict y2 = sim->y[2];
-    const int64_t shift = sg->shift, lo = sg->lo > cut - shift ? sg->lo : cut - shift;
+    const int64_t shift = sg->shift, lo = grid_seg_lo(sg, cut, 0);
     if (G->perm == NULL && shift >= GRID_SAFE) { /* the two ends never share a vector */
 #pragma omp simd safelen(GRID_SAFE)
         for (int64_t g = lo; g < sg->hi; g++) {

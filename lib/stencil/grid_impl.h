@@ -182,10 +182,18 @@ static inline int64_t grid_walk0(const pd_grid *G, int phase)
 /* The first partner row the bonds of block blk are walked for (grid
  * order): a piece's own first row in the block below its own, else 0.
  * A bond g-j (j = g + shift) is walked when j >= it: a segment's
- * particles from max(lo, grid_cut - shift) on. */
+ * particles from grid_seg_lo on. */
 static inline int64_t grid_cut(const pd_grid *G, int64_t blk)
 {
     return blk == G->walk_lo ? G->clip : 0;
+}
+
+/* The first particle of segment sg walked, its partners cut or above, from
+ * particle `from` on: max(sg->lo, from, cut - shift). */
+static inline int64_t grid_seg_lo(const grid_seg *sg, int64_t cut, int64_t from)
+{
+    const int64_t lo = sg->lo > from ? sg->lo : from;
+    return lo > cut - sg->shift ? lo : cut - sg->shift;
 }
 
 /* Is block blk (of the phase being walked) the calling thread's?  Each

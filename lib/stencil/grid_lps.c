@@ -52,7 +52,7 @@ theta_walk(const pd_grid *G, int64_t blk, const grid_arrays *A, double *sum, dou
         const int k = sg->k;
         const uint64_t bit = UINT64_C(1) << (k & 63);
         const uint64_t *restrict mask = G->mask + (k >> 6);
-        const int64_t shift = sg->shift, lo = sg->lo > cut - shift ? sg->lo : cut - shift;
+        const int64_t shift = sg->shift, lo = grid_seg_lo(sg, cut, 0);
         const double len = G->len[k], om = G->omega[k], oml = om * len, nu = G->nu[k];
         if (shift >= GRID_SAFE) {
 #pragma omp simd safelen(GRID_SAFE)
@@ -126,8 +126,7 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
             const double len = G->len[k], il = G->inv_len[k], dc = G->dc[k];                   \
             const double c1 = dil * V * G->nu[k] * G->omega[k] * len,                          \
                          c2 = PD_LPS_SHEAR_FACTOR * shear * V * G->nu[k] * G->omega[k];        \
-            for (int64_t c0 = sg->lo > cut - shift ? sg->lo : cut - shift; c0 < sg->hi;         \
-                 c0 += GRID_CHUNK) {                                                           \
+            for (int64_t c0 = grid_seg_lo(sg, cut, 0); c0 < sg->hi; c0 += GRID_CHUNK) {        \
                 const int64_t n = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;         \
                 double nbreak = 0, near = 0;                                                   \
                 if (shift >= GRID_SAFE) {                                                      \

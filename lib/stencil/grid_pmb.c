@@ -70,8 +70,7 @@ seg_bonds(pd_grid *G, const grid_seg *sg, int64_t cut, const grid_arrays *A, con
     double brk[GRID_CHUNK], gx[GRID_CHUNK], gy[GRID_CHUNK], gz[GRID_CHUNK], t[GRID_CHUNK];
     double xe[GRID_CHUNK];
     const int fused = shift >= GRID_SAFE;
-    for (int64_t c0 = sg->lo > cut - shift ? sg->lo : cut - shift; c0 < sg->hi;
-         c0 += GRID_CHUNK) {
+    for (int64_t c0 = grid_seg_lo(sg, cut, 0); c0 < sg->hi; c0 += GRID_CHUNK) {
         const int64_t m = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;
         double nbreak = 0, near = 0;
         if (fused) {
@@ -312,8 +311,7 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
         }
         for (int64_t q = R->seg0; q < R[1].seg0; q++) {
             const grid_seg *sg = &G->seg[q];
-            int64_t lo = sg->lo > own ? sg->lo : own;
-            lo = lo > cut - sg->shift ? lo : cut - sg->shift;
+            const int64_t lo = grid_seg_lo(sg, cut, own);
             const int64_t hi = sg->hi < g0 + GRID_TILE ? sg->hi : g0 + GRID_TILE;
             if (lo >= hi)
                 continue;
@@ -403,7 +401,7 @@ static void seg_energies(const pd_grid *G, const grid_seg *sg, int64_t cut, cons
                          const int contact)
 {
     const int k = sg->k;
-    const int64_t lo = sg->lo > cut - sg->shift ? sg->lo : cut - sg->shift;
+    const int64_t lo = grid_seg_lo(sg, cut, 0);
     const uint64_t bit = UINT64_C(1) << k;
     const double L = G->len[k], iL = G->inv_len[k], w = G->w[k], dc = G->dc[k];
     const double ce = grid_energy_c(G, k, A->V, 0);
