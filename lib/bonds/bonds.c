@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bonds/half.h"
 #include "pd.h"
 
 int64_t pd_bits_words(int64_t count)
@@ -157,8 +158,10 @@ BONDS_CLONES static void counted_damage(const pd_bonds *b, const uint64_t *intac
  * V, V + V, ... (table[m], added in that very order), so the bits are
  * counted instead of walking the partners: the same damage, bit for bit,
  * without reading the neighbour lists. */
-static void damage_over(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
-                        const uint64_t *skip, double *damage)
+/* When all volumes are equal, the running sums V, V + V, ... up to the
+ * largest family (table[m], the sum of m volumes in family order); else,
+ * or out of memory, NULL. */
+static double *volume_sums(const pd_particles *p, const pd_bonds *b)
 {
     int uniform = b->n > 0;
     for (int64_t i = 1; i < p->n && uniform; i++)
@@ -172,6 +175,15 @@ static void damage_over(const pd_particles *p, const pd_bonds *b, const uint64_t
         table[0] = 0;
         for (int64_t m = 1; m <= longest; m++)
             table[m] = table[m - 1] + p->volume[0];
+    }
+    return table;
+}
+
+static void damage_over(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
+                        const uint64_t *skip, double *damage)
+{
+    double *table = volume_sums(p, b);
+    if (table) {
 #pragma omp parallel
         {
             int64_t i0, i1;
@@ -207,6 +219,51 @@ void pd_damage_no_precrack(const pd_particles *p, const pd_bonds *b, const uint6
                            double *damage)
 {
     damage_over(p, b, intact, b->precrack, damage);
+}
+
+/* kept[i] and kept[j] += 1 for each intact half bond i-j of rows [lo, hi)
+ * (popcnt and tzcnt through the clones). */
+BONDS_CLONES static void count_intact(const pd_half_bonds *h, int64_t lo, int64_t hi, int32_t *kept)
+{
+    for (int64_t i = lo; i < hi; i++)
+        for (int64_t q = h->offset[i]; q < h->offset[i + 1];) {
+            const int64_t end = ((q >> 6) + 1) * 64 < h->offset[i + 1] ? ((q >> 6) + 1) * 64
+                                                                       : h->offset[i + 1];
+            uint64_t w = h->intact[q >> 6] >> (q & 63);
+            if (end - q < 64)
+                w &= (UINT64_C(1) << (end - q)) - 1;
+            kept[i] += __builtin_popcountll(w);
+            for (; w; w &= w - 1)
+                kept[h->neighbor[q + __builtin_ctzll(w)]]++;
+            q = end;
+        }
+}
+
+int pd_half_damage(const pd_particles *p, const pd_bonds *b, const pd_half_bonds *h,
+                   double *damage)
+{
+    if (!b->offset || h->n != b->n || h->walk != h->nblocks || h->walk_lo != 0)
+        return 0; /* no lists, or a piece of a body */
+    double *table = volume_sums(p, b);
+    int32_t *kept = table ? calloc((size_t)(b->n > 0 ? b->n : 1), sizeof(int32_t)) : NULL;
+    if (kept == NULL) {
+        free(table);
+        return 0;
+    }
+    /* even blocks, then odd ones: a block's partners are in it or the next */
+    for (int phase = 0; phase < 2; phase++)
+#pragma omp parallel for schedule(static)
+        for (int64_t blk = phase; blk < h->nblocks; blk += 2)
+            count_intact(h, blk * h->block,
+                         (blk + 1) * h->block < b->n ? (blk + 1) * h->block : b->n, kept);
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < b->n; i++) {
+        const double all = table[b->offset[i + 1] - b->offset[i]];
+        damage[i] = all > 0 ? 1.0 - table[kept[i]] / all : 0.0;
+    }
+    free(kept);
+    free(table);
+    return 1;
 }
 
 /* The root of x; each step on the way points x at its grandparent

@@ -72,6 +72,13 @@ pd_status pd_half_set_block(pd_half_bonds *h, int64_t block);
 /* The half bonds' bits from directed state bits (the file's), and back. */
 void pd_half_set_state(pd_half_bonds *h, const pd_bonds *b, const uint64_t *intact);
 void pd_half_expand(const pd_half_bonds *h, const pd_bonds *b, uint64_t *intact);
+/* pd_damage of the half bonds' own bits, bit for bit, without expanding
+ * them into directed bits: where every volume is equal (a sum of m volumes
+ * is then the m-th running sum, as pd_damage counts), the intact bonds of
+ * each particle counted over the half bonds.  1 done; 0 (unequal volumes,
+ * a piece of a body, no lists, out of memory): pd_damage is the way. */
+int pd_half_damage(const pd_particles *p, const pd_bonds *b, const pd_half_bonds *h,
+                   double *damage);
 /* Break every bond of particle i (both halves). */
 void pd_half_break_all(pd_half_bonds *h, const pd_bonds *b, int64_t i);
 /* The half bond i-j (i < j): its index, or -1 when there is none. */

@@ -468,11 +468,182 @@ PMB_TARGET_AVX512 static void pmb_block512(pd_sim *sim, int64_t lo, int64_t hi,
     else
         PMB_ROWS(PD_BONDS_ELASTIC, 0);
 }
+
+/* The energies in the rows (rows_energy): h->pack holds each particle's
+ * position and, in the place of its s0, its volume.  Row i's partners j
+ * are loaded and transposed as pmb_row512 does. */
+PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
+rows_partners(const double *pk, const int32_t *nb, int64_t i, int64_t k, int m, int64_t jj[8],
+              __m512d *xj, __m512d *yj, __m512d *zj, __m512d *vj)
+{
+    __m256d row[8];
+    for (int l = 0; l < 8; l++) { /* a lane past the row reads its own row */
+        jj[l] = l < m ? nb[k + l] : i;
+        row[l] = _mm256_load_pd(pk + 8 * jj[l]);
+    }
+    rows_to_lanes(row, xj, yj, zj, vj);
+}
+
+/* The elastic energy of the intact half bonds of row i, pmb_energy_uniform's
+ * 1/4 c s^2 |xi| nu_ij V_i V_j to i and 1/4 c s^2 |xi| nu_ji V_j V_i to j
+ * (w = c V nu holds c, nu and the other end's volume): i's summed in
+ * registers over the row, each partner's added to e[j] in bond order. */
+PMB_TARGET_AVX512 static void energy_row512(const pd_sim *sim, int64_t i, double *e,
+                                            int64_t nwords)
+{
+    const pd_half_bonds *h = &sim->half;
+    const double *restrict pk = h->pack;
+    const double *restrict len = h->length, *restrict wij = h->w_ij, *restrict wji = h->w_ji;
+    const int64_t k1 = h->offset[i + 1];
+    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+    const __m512d vnz = _mm512_set1_pd(PD_NEAR_ZERO), quarter = _mm512_set1_pd(0.25);
+    const __m512d yi0 = _mm512_set1_pd(pk[8 * i]), yi1 = _mm512_set1_pd(pk[8 * i + 1]),
+                  yi2 = _mm512_set1_pd(pk[8 * i + 2]);
+    __m512d own = zero;
+    for (int64_t k = h->offset[i]; k < k1; k += 8) {
+        const int m = k1 - k < 8 ? (int)(k1 - k) : 8;
+        const __mmask8 act = (__mmask8)(m == 8 ? 0xff : (1u << m) - 1);
+        const __mmask8 kmu = (__mmask8)(act & bits8(h->intact, k, nwords));
+        int64_t jj[8];
+        __m512d xj, yj, zj, vj;
+        rows_partners(pk, h->neighbor, i, k, m, jj, &xj, &yj, &zj, &vj);
+        const __m512d L = _mm512_mask_loadu_pd(one, act, len + k);
+        const __m512d dx = _mm512_sub_pd(xj, yi0), dy = _mm512_sub_pd(yj, yi1),
+                      dz = _mm512_sub_pd(zj, yi2);
+        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(
+            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz)));
+        __m512d dr = _mm512_sub_pd(r, L);
+        dr = _mm512_mask_mov_pd(dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), vnz, _CMP_LT_OQ), zero);
+        const __m512d s = _mm512_div_pd(dr, L);
+        /* 1/4 s^2 |xi|, 0 for a broken bond */
+        const __m512d x = _mm512_maskz_mul_pd(kmu, _mm512_mul_pd(_mm512_mul_pd(quarter, s), s), L);
+        own = _mm512_add_pd(own, _mm512_mul_pd(x, _mm512_maskz_loadu_pd(act, wij + k)));
+        double to[8];
+        _mm512_storeu_pd(to, _mm512_mul_pd(_mm512_mul_pd(x, _mm512_maskz_loadu_pd(act, wji + k)),
+                                           vj));
+        for (int l = 0; l < m; l++)
+            e[jj[l]] += to[l];
+    }
+    e[i] += _mm512_reduce_add_pd(own) * pk[8 * i + 3];
+}
+
+/* The contact energy of the pairs of row i (intact or not; neither end
+ * lost): pd_half_contact_energy's 1/4 (c_S/delta) (d - r)^2 V_i V_j to
+ * each end, i's summed over the row in bond order.  Pairs closer than d
+ * are rare: the lanes compare r^2 with d^2 (d's bound over the radii,
+ * h->contact_cap) and only those within it are looked at one by one. */
+PMB_TARGET_AVX512 static void contact_row512(const pd_sim *sim, int64_t i, double *e)
+{
+    const pd_half_bonds *h = &sim->half;
+    const double *restrict pk = h->pack, *len = h->length, *rad = sim->p->radius;
+    const double kc = PD_CONTACT_SCALE * sim->sc.c / sim->b->horizon;
+    const int64_t k1 = h->offset[i + 1];
+    const __m512d one = _mm512_set1_pd(1.0), vref = _mm512_set1_pd(PD_CONTACT_REF_FRAC),
+                  vcap = _mm512_set1_pd(h->contact_cap);
+    const __m512d yi0 = _mm512_set1_pd(pk[8 * i]), yi1 = _mm512_set1_pd(pk[8 * i + 1]),
+                  yi2 = _mm512_set1_pd(pk[8 * i + 2]);
+    if (sim->lost && sim->lost[i])
+        return;
+    double own = 0;
+    for (int64_t k = h->offset[i]; k < k1; k += 8) {
+        const int m = k1 - k < 8 ? (int)(k1 - k) : 8;
+        const __mmask8 act = (__mmask8)(m == 8 ? 0xff : (1u << m) - 1);
+        int64_t jj[8];
+        __m512d xj, yj, zj, vj;
+        rows_partners(pk, h->neighbor, i, k, m, jj, &xj, &yj, &zj, &vj);
+        const __m512d dx = _mm512_sub_pd(xj, yi0), dy = _mm512_sub_pd(yj, yi1),
+                      dz = _mm512_sub_pd(zj, yi2);
+        const __m512d r2 = _mm512_add_pd(
+            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz));
+        const __m512d d =
+            _mm512_min_pd(_mm512_mul_pd(vref, _mm512_mask_loadu_pd(one, act, len + k)), vcap);
+        const __mmask8 near = _mm512_mask_cmp_pd_mask(act, r2, _mm512_mul_pd(d, d), _CMP_LT_OQ);
+        if (!near)
+            continue;
+        double rr[8];
+        _mm512_storeu_pd(rr, r2);
+        for (int l = 0; l < m; l++) {
+            const int64_t j = jj[l];
+            if (!((near >> l) & 1) || (sim->lost && sim->lost[j]))
+                continue;
+            const double d0 = PD_CONTACT_REF_FRAC * len[k + l],
+                         d1 = PD_CONTACT_RADIUS_FAC * (rad[i] + rad[j]);
+            const double dl = d0 < d1 ? d0 : d1, rl = sqrt(rr[l]);
+            if (!(rl < dl))
+                continue;
+            const double x = 0.25 * kc * (dl - rl) * (dl - rl);
+            own += x * pk[8 * j + 3];
+            e[j] += x * pk[8 * i + 3] * pk[8 * j + 3];
+        }
+    }
+    e[i] += own * pk[8 * i + 3];
+}
+
+PMB_TARGET_AVX512 static void energy_block512(const pd_sim *sim, int64_t lo, int64_t hi,
+                                              int contact, double *e)
+{
+    const int64_t nwords = pd_bits_words(sim->half.count);
+    for (int64_t i = lo; i < hi; i++)
+        if (contact)
+            contact_row512(sim, i, e);
+        else
+            energy_row512(sim, i, e, nwords);
+}
 #endif
+
+/* The rows [*lo, *hi) of block blk that the list's passes walk: the whole
+ * block, but a piece's block below its own from its first row with a
+ * partner of the piece's own (pd_half_bonds.clip; the partners ascend). */
+static void block_rows(const pd_half_bonds *h, int64_t blk, int64_t n, int64_t *lo, int64_t *hi)
+{
+    *lo = blk * h->block;
+    *hi = *lo + h->block < n ? *lo + h->block : n;
+    if (blk == h->walk_lo && h->clip > 0)
+        while (*lo < *hi && (h->offset[*lo + 1] == h->offset[*lo] ||
+                             h->neighbor[h->offset[*lo + 1] - 1] < h->clip))
+            (*lo)++;
+}
+
+/* e_i += the elastic energy (contact 0) or the contact energy (1) of
+ * particle i in the AVX-512 rows, where this run has them: 1, else 0 (the
+ * families then).  A pass of the half bonds, each bond once for both ends,
+ * in the blocks' order as the forces are (the same sums at any thread
+ * count); h->pack, the rows' scratch, takes the positions and volumes. */
+static int rows_energy(const pd_sim *sim, double *e, int contact)
+{
+#if PD_AVX512_KERNELS
+    const pd_half_bonds *h = &sim->half;
+    if (!h->pack || (!contact && pd_scene_has_laws(&sim->sc)) || (contact && !h->contact))
+        return 0;
+    double *pk = h->pack;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < sim->n; i++) {
+        pk[8 * i] = sim->y[0][i];
+        pk[8 * i + 1] = sim->y[1][i];
+        pk[8 * i + 2] = sim->y[2][i];
+        pk[8 * i + 3] = sim->p->volume[i];
+    }
+    for (int phase = 0; phase < 2; phase++) {
+        const int64_t first = h->walk_lo + ((h->blk0 + h->walk_lo + phase) & 1);
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int64_t blk = first; blk < h->walk; blk += 2) {
+            int64_t lo, hi;
+            block_rows(h, blk, sim->n, &lo, &hi);
+            energy_block512(sim, lo, hi, contact, e);
+        }
+    }
+    return 1;
+#else
+    (void)sim;
+    (void)e;
+    (void)contact;
+    return 0;
+#endif
+}
 
 void pd_half_contact_energy(const pd_sim *sim, double *e)
 {
-    if (!sim->half.contact)
+    if (!sim->half.contact || rows_energy(sim, e, 1))
         return;
     const pd_bonds *b = sim->b;
     const double k = PD_CONTACT_SCALE * sim->sc.c / b->horizon;
@@ -554,11 +725,8 @@ static void pmb_blocks(pd_sim *sim, pd_bond_mode failure)
         const int64_t first = h->walk_lo + ((h->blk0 + h->walk_lo + phase) & 1);
 #pragma omp parallel for schedule(dynamic, 1)
         for (int64_t blk = first; blk < h->walk; blk += 2) {
-            int64_t lo = blk * h->block, hi = lo + h->block < sim->n ? lo + h->block : sim->n;
-            if (blk == h->walk_lo && h->clip > 0)
-                while (lo < hi && (h->offset[lo + 1] == h->offset[lo] ||
-                                   h->neighbor[h->offset[lo + 1] - 1] < h->clip))
-                    lo++;
+            int64_t lo, hi;
+            block_rows(h, blk, sim->n, &lo, &hi);
             if (failure)
                 h->released[blk] = 0;
 #if PD_AVX512_KERNELS
@@ -822,7 +990,7 @@ static void pmb_energy(const pd_sim *sim, void *state, double *e)
         pd_grid_pmb_energy(sim, e);
     else if (pd_scene_has_laws(&sim->sc))
         pmb_energy_laws(sim, e);
-    else
+    else if (!rows_energy(sim, e, 0))
         pmb_energy_uniform(sim, state, e);
 }
 

@@ -844,7 +844,9 @@ pd_status pd_sim_damage_stats(const pd_sim *sim, double threshold, double *max_d
     }
     if (dmg == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the damage");
-    pd_damage(sim->p, sim->b, pd_sim_intact(sim), dmg);
+    /* the bond list's own bits where they do (no directed bits made) */
+    if (pc || sim->grid || !pd_half_damage(sim->p, sim->b, &sim->half, dmg))
+        pd_damage(sim->p, sim->b, pd_sim_intact(sim), dmg);
     pd_status s = pd_sim_damage_stats_of(sim, dmg, threshold, max_damage, above);
     free(dmg);
     return s;
