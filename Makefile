@@ -106,6 +106,10 @@ bin/%: cmd/%.py lib/pd.h
 	chmod 755 $@.tmp
 	mv $@.tmp $@
 
+# The bench's timing of the bond kernel alone (share/bench.sh, "passes").
+share/passes: share/passes.c lib/libpd.a $(LIB_HDR)
+	$(CC) $(PD_CFLAGS) $(CFLAGS) -o $@ $< lib/libpd.a $(PD_LIBS)
+
 bin/test-%: tests/unit/%.c tests/unit/check.h lib/libpd.a $(LIB_HDR)
 	@mkdir -p bin
 	$(CC) $(PD_CFLAGS) $(CFLAGS) -o $@ $< lib/libpd.a $(PD_LIBS)
@@ -114,7 +118,7 @@ deps:
 	@sh share/install-deps.sh
 
 check: deps
-	$(MAKE) all $(UNIT_BIN)
+	$(MAKE) all $(UNIT_BIN) share/passes
 	$(MAKE) test
 
 test: layers unit bats
@@ -137,7 +141,7 @@ demo: deps
 	$(MAKE) -C examples/lammps-impact demo
 
 bench: deps
-	$(MAKE) all
+	$(MAKE) all share/passes
 	sh share/bench.sh
 
 # The readers under libFuzzer (clang), AddressSanitizer and UBSan for
@@ -180,4 +184,4 @@ uninstall:
 	-rmdir $(DESTDIR)$(SHAREDIR)/python $(DESTDIR)$(SHAREDIR) 2>/dev/null
 
 clean:
-	rm -rf bin lib/*/*.o lib/libpd.a mpi
+	rm -rf bin lib/*/*.o lib/libpd.a mpi share/passes

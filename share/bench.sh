@@ -28,7 +28,9 @@
 #       and the peak FMA rate on BENCH_THREADS threads; the bond kernel's
 #       bytes and flops per bond (counted in README.md, "Performance")
 #       times the bonds of (a) over its "bonds" time are printed as
-#       fractions of them;
+#       fractions of them, and so are those of the kernel alone
+#       (share/passes.c, built by make bench: 200 bond passes of the seed
+#       in one process, the best and the median pass);
 #   (e) scaling with size ("scaling"): the impact scene on disks of about
 #       BENCH_SIZES particles (default "25k 100k 400k 1.6M"; a larger disk
 #       with the same spacing and thickness, radius 37 mm times the square
@@ -402,6 +404,10 @@ if ! skip roofline; then
         die "cannot build share/stream.c with $CC"
     }
     OMP_NUM_THREADS=$THREADS OMP_PROC_BIND=close ./stream >stream.out || die "stream failed"
+    # the bond kernel alone, best and median of 200 passes (share/passes.c)
+    [ -x "$ROOT/share/passes" ] || die "$ROOT/share/passes not built (make share/passes; make bench builds it)"
+    echo "$prog: timing 200 bond passes of model.h5 alone (share/passes, $THREADS threads)" >&2
+    "$ROOT/share/passes" model.h5 "$THREADS" 200 >passes.out || die "share/passes failed"
 fi
 
 # --- (e) scaling with size ----------------------------------------------------
@@ -774,6 +780,17 @@ if ! skip roofline; then
         roof = ai * bw < fl ? ai * bw : fl
         printf "  roofline bound %.3g bonds/s (%s-bound): achieved %.0f%% of it\n",
             roof / ff, ai * bw < fl ? "memory" : "compute", 100 * rate * ff / roof
+    }'
+    # the kernel alone: its best pass against the roofs' best (both the
+    # best of their repetitions), its median pass the hour the bench ran
+    read -r _ kind _ _ _ pb _ best _ median <passes.out || die "cannot read passes.out"
+    awk -v bw="$bw" -v fl="$fl" -v b="$pb" -v best="$best" -v med="$median" -v kind="$kind" 'BEGIN {
+        ff = kind == "stencil" ? 29 : 31
+        printf "  the kernel alone (share/passes: the bond pass of model.h5 with failure and contact,\n"
+        printf "  every bond stretched, no break; 200 passes): best %.2f ms a pass, %.3f ns per bond,\n",
+            1e3 * best, 1e9 * best / b
+        printf "  %.1f GFLOP/s = %.0f%% of the FMA peak; median %.2f ms, %.0f%%\n",
+            ff * b / best / 1e9, 100 * ff * b / best / fl, 1e3 * med, 100 * ff * b / med / fl
     }'
 fi
 

@@ -1,12 +1,15 @@
 #!/usr/bin/env bats
 # share/bench.sh (make bench) without running it: its argument checks, and
 # share/stream.c, the roofline's bandwidth and flop-rate program, built and
-# run small.  The bench itself takes minutes and has no test.
+# run small, and share/passes (make check builds it), the timing of the
+# bond kernel alone, on a small model.  The bench itself takes minutes and
+# has no test.
 
 load test_helper
 
 BENCH="$BATS_TEST_DIRNAME/../share/bench.sh"
 STREAM_C="$BATS_TEST_DIRNAME/../share/stream.c"
+PASSES="$BATS_TEST_DIRNAME/../share/passes"
 
 setup() {
     cd "$BATS_TEST_TMPDIR"
@@ -25,6 +28,38 @@ setup() {
     echo "$output" | awk '
         $1 == "triad_bytes_per_s" { b = $2 } $1 == "fma_flops_per_s" { f = $2 }
         END { exit !(b > 0 && b < 1e13 && f > 0 && f < 1e14) }'
+}
+
+@test "share/passes times the bond passes of a model: its counts, best <= median" {
+    [ -x "$PASSES" ] || fail "share/passes is not built (make share/passes)"
+    pd-lattice -q --spacing 0.001 --density 2200 --box 0,0.02,0,0.006,0,0.005 -o lattice.h5
+    pd-bonds -q --horizon 0.0030001 lattice.h5 -o model.h5
+    n=$(h5ls model.h5/particles/id | sed -n 's/.*Dataset {\([0-9]*\).*/\1/p')
+    b=$(h5dump -a /bonds/count model.h5 | sed -n 's/^ *(0): \([0-9]*\) *$/\1/p')
+    run "$PASSES" model.h5 2 5
+    assert_success
+    assert_output --regexp "^kernel stencil particles $n bonds $((b / 2)) best [0-9.]+ median [0-9.]+\$"
+    echo "$output" | awk '{ exit !($8 > 0 && $8 <= $10 && $10 < 10) }'
+    # a body off the lattice: the bond list
+    pd-lattice -q --spacing 0.001 --density 2200 --box 0,0.02,0,0.006,0,0.005 --perturb 1e-4 \
+        -o perturbed.h5
+    pd-bonds -q --horizon 0.0030001 perturbed.h5 -o p-model.h5
+    run "$PASSES" p-model.h5 1 3
+    assert_success
+    assert_output --regexp "^kernel list particles $n bonds [0-9]+ best "
+}
+
+@test "share/passes: bad arguments are usage errors, a missing model one line" {
+    [ -x "$PASSES" ] || fail "share/passes is not built (make share/passes)"
+    run "$PASSES" model.h5 2
+    assert_failure 2
+    assert_output --partial "usage: passes MODEL.h5 THREADS PASSES"
+    run "$PASSES" model.h5 0 5
+    assert_failure 2
+    run --separate-stderr "$PASSES" nothing.h5 1 5
+    assert_failure 1
+    [ "${#stderr_lines[@]}" -eq 1 ]
+    [[ "$stderr" == "passes: nothing.h5: "* ]]
 }
 
 @test "share/stream.c: bad arguments are usage errors" {
