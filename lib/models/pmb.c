@@ -531,7 +531,8 @@ PMB_TARGET_AVX512 static void energy_row512(const pd_sim *sim, int64_t i, double
  * lost): pd_half_contact_energy's 1/4 (c_S/delta) (d - r)^2 V_i V_j to
  * each end, i's summed over the row in bond order.  Pairs closer than d
  * are rare: the lanes compare r^2 with d^2 (d's bound over the radii,
- * h->contact_cap) and only those within it are looked at one by one. */
+ * h->contact_cap; d^2 enlarged by 1e-12, so that rounding drops no pair)
+ * and only those within it are looked at one by one. */
 PMB_TARGET_AVX512 static void contact_row512(const pd_sim *sim, int64_t i, double *e)
 {
     const pd_half_bonds *h = &sim->half;
@@ -540,6 +541,8 @@ PMB_TARGET_AVX512 static void contact_row512(const pd_sim *sim, int64_t i, doubl
     const int64_t k1 = h->offset[i + 1];
     const __m512d one = _mm512_set1_pd(1.0), vref = _mm512_set1_pd(PD_CONTACT_REF_FRAC),
                   vcap = _mm512_set1_pd(h->contact_cap);
+    /* d^2 a little enlarged: no pair with r < d has r^2 above it */
+    const __m512d enlarge = _mm512_set1_pd(1.0 + 1e-12);
     const __m512d yi0 = _mm512_set1_pd(pk[8 * i]), yi1 = _mm512_set1_pd(pk[8 * i + 1]),
                   yi2 = _mm512_set1_pd(pk[8 * i + 2]);
     if (sim->lost && sim->lost[i])
@@ -557,7 +560,8 @@ PMB_TARGET_AVX512 static void contact_row512(const pd_sim *sim, int64_t i, doubl
             _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz));
         const __m512d d =
             _mm512_min_pd(_mm512_mul_pd(vref, _mm512_mask_loadu_pd(one, act, len + k)), vcap);
-        const __mmask8 near = _mm512_mask_cmp_pd_mask(act, r2, _mm512_mul_pd(d, d), _CMP_LT_OQ);
+        const __mmask8 near = _mm512_mask_cmp_pd_mask(
+            act, r2, _mm512_mul_pd(_mm512_mul_pd(d, d), enlarge), _CMP_LT_OQ);
         if (!near)
             continue;
         double rr[8];
