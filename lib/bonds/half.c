@@ -41,6 +41,8 @@ void pd_half_free(pd_half_bonds *h)
     free(h->cursor);
     free(h->kfail);
     free(h->pack);
+    free(h->eb);
+    free(h->ec);
 }
 
 /* The state bits of row i's half bonds (i-j, j > i: the bit of its copy

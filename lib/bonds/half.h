@@ -54,6 +54,13 @@ typedef struct {
                           configuration, m                               */
     double contact_cap;/* with `contact`: 1.35 (r_i + r_j) when every node
                           radius is the same, else +inf, m               */
+    double *eb, *ec;   /* n each, or NULL (the AVX-512 rows): each
+                          particle's elastic and contact energy, J, as a
+                          bond pass counted them (lib/models/pmb.c)      */
+    int energy_ok;     /* they are those of step energy_step, with the
+                          bits at energy_epoch                           */
+    int64_t energy_step;
+    uint64_t energy_epoch;
 } pd_half_bonds;
 /* The half bonds of b: rows, partners and state (what every kernel needs);
  * lib/models/pmb.c's pd_half_weights adds the lengths and the weights

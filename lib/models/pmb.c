@@ -30,14 +30,10 @@
 #include <stdlib.h>
 
 #include "models/model.h"
+#include "models/pmb_rows.h"
 #include "stencil/grid.h"
 
 #define PMB_CHUNK 256 /* bonds per vector pass */
-
-/* The rows in AVX-512 (pmb_row512; PD_AVX512_KERNELS, state/sim.h) are
- * taken where the processor has AVX-512 F, VL and DQ and PD_NO_AVX512 is
- * not set; any other build or processor walks pmb_row. */
-#define PMB_TARGET_AVX512 __attribute__((target("avx512f,avx512vl,avx512dq")))
 
 pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h)
 {
@@ -79,7 +75,7 @@ pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd
 
 /* The elastic energy of half bond k of row i, J: 1/2 c s^2 |xi| nu V_i V_j,
  * with the mean of nu_ij and nu_ji (w = c V nu holds the rest). */
-static double bond_energy(const pd_sim *sim, int64_t i, int64_t k)
+double pmb_bond_energy(const pd_sim *sim, int64_t i, int64_t k)
 {
     const pd_half_bonds *h = &sim->half;
     const int32_t j = h->neighbor[k];
@@ -170,7 +166,7 @@ static inline __attribute__((always_inline)) void pmb_row(pd_sim *sim, int64_t i
             for (int64_t q = 0; q < m; q++)
                 if (brk[q] > 0 && pd_sim_may_break(sim, i, nb[c0 + q])) {
                     pd_bond_break(h->intact, c0 + q);
-                    *released += bond_energy(sim, i, c0 + q);
+                    *released += pmb_bond_energy(sim, i, c0 + q);
                 }
     }
     fx[i] += ax;
@@ -202,452 +198,9 @@ PD_VECTOR_CLONES static void pmb_block_failure_laws(pd_sim *sim, int64_t lo, int
         pmb_row(sim, i, PD_BONDS_FAILURE_LAWS, released);
 }
 
-#if PD_AVX512_KERNELS
-/* The bond list in AVX-512, 8 bonds of a row at a time.  The scalar-looking
- * list kernel above gathers each partner's position and s0 from four
- * arrays and scatters its force and new s0 into four more, one element at
- * a time: on a processor whose gathers are slow (AMD Zen 4: about 10 cycles
- * for one of 8 doubles) those moves cost more than the arithmetic.  Here
- * each particle's position and s0 sit in one 32-byte row of h->pack, and
- * its force and new s0 in the next 32 bytes (one cache line a particle):
- * a partner is one aligned 256-bit load, eight partners are turned into
- * four vectors by a transpose in registers (about twice as fast as four
- * gathers on Zen 4), and the partners' updates go back through the
- * inverse transpose as one 256-bit read-modify-write each.  Own sums stay
- * in registers over the row.  The partners of one row are distinct, so
- * the 8 lanes never update one particle twice.  The arithmetic is pmb_row's
- * with one division for its three: q = 1/(|xi| r), the force w dr q and
- * the stretch dr (r q) (the stencil too takes the stretch as a product,
- * dr times 1/|xi|), so the two kernels agree to rounding; each is the same
- * at any thread count. */
-
-/* 8 rows of 4 (a_l b_l c_l d_l, lanes l = 0..7) into 4 vectors of 8. */
-PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
-rows_to_lanes(const __m256d r[8], __m512d *a, __m512d *b, __m512d *c, __m512d *d)
-{
-    const __m512d p0 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[0]), r[4], 1);
-    const __m512d p1 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[1]), r[5], 1);
-    const __m512d p2 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[2]), r[6], 1);
-    const __m512d p3 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[3]), r[7], 1);
-    const __m512d q0 = _mm512_unpacklo_pd(p0, p1), q1 = _mm512_unpackhi_pd(p0, p1);
-    const __m512d q2 = _mm512_unpacklo_pd(p2, p3), q3 = _mm512_unpackhi_pd(p2, p3);
-    const __m512i lo = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0),
-                  hi = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
-    *a = _mm512_permutex2var_pd(q0, lo, q2);
-    *c = _mm512_permutex2var_pd(q0, hi, q2);
-    *b = _mm512_permutex2var_pd(q1, lo, q3);
-    *d = _mm512_permutex2var_pd(q1, hi, q3);
-}
-
-/* The inverse: 4 vectors of 8 into 8 rows of 4. */
-PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
-lanes_to_rows(__m512d a, __m512d b, __m512d c, __m512d d, __m256d r[8])
-{
-    const __m512d q0 = _mm512_unpacklo_pd(a, b), q1 = _mm512_unpackhi_pd(a, b);
-    const __m512d q2 = _mm512_unpacklo_pd(c, d), q3 = _mm512_unpackhi_pd(c, d);
-    const __m512i lo = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0),
-                  hi = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
-    const __m512d p0 = _mm512_permutex2var_pd(q0, lo, q2), p2 = _mm512_permutex2var_pd(q0, hi, q2);
-    const __m512d p1 = _mm512_permutex2var_pd(q1, lo, q3), p3 = _mm512_permutex2var_pd(q1, hi, q3);
-    r[0] = _mm512_castpd512_pd256(p0);
-    r[4] = _mm512_extractf64x4_pd(p0, 1);
-    r[1] = _mm512_castpd512_pd256(p1);
-    r[5] = _mm512_extractf64x4_pd(p1, 1);
-    r[2] = _mm512_castpd512_pd256(p2);
-    r[6] = _mm512_extractf64x4_pd(p2, 1);
-    r[3] = _mm512_castpd512_pd256(p3);
-    r[7] = _mm512_extractf64x4_pd(p3, 1);
-}
-
-/* The state bits of bonds k .. k+7 (those past the last word read 0). */
-static inline unsigned bits8(const uint64_t *bits, int64_t k, int64_t nwords)
-{
-    const int64_t w = k >> 6;
-    const int sh = (int)(k & 63);
-    uint64_t v = __atomic_load_n(&bits[w], __ATOMIC_RELAXED) >> sh;
-    if (sh > 56 && w + 1 < nwords)
-        v |= __atomic_load_n(&bits[w + 1], __ATOMIC_RELAXED) << (64 - sh);
-    return (unsigned)(v & 0xff);
-}
-
-/* The contact of the pairs of `near` (lanes of bonds k.. of row i closer
- * than 0.9 |xi| and the common cap): seed 000 eqs. 13-15 as
- * lib/effects/contact.c computes them, each pair once for both ends, in
- * lane order, into h->pack.  Lost particles are out of contact. */
-static void rows_contact(pd_sim *sim, int64_t i, int64_t k, const int64_t *jj, unsigned near,
-                         const double *r, const double *dx, const double *dy, const double *dz)
-{
-    double *pk = sim->half.pack;
-    const double *rad = sim->p->radius, *V = sim->p->volume, *len = sim->half.length;
-    const double kc = PD_CONTACT_SCALE * sim->sc.c / sim->b->horizon;
-    for (int l = 0; l < 8; l++) {
-        const int64_t j = jj[l];
-        if (!((near >> l) & 1) || (sim->lost && (sim->lost[i] || sim->lost[j])))
-            continue;
-        const double d = fmin(PD_CONTACT_REF_FRAC * len[k + l],
-                              PD_CONTACT_RADIUS_FAC * (rad[i] + rad[j]));
-        if (!(r[l] < d) || !(r[l] > 0.0))
-            continue;
-        const double fs = kc * (r[l] - d) / r[l];
-        pk[8 * i + 4] += fs * V[j] * dx[l];
-        pk[8 * i + 5] += fs * V[j] * dy[l];
-        pk[8 * i + 6] += fs * V[j] * dz[l];
-        pk[8 * j + 4] -= fs * V[i] * dx[l];
-        pk[8 * j + 5] -= fs * V[i] * dy[l];
-        pk[8 * j + 6] -= fs * V[i] * dz[l];
-    }
-}
-
-#define PMB_ROW_CHUNKS 32 /* chunks of 8 whose breaks a row keeps to the end */
-
-/* The bonds of `brks` (lanes of the n chunks of 8 from bond k of row i)
- * that may break (--no-failure) break, their energy released, in bond
- * order. */
-static void row_breaks(pd_sim *sim, int64_t i, int64_t k, const uint8_t *brks, int n,
-                       double *released)
-{
-    for (int c = 0; c < n; c++)
-        for (int l = 0; brks[c] >> l; l++) {
-            const int64_t b = k + 8 * c + l;
-            if (((brks[c] >> l) & 1) && pd_sim_may_break(sim, i, sim->half.neighbor[b])) {
-                pd_bond_break(sim->half.intact, b);
-                *released += bond_energy(sim, i, b);
-            }
-        }
-}
-
-/* pmb_row on h->pack (its comment holds the maths), 8 bonds at a time; a
- * row's last 8 are masked.  With `failure` the bonds whose stretch breaks
- * them are kept a chunk's lanes at a time and broken after the row's
- * chunks (row_breaks): a chunk reads only its own bonds' bits. */
-PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
-pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact, const int sym,
-           double *released, int64_t nwords)
-{
-    pd_half_bonds *h = &sim->half;
-    double *restrict pk = h->pack;
-    const double *restrict len = h->length, *restrict wij = h->w_ij, *restrict wji = h->w_ji;
-    const double *restrict kf = h->kfail;
-    const int32_t *restrict nb = h->neighbor;
-    const int64_t k1 = h->offset[i + 1];
-    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
-    const __m512d ninf = _mm512_set1_pd(-INFINITY), vnz = _mm512_set1_pd(PD_NEAR_ZERO);
-    const __m512d vs00 = _mm512_set1_pd(sim->sc.s00), valpha = _mm512_set1_pd(sim->sc.alpha);
-    const __m512d vref = _mm512_set1_pd(PD_CONTACT_REF_FRAC), vcap = _mm512_set1_pd(h->contact_cap);
-    const __m512d yi0 = _mm512_set1_pd(pk[8 * i]), yi1 = _mm512_set1_pd(pk[8 * i + 1]),
-                  yi2 = _mm512_set1_pd(pk[8 * i + 2]), s0i = _mm512_set1_pd(pk[8 * i + 3]);
-    __m512d ax = zero, ay = zero, az = zero, sm = ninf;
-    uint8_t brks[PMB_ROW_CHUNKS]; /* each chunk's breaking lanes, from kbrk on */
-    int nbrk = 0;
-    int64_t kbrk = h->offset[i];
-    unsigned anybrk = 0;
-    for (int64_t k = h->offset[i]; k < k1; k += 8) {
-        const int m = k1 - k < 8 ? (int)(k1 - k) : 8;
-        const __mmask8 act = (__mmask8)(m == 8 ? 0xff : (1u << m) - 1);
-        const __mmask8 kmu = (__mmask8)(act & bits8(h->intact, k, nwords));
-        int64_t jj[8];
-        __m256d row[8];
-        for (int l = 0; l < 8; l++) { /* a lane past the row reads its own row */
-            jj[l] = l < m ? nb[k + l] : i;
-            row[l] = _mm256_load_pd(pk + 8 * jj[l]);
-        }
-        __m512d xj, yj, zj, sj;
-        rows_to_lanes(row, &xj, &yj, &zj, &sj);
-        const __m512d L = _mm512_mask_loadu_pd(one, act, len + k);
-        const __m512d dx = _mm512_sub_pd(xj, yi0), dy = _mm512_sub_pd(yj, yi1),
-                      dz = _mm512_sub_pd(zj, yi2);
-        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(
-            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz)));
-        __m512d dr = _mm512_sub_pd(r, L);
-        dr = _mm512_mask_mov_pd(dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), vnz, _CMP_LT_OQ), zero);
-        /* one division for both: q = 1/(|xi| r), s/r = dr q, s = dr (r q)
-         * (dr/|xi| itself where r = 0) */
-        const __mmask8 pos = _mm512_mask_cmp_pd_mask(act, r, zero, _CMP_GT_OQ);
-        const __m512d q = _mm512_maskz_div_pd(pos, one, _mm512_mul_pd(L, r));
-        const __m512d g = _mm512_maskz_mul_pd((__mmask8)(kmu & pos), dr, q);
-        /* the force on i, and (the same unless the weights differ) j's */
-        const __m512d fi = _mm512_mul_pd(_mm512_maskz_loadu_pd(act, wij + k), g);
-        const __m512d gx = _mm512_mul_pd(fi, dx), gy = _mm512_mul_pd(fi, dy),
-                      gz = _mm512_mul_pd(fi, dz);
-        ax = _mm512_add_pd(ax, gx);
-        ay = _mm512_add_pd(ay, gy);
-        az = _mm512_add_pd(az, gz);
-        __m512d hx = gx, hy = gy, hz = gz;
-        if (!sym) {
-            const __m512d fj = _mm512_mul_pd(_mm512_maskz_loadu_pd(act, wji + k), g);
-            hx = _mm512_mul_pd(fj, dx);
-            hy = _mm512_mul_pd(fj, dy);
-            hz = _mm512_mul_pd(fj, dz);
-        }
-        __m512d t = zero;
-        __mmask8 brk = 0;
-        if (failure) {
-            __m512d s = _mm512_mul_pd(dr, _mm512_mul_pd(r, q));
-            if ((__mmask8)(act & ~pos))
-                s = _mm512_mask_div_pd(s, (__mmask8)(act & ~pos), dr, L);
-            __m512d thr = _mm512_min_pd(s0i, sj);
-            if (failure == PD_BONDS_FAILURE_LAWS)
-                thr = _mm512_mul_pd(_mm512_maskz_loadu_pd(act, kf + k), thr);
-            brk = _mm512_mask_cmp_pd_mask(kmu, s, thr, _CMP_GT_OQ);
-            t = _mm512_mask_sub_pd(ninf, kmu, vs00, _mm512_mul_pd(valpha, s));
-            sm = _mm512_max_pd(sm, t);
-        }
-        __m256d out[8];
-        lanes_to_rows(hx, hy, hz, t, out);
-        for (int l = 0; l < m; l++) {
-            double *p = pk + 8 * jj[l] + 4;
-            const __m256d v = _mm256_load_pd(p);
-            __m256d nv = _mm256_sub_pd(v, out[l]);
-            if (failure) /* the new s0: the larger */
-                nv = _mm256_mask_max_pd(nv, 0x8, v, out[l]);
-            _mm256_store_pd(p, nv);
-        }
-        /* contact: any pair of the row, intact or not, closer than its
-         * d_ij (or, with radii of their own, than 0.9 |xi|); rare */
-        const __mmask8 near =
-            contact ? _mm512_mask_cmp_pd_mask(act, r, _mm512_min_pd(_mm512_mul_pd(vref, L), vcap),
-                                              _CMP_LT_OQ)
-                    : 0;
-        if (near) {
-            double rr[8], ex[8], ey[8], ez[8];
-            _mm512_storeu_pd(rr, r);
-            _mm512_storeu_pd(ex, dx);
-            _mm512_storeu_pd(ey, dy);
-            _mm512_storeu_pd(ez, dz);
-            rows_contact(sim, i, k, jj, near, rr, ex, ey, ez);
-        }
-        if (failure) { /* the breaks after the chunks, in bond order */
-            if (nbrk == PMB_ROW_CHUNKS) {
-                row_breaks(sim, i, kbrk, brks, nbrk, released);
-                kbrk = k;
-                nbrk = 0;
-            }
-            brks[nbrk++] = brk;
-            anybrk |= brk;
-        }
-    }
-    if (anybrk)
-        row_breaks(sim, i, kbrk, brks, nbrk, released);
-    double *p = pk + 8 * i + 4;
-    p[0] += _mm512_reduce_add_pd(ax);
-    p[1] += _mm512_reduce_add_pd(ay);
-    p[2] += _mm512_reduce_add_pd(az);
-    if (failure) {
-        const double s0 = _mm512_reduce_max_pd(sm);
-        p[3] = s0 > p[3] ? s0 : p[3];
-    }
-}
-
-/* The rows of a block, a variant per failure mode, contact and symmetric
- * weights (w_ji the same array as w_ij: one force for both ends). */
-#define PMB_ROWS(mode, contact)                                                                \
-    do {                                                                                       \
-        if (sim->half.w_ji == sim->half.w_ij)                                                  \
-            for (int64_t i = lo; i < hi; i++)                                                  \
-                pmb_row512(sim, i, mode, contact, 1, released, nwords);                        \
-        else                                                                                   \
-            for (int64_t i = lo; i < hi; i++)                                                  \
-                pmb_row512(sim, i, mode, contact, 0, released, nwords);                        \
-    } while (0)
-
-PMB_TARGET_AVX512 static void pmb_block512(pd_sim *sim, int64_t lo, int64_t hi,
-                                           const pd_bond_mode failure, double *released)
-{
-    const int64_t nwords = pd_bits_words(sim->half.count);
-    const int contact = sim->half.contact;
-    if (failure == PD_BONDS_FAILURE_LAWS && contact)
-        PMB_ROWS(PD_BONDS_FAILURE_LAWS, 1);
-    else if (failure == PD_BONDS_FAILURE_LAWS)
-        PMB_ROWS(PD_BONDS_FAILURE_LAWS, 0);
-    else if (failure && contact)
-        PMB_ROWS(PD_BONDS_FAILURE, 1);
-    else if (failure)
-        PMB_ROWS(PD_BONDS_FAILURE, 0);
-    else if (contact)
-        PMB_ROWS(PD_BONDS_ELASTIC, 1);
-    else
-        PMB_ROWS(PD_BONDS_ELASTIC, 0);
-}
-
-/* The energies in the rows (rows_energy): h->pack holds each particle's
- * position and, in the place of its s0, its volume.  Row i's partners j
- * are loaded and transposed as pmb_row512 does. */
-PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
-rows_partners(const double *pk, const int32_t *nb, int64_t i, int64_t k, int m, int64_t jj[8],
-              __m512d *xj, __m512d *yj, __m512d *zj, __m512d *vj)
-{
-    __m256d row[8];
-    for (int l = 0; l < 8; l++) { /* a lane past the row reads its own row */
-        jj[l] = l < m ? nb[k + l] : i;
-        row[l] = _mm256_load_pd(pk + 8 * jj[l]);
-    }
-    rows_to_lanes(row, xj, yj, zj, vj);
-}
-
-/* The elastic energy of the intact half bonds of row i, pmb_energy_uniform's
- * 1/4 c s^2 |xi| nu_ij V_i V_j to i and 1/4 c s^2 |xi| nu_ji V_j V_i to j
- * (w = c V nu holds c, nu and the other end's volume): i's summed in
- * registers over the row, each partner's added to e[j] in bond order. */
-PMB_TARGET_AVX512 static void energy_row512(const pd_sim *sim, int64_t i, double *e,
-                                            int64_t nwords)
-{
-    const pd_half_bonds *h = &sim->half;
-    const double *restrict pk = h->pack;
-    const double *restrict len = h->length, *restrict wij = h->w_ij, *restrict wji = h->w_ji;
-    const int64_t k1 = h->offset[i + 1];
-    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
-    const __m512d vnz = _mm512_set1_pd(PD_NEAR_ZERO), quarter = _mm512_set1_pd(0.25);
-    const __m512d yi0 = _mm512_set1_pd(pk[8 * i]), yi1 = _mm512_set1_pd(pk[8 * i + 1]),
-                  yi2 = _mm512_set1_pd(pk[8 * i + 2]);
-    __m512d own = zero;
-    for (int64_t k = h->offset[i]; k < k1; k += 8) {
-        const int m = k1 - k < 8 ? (int)(k1 - k) : 8;
-        const __mmask8 act = (__mmask8)(m == 8 ? 0xff : (1u << m) - 1);
-        const __mmask8 kmu = (__mmask8)(act & bits8(h->intact, k, nwords));
-        int64_t jj[8];
-        __m512d xj, yj, zj, vj;
-        rows_partners(pk, h->neighbor, i, k, m, jj, &xj, &yj, &zj, &vj);
-        const __m512d L = _mm512_mask_loadu_pd(one, act, len + k);
-        const __m512d dx = _mm512_sub_pd(xj, yi0), dy = _mm512_sub_pd(yj, yi1),
-                      dz = _mm512_sub_pd(zj, yi2);
-        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(
-            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz)));
-        __m512d dr = _mm512_sub_pd(r, L);
-        dr = _mm512_mask_mov_pd(dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), vnz, _CMP_LT_OQ), zero);
-        const __m512d s = _mm512_div_pd(dr, L);
-        /* 1/4 s^2 |xi|, 0 for a broken bond */
-        const __m512d x = _mm512_maskz_mul_pd(kmu, _mm512_mul_pd(_mm512_mul_pd(quarter, s), s), L);
-        own = _mm512_add_pd(own, _mm512_mul_pd(x, _mm512_maskz_loadu_pd(act, wij + k)));
-        double to[8];
-        _mm512_storeu_pd(to, _mm512_mul_pd(_mm512_mul_pd(x, _mm512_maskz_loadu_pd(act, wji + k)),
-                                           vj));
-        for (int l = 0; l < m; l++)
-            e[jj[l]] += to[l];
-    }
-    e[i] += _mm512_reduce_add_pd(own) * pk[8 * i + 3];
-}
-
-/* The contact energy of the pairs of row i (intact or not; neither end
- * lost): pd_half_contact_energy's 1/4 (c_S/delta) (d - r)^2 V_i V_j to
- * each end, i's summed over the row in bond order.  Pairs closer than d
- * are rare: the lanes compare r^2 with d^2 (d's bound over the radii,
- * h->contact_cap; d^2 enlarged by 1e-12, so that rounding drops no pair)
- * and only those within it are looked at one by one. */
-PMB_TARGET_AVX512 static void contact_row512(const pd_sim *sim, int64_t i, double *e)
-{
-    const pd_half_bonds *h = &sim->half;
-    const double *restrict pk = h->pack, *len = h->length, *rad = sim->p->radius;
-    const double kc = PD_CONTACT_SCALE * sim->sc.c / sim->b->horizon;
-    const int64_t k1 = h->offset[i + 1];
-    const __m512d one = _mm512_set1_pd(1.0), vref = _mm512_set1_pd(PD_CONTACT_REF_FRAC),
-                  vcap = _mm512_set1_pd(h->contact_cap);
-    /* d^2 a little enlarged: no pair with r < d has r^2 above it */
-    const __m512d enlarge = _mm512_set1_pd(1.0 + 1e-12);
-    const __m512d yi0 = _mm512_set1_pd(pk[8 * i]), yi1 = _mm512_set1_pd(pk[8 * i + 1]),
-                  yi2 = _mm512_set1_pd(pk[8 * i + 2]);
-    if (sim->lost && sim->lost[i])
-        return;
-    double own = 0;
-    for (int64_t k = h->offset[i]; k < k1; k += 8) {
-        const int m = k1 - k < 8 ? (int)(k1 - k) : 8;
-        const __mmask8 act = (__mmask8)(m == 8 ? 0xff : (1u << m) - 1);
-        int64_t jj[8];
-        __m512d xj, yj, zj, vj;
-        rows_partners(pk, h->neighbor, i, k, m, jj, &xj, &yj, &zj, &vj);
-        const __m512d dx = _mm512_sub_pd(xj, yi0), dy = _mm512_sub_pd(yj, yi1),
-                      dz = _mm512_sub_pd(zj, yi2);
-        const __m512d r2 = _mm512_add_pd(
-            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz));
-        const __m512d d =
-            _mm512_min_pd(_mm512_mul_pd(vref, _mm512_mask_loadu_pd(one, act, len + k)), vcap);
-        const __mmask8 near = _mm512_mask_cmp_pd_mask(
-            act, r2, _mm512_mul_pd(_mm512_mul_pd(d, d), enlarge), _CMP_LT_OQ);
-        if (!near)
-            continue;
-        double rr[8];
-        _mm512_storeu_pd(rr, r2);
-        for (int l = 0; l < m; l++) {
-            const int64_t j = jj[l];
-            if (!((near >> l) & 1) || (sim->lost && sim->lost[j]))
-                continue;
-            const double d0 = PD_CONTACT_REF_FRAC * len[k + l],
-                         d1 = PD_CONTACT_RADIUS_FAC * (rad[i] + rad[j]);
-            const double dl = d0 < d1 ? d0 : d1, rl = sqrt(rr[l]);
-            if (!(rl < dl))
-                continue;
-            const double x = 0.25 * kc * (dl - rl) * (dl - rl);
-            own += x * pk[8 * j + 3];
-            e[j] += x * pk[8 * i + 3] * pk[8 * j + 3];
-        }
-    }
-    e[i] += own * pk[8 * i + 3];
-}
-
-PMB_TARGET_AVX512 static void energy_block512(const pd_sim *sim, int64_t lo, int64_t hi,
-                                              int contact, double *e)
-{
-    const int64_t nwords = pd_bits_words(sim->half.count);
-    for (int64_t i = lo; i < hi; i++)
-        if (contact)
-            contact_row512(sim, i, e);
-        else
-            energy_row512(sim, i, e, nwords);
-}
-#endif
-
-/* The rows [*lo, *hi) of block blk that the list's passes walk: the whole
- * block, but a piece's block below its own from its first row with a
- * partner of the piece's own (pd_half_bonds.clip; the partners ascend). */
-static void block_rows(const pd_half_bonds *h, int64_t blk, int64_t n, int64_t *lo, int64_t *hi)
-{
-    *lo = blk * h->block;
-    *hi = *lo + h->block < n ? *lo + h->block : n;
-    if (blk == h->walk_lo && h->clip > 0)
-        while (*lo < *hi && (h->offset[*lo + 1] == h->offset[*lo] ||
-                             h->neighbor[h->offset[*lo + 1] - 1] < h->clip))
-            (*lo)++;
-}
-
-/* e_i += the elastic energy (contact 0) or the contact energy (1) of
- * particle i in the AVX-512 rows, where this run has them: 1, else 0 (the
- * families then).  A pass of the half bonds, each bond once for both ends,
- * in the blocks' order as the forces are (the same sums at any thread
- * count); h->pack, the rows' scratch, takes the positions and volumes. */
-static int rows_energy(const pd_sim *sim, double *e, int contact)
-{
-#if PD_AVX512_KERNELS
-    const pd_half_bonds *h = &sim->half;
-    if (!h->pack || (!contact && pd_scene_has_laws(&sim->sc)) || (contact && !h->contact))
-        return 0;
-    double *pk = h->pack;
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++) {
-        pk[8 * i] = sim->y[0][i];
-        pk[8 * i + 1] = sim->y[1][i];
-        pk[8 * i + 2] = sim->y[2][i];
-        pk[8 * i + 3] = sim->p->volume[i];
-    }
-    for (int phase = 0; phase < 2; phase++) {
-        const int64_t first = h->walk_lo + ((h->blk0 + h->walk_lo + phase) & 1);
-#pragma omp parallel for schedule(dynamic, 1)
-        for (int64_t blk = first; blk < h->walk; blk += 2) {
-            int64_t lo, hi;
-            block_rows(h, blk, sim->n, &lo, &hi);
-            energy_block512(sim, lo, hi, contact, e);
-        }
-    }
-    return 1;
-#else
-    (void)sim;
-    (void)e;
-    (void)contact;
-    return 0;
-#endif
-}
-
 void pd_half_contact_energy(const pd_sim *sim, double *e)
 {
-    if (!sim->half.contact || rows_energy(sim, e, 1))
+    if (!sim->half.contact || pmb_rows_energy(sim, e, 1))
         return;
     const pd_bonds *b = sim->b;
     const double k = PD_CONTACT_SCALE * sim->sc.c / b->horizon;
@@ -689,7 +242,9 @@ double pd_half_contact_cap(const pd_particles *p)
     return rmin == rmax ? PD_CONTACT_RADIUS_FAC * (rmax + rmax) : INFINITY;
 }
 
-/* Does this run take the AVX-512 rows?  Then h->pack is there. */
+/* Does this run take the AVX-512 rows (lib/models/pmb_rows.c: where the
+ * processor has AVX-512 F, VL and DQ and PD_NO_AVX512 is not set; any
+ * other build or processor walks pmb_row)?  Then h->pack is there. */
 static pd_status pmb_rows_init(pd_sim *sim)
 {
 #if PD_AVX512_KERNELS
@@ -722,7 +277,7 @@ static pd_status pmb_rows_init(pd_sim *sim)
  * blocks fix, whatever the thread count.  A piece's block below its own is
  * walked from its first row with a partner of the piece's own
  * (pd_half_bonds.clip; the partners ascend). */
-static void pmb_blocks(pd_sim *sim, pd_bond_mode failure)
+static void pmb_blocks(pd_sim *sim, pd_bond_mode failure, int energy)
 {
     const pd_half_bonds *h = &sim->half;
     for (int phase = 0; phase < 2; phase++) {
@@ -730,12 +285,12 @@ static void pmb_blocks(pd_sim *sim, pd_bond_mode failure)
 #pragma omp parallel for schedule(dynamic, 1)
         for (int64_t blk = first; blk < h->walk; blk += 2) {
             int64_t lo, hi;
-            block_rows(h, blk, sim->n, &lo, &hi);
+            pmb_block_rows(h, blk, sim->n, &lo, &hi);
             if (failure)
                 h->released[blk] = 0;
 #if PD_AVX512_KERNELS
             if (h->pack) {
-                pmb_block512(sim, lo, hi, failure, &h->released[blk]);
+                pmb_rows_block(sim, lo, hi, failure, energy, &h->released[blk]);
                 continue;
             }
 #endif
@@ -777,7 +332,14 @@ static void pmb_kernel(pd_sim *sim, pd_bond_mode failure)
             sim->s0_new[i] = -INFINITY;
         tf += pd_wtime() - t0;
     }
-    pmb_blocks(sim, !failure ? PD_BONDS_ELASTIC : h->kfail ? PD_BONDS_FAILURE_LAWS : failure);
+    const int energy = pmb_rows_count(sim);
+    pmb_blocks(sim, !failure ? PD_BONDS_ELASTIC : h->kfail ? PD_BONDS_FAILURE_LAWS : failure,
+               energy);
+    if (energy) { /* the step's energies, counted */
+        sim->half.energy_ok = 1;
+        sim->half.energy_step = sim->step;
+        sim->half.energy_epoch = h->epoch;
+    }
     if (pk) /* the rows' forces added to the step's, and their new s0 */
 #pragma omp parallel for schedule(static)
         for (int64_t i = 0; i < sim->n; i++) {
@@ -994,7 +556,7 @@ static void pmb_energy(const pd_sim *sim, void *state, double *e)
         pd_grid_pmb_energy(sim, e);
     else if (pd_scene_has_laws(&sim->sc))
         pmb_energy_laws(sim, e);
-    else if (!rows_energy(sim, e, 0))
+    else if (!pmb_rows_energy(sim, e, 0))
         pmb_energy_uniform(sim, state, e);
 }
 

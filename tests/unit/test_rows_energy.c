@@ -11,7 +11,11 @@
  * family (1/4 (c_S/delta) (d - r)^2 V_i V_j, seed 000 eqs. 13-15) agree
  * with the families' sums to rounding (1e-12 of the largest); the damage
  * of the half bonds is pd_damage of the directed bits bit for bit; and
- * the energies and damage are the same bits on 1 and 2 threads.  Where
+ * the energies and damage are the same bits on 1 and 2 threads; and that
+ * a run that asks for the energies of every step before taking it
+ * (pd_sim_energy_next: the bond pass counts them, pmb_row512's `energy`)
+ * has the same energies and damage, bit for bit, as one that does not
+ * (a pass of their own, rows_energy).  Where
  * the processor has no AVX-512 (or PD_NO_AVX512 is set) the elastic
  * energies are the families' walk, and the contact of the pairs is the
  * contact list's, not checked here.
@@ -74,8 +78,8 @@ static double rel_diff(const double *a, const double *b, int64_t n)
 
 /* 30 steps of the box on `threads` threads; the energies and damage of
  * every step into e (elastic, contact, damage: 3 n a step). */
-static void run(const pd_particles *p, const pd_bonds *b, int threads, double *out, int *rows,
-                int64_t *broken, int64_t *touching)
+static void run(const pd_particles *p, const pd_bonds *b, int threads, int ask, double *out,
+                int *rows, int64_t *broken, int64_t *touching)
 {
     omp_set_num_threads(threads);
     pd_scene sc;
@@ -109,9 +113,13 @@ static void run(const pd_particles *p, const pd_bonds *b, int threads, double *o
     if (want == NULL)
         die("memory");
     *touching = 0;
+    int counted = 0;
     for (int step = 0; step < 30; step++) {
+        if (ask)
+            pd_sim_energy_next(sim);
         if (pd_sim_step(sim) != PD_OK)
             die("step");
+        counted += sim->half.energy_ok && sim->half.energy_step == sim->step;
         double *e = out + (size_t)step * 3 * n;
         memset(e, 0, (size_t)2 * n * sizeof(double));
         sim->model->force_failure->energy(sim, NULL, e);
@@ -131,6 +139,8 @@ static void run(const pd_particles *p, const pd_bonds *b, int threads, double *o
         CHECK(memcmp(e + 2 * n, want, (size_t)n * sizeof(double)) == 0,
               "step %d: the half bonds' damage is not pd_damage's", step);
     }
+    CHECK(counted == (ask && *rows ? 30 : 0), "the bond pass counted the energies of %d steps",
+          counted);
     *broken = pd_sim_broken(sim);
     free(want);
     pd_sim_free(sim);
@@ -151,26 +161,32 @@ int main(void)
         die("bonds");
     const size_t each = (size_t)30 * 3 * (size_t)p->n;
     double *one = malloc(each * sizeof(double)), *two = malloc(each * sizeof(double));
-    if (!one || !two)
+    double *asked = malloc(each * sizeof(double));
+    if (!one || !two || !asked)
         die("memory");
-    int f0 = failures, rows1, rows2;
-    int64_t broken1, broken2, touching1, touching2;
-    run(p, b, 1, one, &rows1, &broken1, &touching1);
-    run(p, b, 2, two, &rows2, &broken2, &touching2);
+    int f0 = failures, rows1, rows2, rows3;
+    int64_t broken1, broken2, broken3, touching1, touching2, touching3;
+    run(p, b, 1, 0, one, &rows1, &broken1, &touching1);
+    run(p, b, 2, 0, two, &rows2, &broken2, &touching2);
+    run(p, b, 2, 1, asked, &rows3, &broken3, &touching3);
     CHECK(broken1 > 0 && touching1 > 0, "bonds should break (%lld) and pairs touch (%lld)",
           (long long)broken1, (long long)touching1);
     CHECK(memcmp(one, two, each * sizeof(double)) == 0 && broken1 == broken2,
           "1 and 2 threads give other bits");
-    char what[320];
+    CHECK(memcmp(two, asked, each * sizeof(double)) == 0 && broken2 == broken3,
+          "the energies the bond pass counted are not those of a pass of their own");
+    char what[400];
     snprintf(what, sizeof what,
              "perturbed box, %lld particles, 30 steps (%lld bonds broken, %lld particle-steps in "
-             "contact): energies %s agree with the families' to 1e-12, the half bonds' damage is "
-             "pd_damage's, 1 and 2 threads the same bits",
+             "contact): energies %s agree with the families' to 1e-12 and, counted in the bond "
+             "pass, are those of a pass of their own bit for bit; the half bonds' damage is "
+             "pd_damage's; 1 and 2 threads the same bits",
              (long long)p->n, (long long)broken1, (long long)touching1,
              rows1 ? "in AVX-512 rows" : "(no AVX-512 here: the families' walk)");
     proved(f0, what);
     free(one);
     free(two);
+    free(asked);
     pd_bonds_free(b);
     pd_particles_free(p);
     return failures ? 1 : 0;
