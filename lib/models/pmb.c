@@ -73,21 +73,6 @@ pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd
     return PD_OK;
 }
 
-/* The elastic energy of half bond k of row i, J: 1/2 c s^2 |xi| nu V_i V_j,
- * with the mean of nu_ij and nu_ji (w = c V nu holds the rest). */
-double pmb_bond_energy(const pd_sim *sim, int64_t i, int64_t k)
-{
-    const pd_half_bonds *h = &sim->half;
-    const int32_t j = h->neighbor[k];
-    const double dx = sim->y[0][j] - sim->y[0][i], dy = sim->y[1][j] - sim->y[1][i],
-                 dz = sim->y[2][j] - sim->y[2][i];
-    double dr = sqrt(dx * dx + dy * dy + dz * dz) - h->length[k];
-    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-    const double s = dr / h->length[k];
-    const double *V = sim->p->volume;
-    return 0.25 * s * s * h->length[k] * (h->w_ij[k] * V[i] + h->w_ji[k] * V[j]);
-}
-
 /* mu[q] = the state bit of bond c0 + q, q < m (0 or 1): a word at a time,
  * its bits in a loop the compiler vectorizes. */
 static inline __attribute__((always_inline)) void chunk_states(const uint64_t *bits, int64_t c0,

@@ -10,7 +10,8 @@
 /* The rows' instruction sets: AVX-512 F, VL and DQ. */
 #define PMB_TARGET_AVX512 __attribute__((target("avx512f,avx512vl,avx512dq")))
 
-/* The elastic energy of half bond k of row i, J (pmb.c). */
+/* The elastic energy of half bond k of row i, J (pmb_rows.c; pmb.c's
+ * portable rows take it too). */
 double pmb_bond_energy(const pd_sim *sim, int64_t i, int64_t k);
 /* The rows [*lo, *hi) of block blk that the list's passes walk. */
 void pmb_block_rows(const pd_half_bonds *h, int64_t blk, int64_t n, int64_t *lo, int64_t *hi);
