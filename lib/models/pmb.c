@@ -256,37 +256,40 @@ static pd_status pmb_rows_init(pd_sim *sim)
     return PD_OK;
 }
 
-/* The blocks of the half bonds: even blocks in parallel, then odd ones (of
- * the whole body, pd_half_bonds.blk0; a block writes only to itself and
- * the next).  Every sum is in an order the
- * blocks fix, whatever the thread count.  A piece's block below its own is
- * walked from its first row with a partner of the piece's own
- * (pd_half_bonds.clip; the partners ascend). */
+/* A block of the bond pass (pmb_walk_blocks): its rows' forces, and with
+ * failure their breaks and released energy. */
+typedef struct {
+    pd_sim *sim;
+    pd_bond_mode failure;
+    int energy;
+} pmb_pass;
+
+static void pmb_block(const pd_sim *csim, int64_t blk, int64_t lo, int64_t hi, void *ctx)
+{
+    const pmb_pass *ps = ctx;
+    pd_sim *sim = ps->sim; /* csim, writable */
+    (void)csim;
+    pd_half_bonds *h = &sim->half;
+    if (ps->failure)
+        h->released[blk] = 0;
+#if PD_AVX512_KERNELS
+    if (h->pack) {
+        pmb_rows_block(sim, lo, hi, ps->failure, ps->energy, &h->released[blk]);
+        return;
+    }
+#endif
+    if (ps->failure == PD_BONDS_FAILURE_LAWS)
+        pmb_block_failure_laws(sim, lo, hi, &h->released[blk]);
+    else if (ps->failure)
+        pmb_block_failure(sim, lo, hi, &h->released[blk]);
+    else
+        pmb_block_elastic(sim, lo, hi);
+}
+
 static void pmb_blocks(pd_sim *sim, pd_bond_mode failure, int energy)
 {
-    const pd_half_bonds *h = &sim->half;
-    for (int phase = 0; phase < 2; phase++) {
-        const int64_t first = h->walk_lo + ((h->blk0 + h->walk_lo + phase) & 1);
-#pragma omp parallel for schedule(dynamic, 1)
-        for (int64_t blk = first; blk < h->walk; blk += 2) {
-            int64_t lo, hi;
-            pmb_block_rows(h, blk, sim->n, &lo, &hi);
-            if (failure)
-                h->released[blk] = 0;
-#if PD_AVX512_KERNELS
-            if (h->pack) {
-                pmb_rows_block(sim, lo, hi, failure, energy, &h->released[blk]);
-                continue;
-            }
-#endif
-            if (failure == PD_BONDS_FAILURE_LAWS)
-                pmb_block_failure_laws(sim, lo, hi, &h->released[blk]);
-            else if (failure)
-                pmb_block_failure(sim, lo, hi, &h->released[blk]);
-            else
-                pmb_block_elastic(sim, lo, hi);
-        }
-    }
+    pmb_pass ps = {sim, failure, energy};
+    pmb_walk_blocks(sim, pmb_block, &ps);
 }
 
 static void pmb_kernel(pd_sim *sim, pd_bond_mode failure)

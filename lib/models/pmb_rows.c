@@ -170,6 +170,53 @@ row_stretch(__m512d r, __m512d L, __m512d dr, __mmask8 act, __mmask8 *pos, __m51
     return s;
 }
 
+/* The energies in the rows (pmb_rows_energy): h->pack holds each particle's
+ * position and, in the place of its s0, its volume.  Row i's partners j
+ * are loaded and transposed as pmb_row512 does. */
+PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
+rows_partners(const double *pk, const int32_t *nb, int64_t i, int64_t k, int m, int64_t jj[8],
+              __m512d *xj, __m512d *yj, __m512d *zj, __m512d *vj)
+{
+    __m256d row[8];
+    for (int l = 0; l < 8; l++) { /* a lane past the row reads its own row */
+        jj[l] = l < m ? nb[k + l] : i;
+        row[l] = _mm256_load_pd(pk + 8 * jj[l]);
+    }
+    rows_to_lanes(row, xj, yj, zj, vj);
+}
+
+/* A chunk of 8 bonds of a row: its partners' 4th values (s0 in the bond
+ * pass, volumes in the energies' passes), the bond vectors, lengths r and
+ * |xi|, the extension dr (0 below eps of extension), the stretch s and
+ * row_stretch's q and pos. */
+typedef struct {
+    __m512d w4, L, dx, dy, dz, r, dr, s, q;
+    __mmask8 pos;
+} row_chunk;
+
+/* Bonds k .. k+m-1 of row i (own position yi0, yi1, yi2) into *c, their
+ * partners into jj; every pass of the rows takes its bonds so, to the
+ * bit. */
+PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
+row_chunk_of(const double *pk, const int32_t *nb, const double *len, int64_t i, int64_t k, int m,
+             __mmask8 act, __m512d yi0, __m512d yi1, __m512d yi2, int64_t jj[8], row_chunk *c)
+{
+    __m512d xj, yj, zj;
+    rows_partners(pk, nb, i, k, m, jj, &xj, &yj, &zj, &c->w4);
+    c->L = _mm512_mask_loadu_pd(_mm512_set1_pd(1.0), act, len + k);
+    c->dx = _mm512_sub_pd(xj, yi0);
+    c->dy = _mm512_sub_pd(yj, yi1);
+    c->dz = _mm512_sub_pd(zj, yi2);
+    c->r = _mm512_sqrt_pd(
+        _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(c->dx, c->dx), _mm512_mul_pd(c->dy, c->dy)),
+                      _mm512_mul_pd(c->dz, c->dz)));
+    const __m512d dr = _mm512_sub_pd(c->r, c->L);
+    c->dr = _mm512_mask_mov_pd(
+        dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), _mm512_set1_pd(PD_NEAR_ZERO), _CMP_LT_OQ),
+        _mm512_setzero_pd());
+    c->s = row_stretch(c->r, c->L, c->dr, act, &c->pos, &c->q);
+}
+
 /* 1/4 s^2 |xi| of the lanes of `keep`, 0 elsewhere: a bond's elastic
  * energy over w = c V nu and the volume of the end it goes to. */
 PMB_TARGET_AVX512 static inline __attribute__((always_inline)) __m512d
@@ -202,8 +249,7 @@ pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact
     const double *restrict kf = h->kfail;
     const int32_t *restrict nb = h->neighbor;
     const int64_t k1 = h->offset[i + 1];
-    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
-    const __m512d ninf = _mm512_set1_pd(-INFINITY), vnz = _mm512_set1_pd(PD_NEAR_ZERO);
+    const __m512d zero = _mm512_setzero_pd(), ninf = _mm512_set1_pd(-INFINITY);
     const __m512d vs00 = _mm512_set1_pd(sim->sc.s00), valpha = _mm512_set1_pd(sim->sc.alpha);
     const __m512d vref = _mm512_set1_pd(PD_CONTACT_REF_FRAC), vcap = _mm512_set1_pd(h->contact_cap);
     const __m512d yi0 = _mm512_set1_pd(pk[8 * i]), yi1 = _mm512_set1_pd(pk[8 * i + 1]),
@@ -224,25 +270,13 @@ pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact
         const __mmask8 act = (__mmask8)(m == 8 ? 0xff : (1u << m) - 1);
         const __mmask8 kmu = (__mmask8)(act & bits8(h->intact, k, nwords));
         int64_t jj[8];
-        __m256d row[8];
-        for (int l = 0; l < 8; l++) { /* a lane past the row reads its own row */
-            jj[l] = l < m ? nb[k + l] : i;
-            row[l] = _mm256_load_pd(pk + 8 * jj[l]);
-        }
-        __m512d xj, yj, zj, sj;
-        rows_to_lanes(row, &xj, &yj, &zj, &sj);
-        const __m512d L = _mm512_mask_loadu_pd(one, act, len + k);
-        const __m512d dx = _mm512_sub_pd(xj, yi0), dy = _mm512_sub_pd(yj, yi1),
-                      dz = _mm512_sub_pd(zj, yi2);
-        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(
-            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz)));
-        __m512d dr = _mm512_sub_pd(r, L);
-        dr = _mm512_mask_mov_pd(dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), vnz, _CMP_LT_OQ), zero);
+        row_chunk c;
+        row_chunk_of(pk, nb, len, i, k, m, act, yi0, yi1, yi2, jj, &c);
+        const __m512d sj = c.w4, L = c.L, dx = c.dx, dy = c.dy, dz = c.dz, r = c.r, dr = c.dr;
         /* one division for both: q = 1/(|xi| r), s/r = dr q, s = dr (r q)
          * (dr/|xi| itself where r = 0) */
-        __mmask8 pos;
-        __m512d q;
-        const __m512d s = row_stretch(r, L, dr, act, &pos, &q);
+        const __mmask8 pos = c.pos;
+        const __m512d q = c.q, s = c.s;
         const __m512d g = _mm512_maskz_mul_pd((__mmask8)(kmu & pos), dr, q);
         /* the force on i, and (the same unless the weights differ) j's */
         const __m512d wi = _mm512_maskz_loadu_pd(act, wij + k);
@@ -368,21 +402,6 @@ PMB_TARGET_AVX512 void pmb_rows_block(pd_sim *sim, int64_t lo, int64_t hi, pd_bo
         PMB_ROWS(PD_BONDS_ELASTIC, 0);
 }
 
-/* The energies in the rows (pmb_rows_energy): h->pack holds each particle's
- * position and, in the place of its s0, its volume.  Row i's partners j
- * are loaded and transposed as pmb_row512 does. */
-PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
-rows_partners(const double *pk, const int32_t *nb, int64_t i, int64_t k, int m, int64_t jj[8],
-              __m512d *xj, __m512d *yj, __m512d *zj, __m512d *vj)
-{
-    __m256d row[8];
-    for (int l = 0; l < 8; l++) { /* a lane past the row reads its own row */
-        jj[l] = l < m ? nb[k + l] : i;
-        row[l] = _mm256_load_pd(pk + 8 * jj[l]);
-    }
-    rows_to_lanes(row, xj, yj, zj, vj);
-}
-
 /* The elastic energy of the intact half bonds of row i, pmb_energy_uniform's
  * 1/4 c s^2 |xi| nu_ij V_i V_j to i and 1/4 c s^2 |xi| nu_ji V_j V_i to j
  * (w = c V nu holds c, nu and the other end's volume): i's summed in
@@ -395,8 +414,7 @@ PMB_TARGET_AVX512 static void energy_row512(const pd_sim *sim, int64_t i, double
     const double *restrict pk = h->pack;
     const double *restrict len = h->length, *restrict wij = h->w_ij, *restrict wji = h->w_ji;
     const int64_t k1 = h->offset[i + 1];
-    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
-    const __m512d vnz = _mm512_set1_pd(PD_NEAR_ZERO);
+    const __m512d zero = _mm512_setzero_pd();
     const __m512d yi0 = _mm512_set1_pd(pk[8 * i]), yi1 = _mm512_set1_pd(pk[8 * i + 1]),
                   yi2 = _mm512_set1_pd(pk[8 * i + 2]);
     __m512d own = zero;
@@ -405,19 +423,9 @@ PMB_TARGET_AVX512 static void energy_row512(const pd_sim *sim, int64_t i, double
         const __mmask8 act = (__mmask8)(m == 8 ? 0xff : (1u << m) - 1);
         const __mmask8 kmu = (__mmask8)(act & bits8(h->intact, k, nwords));
         int64_t jj[8];
-        __m512d xj, yj, zj, vj;
-        rows_partners(pk, h->neighbor, i, k, m, jj, &xj, &yj, &zj, &vj);
-        const __m512d L = _mm512_mask_loadu_pd(one, act, len + k);
-        const __m512d dx = _mm512_sub_pd(xj, yi0), dy = _mm512_sub_pd(yj, yi1),
-                      dz = _mm512_sub_pd(zj, yi2);
-        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(
-            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz)));
-        __m512d dr = _mm512_sub_pd(r, L);
-        dr = _mm512_mask_mov_pd(dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), vnz, _CMP_LT_OQ), zero);
-        __mmask8 pos;
-        __m512d q;
-        const __m512d s = row_stretch(r, L, dr, act, &pos, &q);
-        const __m512d x = row_energy(s, L, kmu); /* 0 for a broken bond */
+        row_chunk c;
+        row_chunk_of(pk, h->neighbor, len, i, k, m, act, yi0, yi1, yi2, jj, &c);
+        const __m512d vj = c.w4, x = row_energy(c.s, c.L, kmu); /* 0 for a broken bond */
         own = _mm512_add_pd(own, _mm512_mul_pd(x, _mm512_maskz_loadu_pd(act, wij + k)));
         double to[8];
         _mm512_storeu_pd(to, _mm512_mul_pd(_mm512_mul_pd(x, _mm512_maskz_loadu_pd(act, wji + k)),
@@ -484,22 +492,31 @@ PMB_TARGET_AVX512 static void contact_row512(const pd_sim *sim, int64_t i, doubl
     e[i] += own * pk[8 * i + 3];
 }
 
-PMB_TARGET_AVX512 static void energy_block512(const pd_sim *sim, int64_t lo, int64_t hi,
-                                              int contact, double *e)
+/* A block of an energies' pass (pmb_walk_blocks): the contact energy or
+ * the elastic one into e. */
+typedef struct {
+    int contact;
+    double *e;
+} energy_pass;
+
+PMB_TARGET_AVX512 static void energy_block512(const pd_sim *sim, int64_t blk, int64_t lo,
+                                              int64_t hi, void *ctx)
 {
+    const energy_pass *ps = ctx;
     const int64_t nwords = pd_bits_words(sim->half.count);
+    (void)blk;
     for (int64_t i = lo; i < hi; i++)
-        if (contact)
-            contact_row512(sim, i, e);
+        if (ps->contact)
+            contact_row512(sim, i, ps->e);
         else
-            energy_row512(sim, i, e, nwords);
+            energy_row512(sim, i, ps->e, nwords);
 }
 #endif
 
 /* The rows [*lo, *hi) of block blk that the list's passes walk: the whole
  * block, but a piece's block below its own from its first row with a
  * partner of the piece's own (pd_half_bonds.clip; the partners ascend). */
-void pmb_block_rows(const pd_half_bonds *h, int64_t blk, int64_t n, int64_t *lo, int64_t *hi)
+static void block_rows(const pd_half_bonds *h, int64_t blk, int64_t n, int64_t *lo, int64_t *hi)
 {
     *lo = blk * h->block;
     *hi = *lo + h->block < n ? *lo + h->block : n;
@@ -507,6 +524,20 @@ void pmb_block_rows(const pd_half_bonds *h, int64_t blk, int64_t n, int64_t *lo,
         while (*lo < *hi && (h->offset[*lo + 1] == h->offset[*lo] ||
                              h->neighbor[h->offset[*lo + 1] - 1] < h->clip))
             (*lo)++;
+}
+
+void pmb_walk_blocks(const pd_sim *sim, pmb_block_fn *fn, void *ctx)
+{
+    const pd_half_bonds *h = &sim->half;
+    for (int phase = 0; phase < 2; phase++) {
+        const int64_t first = h->walk_lo + ((h->blk0 + h->walk_lo + phase) & 1);
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int64_t blk = first; blk < h->walk; blk += 2) {
+            int64_t lo, hi;
+            block_rows(h, blk, sim->n, &lo, &hi);
+            fn(sim, blk, lo, hi, ctx);
+        }
+    }
 }
 
 /* e_i += the elastic energy (contact 0) or the contact energy (1) of
@@ -539,15 +570,8 @@ int pmb_rows_energy(const pd_sim *sim, double *e, int contact)
             pk[8 * i + 3] = sim->p->volume[i];
             out[i] = 0;
         }
-        for (int phase = 0; phase < 2; phase++) {
-            const int64_t first = h->walk_lo + ((h->blk0 + h->walk_lo + phase) & 1);
-#pragma omp parallel for schedule(dynamic, 1)
-            for (int64_t blk = first; blk < h->walk; blk += 2) {
-                int64_t lo, hi;
-                pmb_block_rows(h, blk, sim->n, &lo, &hi);
-                energy_block512(sim, lo, hi, contact, out);
-            }
-        }
+        energy_pass ps = {contact, out};
+        pmb_walk_blocks(sim, energy_block512, &ps);
     }
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < sim->n; i++)

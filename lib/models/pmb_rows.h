@@ -13,8 +13,15 @@
 /* The elastic energy of half bond k of row i, J (pmb_rows.c; pmb.c's
  * portable rows take it too). */
 double pmb_bond_energy(const pd_sim *sim, int64_t i, int64_t k);
-/* The rows [*lo, *hi) of block blk that the list's passes walk. */
-void pmb_block_rows(const pd_half_bonds *h, int64_t blk, int64_t n, int64_t *lo, int64_t *hi);
+/* fn(sim, blk, lo, hi, ctx) for each block of the half bonds and the rows
+ * [lo, hi) of it that the list's passes walk: even blocks in parallel,
+ * then odd ones (of the whole body, pd_half_bonds.blk0; a block writes
+ * only to itself and the next), so that every sum is in an order the
+ * blocks fix, whatever the thread count.  A piece's block below its own
+ * is walked from its first row with a partner of the piece's own
+ * (pd_half_bonds.clip; the partners ascend). */
+typedef void pmb_block_fn(const pd_sim *sim, int64_t blk, int64_t lo, int64_t hi, void *ctx);
+void pmb_walk_blocks(const pd_sim *sim, pmb_block_fn *fn, void *ctx);
 #if PD_AVX512_KERNELS
 /* The bond pass of rows [lo, hi) in AVX-512 (h->pack), with `energy` the
  * energies counted into h->eb and h->ec; the released energy of the bonds
