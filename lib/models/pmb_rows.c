@@ -303,7 +303,8 @@ pmb_row512(pd_sim *sim, int64_t i, const pd_bond_mode failure, const int contact
             t = _mm512_mask_sub_pd(ninf, kmu, vs00, _mm512_mul_pd(valpha, s));
             sm = _mm512_max_pd(sm, t);
         }
-        if (energy) { /* rare: a bond that breaks in this pass */
+        if (energy) { /* the bonds intact after this pass: not those that break in
+                         it (rare), unless --no-failure keeps them */
             const __mmask8 gone = brk && sim->nofail ? row_gone(sim, i, jj, brk) : brk;
             const __m512d x = row_energy(s, L, (__mmask8)(kmu & ~gone));
             own = _mm512_add_pd(own, _mm512_mul_pd(x, wi));
