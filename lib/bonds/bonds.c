@@ -152,12 +152,6 @@ BONDS_CLONES static void counted_damage(const pd_bonds *b, const uint64_t *intac
     }
 }
 
-/* Damage (seed 000 eq. 10) over the bonds whose bit in `skip` is clear
- * (skip NULL: every bond).  The sums of V_j run in family order; when all
- * volumes are equal, a sum of m of them is the m-th of the running sums
- * V, V + V, ... (table[m], added in that very order), so the bits are
- * counted instead of walking the partners: the same damage, bit for bit,
- * without reading the neighbour lists. */
 /* When all volumes are equal, the running sums V, V + V, ... up to the
  * largest family (table[m], the sum of m volumes in family order); else,
  * or out of memory, NULL. */
@@ -179,6 +173,12 @@ static double *volume_sums(const pd_particles *p, const pd_bonds *b)
     return table;
 }
 
+/* Damage (seed 000 eq. 10) over the bonds whose bit in `skip` is clear
+ * (skip NULL: every bond).  The sums of V_j run in family order; when all
+ * volumes are equal, a sum of m of them is the m-th of the running sums
+ * V, V + V, ... (table[m], added in that very order), so the bits are
+ * counted instead of walking the partners: the same damage, bit for bit,
+ * without reading the neighbour lists. */
 static void damage_over(const pd_particles *p, const pd_bonds *b, const uint64_t *intact,
                         const uint64_t *skip, double *damage)
 {

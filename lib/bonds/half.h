@@ -56,7 +56,7 @@ typedef struct {
                           radius is the same, else +inf, m               */
     double *eb, *ec;   /* n each, or NULL (the AVX-512 rows): each
                           particle's elastic and contact energy, J, as a
-                          bond pass counted them (lib/models/pmb.c)      */
+                          bond pass counted them (lib/models/pmb_rows.c) */
     int energy_ok;     /* they are those of step energy_step, with the
                           bits at energy_epoch                           */
     int64_t energy_step;
