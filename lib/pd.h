@@ -231,6 +231,12 @@ int pd_cells_adjacent(const pd_cells *c, const double x[3], int64_t cells[27]);
  * rows in z, y order (pd_cells_adjacent's points in its order); returns
  * how many rows (up to 9). */
 int pd_cells_adjacent_rows(const pd_cells *c, const double x[3], int64_t lo[9], int64_t hi[9]);
+/* The same rows as cells: row r is the `width` cells first[r] ..
+ * first[r] + width - 1 (width the same for every row), at z, y offset
+ * around[r] = 3 (dz + 1) + (dy + 1) from x's cell, its first cell at x
+ * offset *dx0 (-1, or 0 at the grid's edge); returns how many rows. */
+int pd_cells_adjacent_runs(const pd_cells *c, const double x[3], int64_t first[9], int *width,
+                           int around[9], int *dx0);
 
 /* ---------------------------------------------------------------- bonds */
 

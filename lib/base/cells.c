@@ -33,7 +33,8 @@ int pd_cells_adjacent(const pd_cells *c, const double x[3], int64_t cells[27])
     return m;
 }
 
-int pd_cells_adjacent_rows(const pd_cells *c, const double x[3], int64_t lo[9], int64_t hi[9])
+int pd_cells_adjacent_runs(const pd_cells *c, const double x[3], int64_t first[9], int *width,
+                           int around[9], int *dx0)
 {
     int64_t k[3];
     pd_cells_locate(c, x, k);
@@ -42,11 +43,23 @@ int pd_cells_adjacent_rows(const pd_cells *c, const double x[3], int64_t lo[9], 
     for (int64_t cz = k[2] - 1; cz <= k[2] + 1; cz++)
         for (int64_t cy = k[1] - 1; cy <= k[1] + 1; cy++)
             if (cz >= 0 && cz < c->dim[2] && cy >= 0 && cy < c->dim[1]) {
-                const int64_t row = (cz * c->dim[1] + cy) * c->dim[0];
-                lo[m] = c->start[row + x0];
-                hi[m] = c->start[row + x1 + 1];
-                m++;
+                around[m] = (int)(3 * (cz - k[2] + 1) + (cy - k[1] + 1));
+                first[m++] = (cz * c->dim[1] + cy) * c->dim[0] + x0;
             }
+    *width = (int)(x1 - x0 + 1);
+    *dx0 = (int)(x0 - k[0]);
+    return m;
+}
+
+int pd_cells_adjacent_rows(const pd_cells *c, const double x[3], int64_t lo[9], int64_t hi[9])
+{
+    int64_t first[9];
+    int width, around[9], dx0;
+    const int m = pd_cells_adjacent_runs(c, x, first, &width, around, &dx0);
+    for (int r = 0; r < m; r++) {
+        lo[r] = c->start[first[r]];
+        hi[r] = c->start[first[r] + width];
+    }
     return m;
 }
 
@@ -94,15 +107,28 @@ pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], doub
 {
     c->start = NULL;
     c->index = NULL;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double lo0 = INFINITY, lo1 = INFINITY, lo2 = INFINITY;
+    double hi0 = -INFINITY, hi1 = -INFINITY, hi2 = -INFINITY;
+#pragma omp parallel for schedule(static) reduction(min : lo0, lo1, lo2) reduction(max : hi0, hi1, hi2)
     for (int64_t i = 0; i < n; i++)
-        for (int d = 0; d < 3; d++)
-            if (isfinite(x[d][i]) && !(skip && skip[i])) { /* fmin, fmax inlined */
-                lo[d] = x[d][i] < lo[d] ? x[d][i] : lo[d];
-                hi[d] = x[d][i] > hi[d] ? x[d][i] : hi[d];
+        if (!(skip && skip[i])) { /* fmin, fmax inlined */
+            const double a = x[0][i], b = x[1][i], d = x[2][i];
+            if (isfinite(a)) {
+                lo0 = a < lo0 ? a : lo0;
+                hi0 = a > hi0 ? a : hi0;
             }
+            if (isfinite(b)) {
+                lo1 = b < lo1 ? b : lo1;
+                hi1 = b > hi1 ? b : hi1;
+            }
+            if (isfinite(d)) {
+                lo2 = d < lo2 ? d : lo2;
+                hi2 = d > hi2 ? d : hi2;
+            }
+        }
     if (!(cutoff > 0))
         return pd_fail(PD_ERR_INVALID, "cell size must be positive");
+    const double lo[3] = {lo0, lo1, lo2}, hi[3] = {hi0, hi1, hi2};
     pd_cells_geometry(c, lo, hi, n, cutoff);
     const int64_t ncell = c->dim[0] * c->dim[1] * c->dim[2];
     c->start = calloc((size_t)ncell + 1, sizeof(int64_t));
@@ -113,27 +139,26 @@ pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], doub
         pd_cells_free(c);
         return pd_fail(PD_ERR_NOMEM, "out of memory for a cell list");
     }
-    for (int64_t i = 0; i < n; i++) {
-        if (skip && skip[i])
-            continue;
-        double p[3] = {x[0][i], x[1][i], x[2][i]};
-        cellof[i] = cell_of(c, p);
-        c->start[cellof[i] + 1]++;
-    }
-    for (int64_t k = 0; k < ncell; k++)
-        c->start[k + 1] += c->start[k];
-    int64_t *fill = malloc((size_t)ncell * sizeof(int64_t));
-    if (fill == NULL) {
-        free(cellof);
-        pd_cells_free(c);
-        return pd_fail(PD_ERR_NOMEM, "out of memory for a cell list");
-    }
-    for (int64_t k = 0; k < ncell; k++)
-        fill[k] = c->start[k];
+    int64_t *start = c->start;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++)
+        if (!(skip && skip[i])) {
+            const double p[3] = {x[0][i], x[1][i], x[2][i]};
+            cellof[i] = cell_of(c, p);
+        }
     for (int64_t i = 0; i < n; i++)
         if (!(skip && skip[i]))
-            c->index[fill[cellof[i]]++] = (int32_t)i;
-    free(fill);
+            start[cellof[i] + 1]++;
+    for (int64_t k = 0; k < ncell; k++)
+        start[k + 1] += start[k];
+    /* each cell's points in ascending order, start[k] its cursor (so that
+     * it ends at the next cell's start), then every start back one cell */
+    for (int64_t i = 0; i < n; i++)
+        if (!(skip && skip[i]))
+            c->index[start[cellof[i]]++] = (int32_t)i;
+    for (int64_t k = ncell; k > 0; k--)
+        start[k] = start[k - 1];
+    start[0] = 0;
     free(cellof);
     return PD_OK;
 }

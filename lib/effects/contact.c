@@ -102,7 +102,7 @@ static pd_status contact_init(pd_sim *sim, void **state)
  * is y[d][c.index[e]]: a cell's particles are read one after another, not
  * from all over the arrays); with a kernel that takes the contact of the
  * pairs that started within `gap` (the stencil, the bond list's rows), the
- * displacements too (us, in the same order): a pair that started at least
+ * displacements too (y - x, in the same order): a pair that started at least
  * `gap` apart comes within `reach` only when |u_i - u_j| >= gap - reach,
  * so a candidate displaced less than that from i started within the gap,
  * is the kernel's, and is left out before it is looked up (fragments that
@@ -110,21 +110,63 @@ static pd_status contact_init(pd_sim *sim, void **state)
 typedef struct {
     pd_cells c;
     double *ys[3];
-    double *us[3];  /* NULL: no gap to prune by                  */
+    int prune;      /* 0: no gap to prune by (ub, pass NULL)      */
+    float *ub;      /* 6 a point; at the first point of each cell:
+                       a box about its displacements (least x, y, z,
+                       then greatest, each rounded outwards to a
+                       float), so that a cell displaced as i is is
+                       passed over whole                         */
+    uint32_t *pass; /* at the first point of each cell: bit
+                       9 (dz + 1) + 3 (dy + 1) + dx + 1 set when its
+                       neighbour at (dx, dy, dz) is outside the grid,
+                       empty, or displaced as one with it (judged by
+                       the two boxes): its points pass that neighbour
+                       over, and with all 27 set do not search     */
     double prune2;  /* |u_i - u_j|^2 below this: the kernel's pair */
 } cell_search;
+
+#define ALL_PASSED 0x7ffffffu /* the 27 bits of cell_search.pass */
 
 static void search_free(cell_search *cs)
 {
     pd_cells_free(&cs->c);
-    for (int d = 0; d < 3; d++) {
+    for (int d = 0; d < 3; d++)
         free(cs->ys[d]);
-        free(cs->us[d]);
+    free(cs->ub);
+    free(cs->pass);
+    memset(cs, 0, sizeof *cs);
+}
+
+/* Are the points of the cells whose points start at entries e and f
+ * displaced as one (|u_i - u_j|^2 below prune2 for every pair)?  By the
+ * farthest corners of their boxes, as cell_comoves judges a point and a
+ * box. */
+static int boxes_comove(const cell_search *cs, int64_t e, int64_t f)
+{
+    double t[3];
+    for (int d = 0; d < 3; d++) {
+        const double a = (double)cs->ub[6 * e + d + 3] - (double)cs->ub[6 * f + d],
+                     b = (double)cs->ub[6 * f + d + 3] - (double)cs->ub[6 * e + d];
+        t[d] = a > b ? a : b;
     }
+    return t[0] * t[0] + t[1] * t[1] + t[2] * t[2] < cs->prune2 * (1.0 - 1e-12);
+}
+
+/* The largest float at or below v, and the least at or above. */
+static float float_down(double v)
+{
+    const float f = (float)v;
+    return (double)f > v ? nextafterf(f, -INFINITY) : f;
+}
+
+static float float_up(double v)
+{
+    const float f = (float)v;
+    return (double)f < v ? nextafterf(f, INFINITY) : f;
 }
 
 /* The cells of the particles but the lost (reach: the cell edge); with a
- * gap above the reach, the displacements to prune by. */
+ * gap above the reach, the boxes of the cells' displacements to prune by. */
 static pd_status search_build(const pd_sim *sim, double reach, double gap, cell_search *cs)
 {
     memset(cs, 0, sizeof *cs);
@@ -132,38 +174,101 @@ static pd_status search_build(const pd_sim *sim, double reach, double gap, cell_
     if (s != PD_OK)
         return s;
     const int64_t m = cs->c.start[cs->c.dim[0] * cs->c.dim[1] * cs->c.dim[2]];
-    const int prune = gap > reach;
+    const int prune = cs->prune = gap > reach;
+    const size_t room = (size_t)(m > 0 ? m : 1);
+    int bad = 0;
     for (int d = 0; d < 3; d++)
-        if ((cs->ys[d] = malloc((size_t)(m > 0 ? m : 1) * sizeof(double))) == NULL ||
-            (prune && (cs->us[d] = malloc((size_t)(m > 0 ? m : 1) * sizeof(double))) == NULL)) {
-            search_free(cs);
-            return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
-        }
+        bad |= (cs->ys[d] = malloc(room * sizeof(double))) == NULL;
+    if (prune)
+        bad |= (cs->ub = malloc(6 * room * sizeof(float))) == NULL ||
+               (cs->pass = malloc(room * sizeof(uint32_t))) == NULL;
+    if (bad) {
+        search_free(cs);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+    }
     /* (gap - reach)^2 less a margin far above any rounding of |u| */
     cs->prune2 = prune ? (gap - reach) * (gap - reach) * (1.0 - 1e-9) : 0.0;
     double *const *y = sim->y, *const *x = sim->p->x;
 #pragma omp parallel for schedule(static)
     for (int64_t e = 0; e < m; e++)
-        for (int d = 0; d < 3; d++) {
-            const int32_t i = cs->c.index[e];
-            cs->ys[d][e] = y[d][i];
-            if (prune)
-                cs->us[d][e] = y[d][i] - x[d][i];
-        }
+        for (int d = 0; d < 3; d++)
+            cs->ys[d][e] = y[d][cs->c.index[e]];
+    if (prune) {
+        const int64_t ncell = cs->c.dim[0] * cs->c.dim[1] * cs->c.dim[2];
+        const int64_t *start = cs->c.start;
+        const int32_t *index = cs->c.index;
+#pragma omp parallel for schedule(static)
+        for (int64_t k = 0; k < ncell; k++)
+            if (start[k + 1] > start[k])
+                for (int d = 0; d < 3; d++) {
+                    double lo = INFINITY, hi = -INFINITY;
+                    for (int64_t e = start[k]; e < start[k + 1]; e++) {
+                        const double u = cs->ys[d][e] - x[d][index[e]];
+                        lo = u < lo ? u : lo;
+                        hi = u > hi ? u : hi;
+                    }
+                    cs->ub[6 * start[k] + d] = float_down(lo);
+                    cs->ub[6 * start[k] + d + 3] = float_up(hi);
+                }
+        const int64_t *dim = cs->c.dim;
+#pragma omp parallel for schedule(static)
+        for (int64_t k = 0; k < ncell; k++)
+            if (start[k + 1] > start[k]) {
+                const int64_t kc[3] = {k % dim[0], k / dim[0] % dim[1], k / (dim[0] * dim[1])};
+                uint32_t pass = 0;
+                for (int b = 0; b < 27; b++) {
+                    const int64_t q[3] = {kc[0] + b % 3 - 1, kc[1] + b / 3 % 3 - 1,
+                                          kc[2] + b / 9 - 1};
+                    int out = 0;
+                    for (int d = 0; d < 3; d++)
+                        out |= q[d] < 0 || q[d] >= dim[d];
+                    const int64_t n = out ? 0 : (q[2] * dim[1] + q[1]) * dim[0] + q[0];
+                    if (out || start[n + 1] == start[n] || boxes_comove(cs, start[k], start[n]))
+                        pass |= 1u << b;
+                }
+                cs->pass[start[k]] = pass;
+            }
+    }
     return PD_OK;
 }
 
-/* The points of the cells around particle i, as pd_cells_adjacent_rows
- * gives them: rows [lo[q], hi[q]) of the cells' index. */
+/* The cells around particle i, as pd_cells_adjacent_runs gives them: rows
+ * of `width` cells from first[q], their points [lo[q], hi[q]) of the
+ * cells' index; i's own cell `home`. */
 typedef struct {
-    int n;
-    int64_t lo[9], hi[9];
+    int n, width, dx0, around[9];
+    int64_t first[9], lo[9], hi[9], home;
 } cell_rows;
 
 static void rows_around(const pd_sim *sim, const cell_search *cs, int64_t i, cell_rows *r)
 {
     const double yi[3] = {sim->y[0][i], sim->y[1][i], sim->y[2][i]};
-    r->n = pd_cells_adjacent_rows(&cs->c, yi, r->lo, r->hi);
+    r->n = pd_cells_adjacent_runs(&cs->c, yi, r->first, &r->width, r->around, &r->dx0);
+    for (int q = 0; q < r->n; q++) {
+        r->lo[q] = cs->c.start[r->first[q]];
+        r->hi[q] = cs->c.start[r->first[q] + r->width];
+        if (r->around[q] == 4) /* dy = dz = 0 */
+            r->home = r->first[q] - r->dx0;
+    }
+}
+
+/* Is every point of the cell whose points start at entry e displaced as i
+ * is (|u_i - u_j|^2 below prune2, i's displacement ui)?  By its box's
+ * farthest corner from ui: the box holds every point's displacement, each
+ * difference is rounded as candidates() rounds a point's, and no smaller
+ * (rounding keeps the order), so the corner's squares are no smaller; their sum is kept 1e-12 below prune2,
+ * far above what summing in another order could change (this file's sums
+ * may be reassociated), so a cell passed over holds no pair that
+ * candidates() would keep. */
+static int cell_comoves(const cell_search *cs, int64_t e, const double ui[3])
+{
+    double t[3];
+    for (int d = 0; d < 3; d++) {
+        const double a = ui[d] - (double)cs->ub[6 * e + d],
+                     b = (double)cs->ub[6 * e + d + 3] - ui[d];
+        t[d] = a > b ? a : b;
+    }
+    return t[0] * t[0] + t[1] * t[1] + t[2] * t[2] < cs->prune2 * (1.0 - 1e-12);
 }
 
 /* Candidates of i within cutoff + skin among the points of `rows` (i's
@@ -182,13 +287,41 @@ static int64_t candidates(const pd_sim *sim, const cell_search *cs, const cell_r
     const pd_grid *grid = pd_grid_contact(sim->grid) ? sim->grid : NULL;
     const pd_half_bonds *hb = sim->half.contact ? &sim->half : NULL;
     const double yi[3] = {y[0][i], y[1][i], y[2][i]};
-    const int64_t *lo = rows->lo, *hi = rows->hi;
-    int64_t m = 0;
-    int64_t near[256]; /* the entries of a stretch of a row within reach */
-    const double *us0 = cs->us[0], *us1 = cs->us[1], *us2 = cs->us[2], prune2 = cs->prune2;
+    const int prune = cs->prune;
+    const double prune2 = cs->prune2;
     double *const *x = sim->p->x;
     const double ui[3] = {yi[0] - x[0][i], yi[1] - x[1][i], yi[2] - x[2][i]};
-    for (int q = 0; q < rows->n; q++)
+    /* the rows' runs of cells not displaced as i is (the whole rows
+     * without a gap to prune by), in the rows' order */
+    const uint32_t pass = prune ? cs->pass[c->start[rows->home]] : 0;
+    int64_t lo[18], hi[18];
+    int nspan = 0;
+    for (int q = 0; q < rows->n; q++) {
+        if (!prune) {
+            lo[nspan] = rows->lo[q];
+            hi[nspan++] = rows->hi[q];
+            continue;
+        }
+        int64_t from = rows->lo[q];
+        for (int w = 0; w < rows->width; w++) {
+            const int64_t k = rows->first[q] + w, e0 = c->start[k], e1 = c->start[k + 1];
+            const int bit = 3 * rows->around[q] + rows->dx0 + w + 1;
+            if (e1 > e0 && (((pass >> bit) & 1) || cell_comoves(cs, e0, ui))) {
+                if (e0 > from) {
+                    lo[nspan] = from;
+                    hi[nspan++] = e0;
+                }
+                from = e1;
+            }
+        }
+        if (rows->hi[q] > from) {
+            lo[nspan] = from;
+            hi[nspan++] = rows->hi[q];
+        }
+    }
+    int64_t m = 0;
+    int64_t near[256]; /* the entries of a stretch of a row within reach */
+    for (int q = 0; q < nspan; q++)
         for (int64_t e0 = lo[q]; e0 < hi[q]; e0 += 256) {
             const int64_t e1 = hi[q] - e0 > 256 ? e0 + 256 : hi[q];
             int nn = 0; /* most are out of reach: kept or not without a branch */
@@ -200,8 +333,9 @@ static int64_t candidates(const pd_sim *sim, const cell_search *cs, const cell_r
             for (int a = 0; a < nn; a++) {
                 const int64_t e = near[a];
                 const int32_t j = c->index[e];
-                if (us0) { /* displaced as i is: the kernel's pair, not looked up */
-                    const double vx = ui[0] - us0[e], vy = ui[1] - us1[e], vz = ui[2] - us2[e];
+                if (prune) { /* displaced as i is: the kernel's pair, not looked up */
+                    const double vx = ui[0] - (ys0[e] - x[0][j]), vy = ui[1] - (ys1[e] - x[1][j]),
+                                 vz = ui[2] - (ys2[e] - x[2][j]);
                     if (vx * vx + vy * vy + vz * vz < prune2)
                         continue;
                 }
@@ -244,16 +378,16 @@ static pd_status list_room(contact_list *cl, int64_t total)
  * ends): without the lattice stencil. */
 static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
 {
-    cell_search c;
-    pd_status s = search_build(sim, reach, 0.0, &c);
+    cell_search search, *c = &search;
+    pd_status s = search_build(sim, reach, 0.0, c);
     if (s != PD_OK)
         return s;
     const int64_t n = sim->n;
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++) {
         cell_rows r;
-        rows_around(sim, &c, i, &r);
-        cl->offset[i + 1] = candidates(sim, &c, &r, reach * reach, i, NULL, NULL);
+        rows_around(sim, c, i, &r);
+        cl->offset[i + 1] = candidates(sim, c, &r, reach * reach, i, NULL, NULL);
     }
     cl->offset[0] = 0;
     for (int64_t i = 0; i < n; i++)
@@ -262,11 +396,11 @@ static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
 #pragma omp parallel for schedule(static)
         for (int64_t i = 0; i < n; i++) {
             cell_rows r;
-            rows_around(sim, &c, i, &r);
-            candidates(sim, &c, &r, reach * reach, i, cl->partner + cl->offset[i],
+            rows_around(sim, c, i, &r);
+            candidates(sim, c, &r, reach * reach, i, cl->partner + cl->offset[i],
                        cl->d + cl->offset[i]);
         }
-    search_free(&c);
+    search_free(c);
     return s;
 }
 
@@ -306,12 +440,12 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
         free(mv);
         return PD_OK;
     }
-    cell_search c;
-    memset(&c, 0, sizeof c);
+    cell_search search, *c = &search;
+    memset(c, 0, sizeof *c);
     int64_t *who = malloc((size_t)nm * sizeof(int64_t)), *toff = malloc((size_t)(nm + 1) * sizeof(int64_t));
     int32_t *tp = NULL;
     double *td = NULL;
-    pd_status s = who && toff ? search_build(sim, reach, gap, &c)
+    pd_status s = who && toff ? search_build(sim, reach, gap, c)
                               : pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
     if (s == PD_OK) {
         for (int64_t i = 0, k = 0; i < n; i++)
@@ -340,10 +474,14 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
 #endif
             int64_t cap = 0;
             for (int64_t k = nm * t / T; k < nm * (t + 1) / T && !bad; k++) {
-                /* room for every particle of the mover's 27 cells */
                 const int64_t i = who[k];
                 cell_rows r;
-                rows_around(sim, &c, i, &r);
+                rows_around(sim, c, i, &r);
+                if (c->prune && c->pass[c->c.start[r.home]] == ALL_PASSED) {
+                    toff[k + 1] = 0; /* its 27 cells displaced as it is */
+                    continue;
+                }
+                /* room for every particle of the mover's 27 cells */
                 int64_t most = 0;
                 for (int q = 0; q < r.n; q++)
                     most += r.hi[q] - r.lo[q];
@@ -360,7 +498,7 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
                         break;
                 }
                 toff[k + 1] =
-                    candidates(sim, &c, &r, reach * reach, i, bp[t] + bn[t], bd[t] + bn[t]);
+                    candidates(sim, c, &r, reach * reach, i, bp[t] + bn[t], bd[t] + bn[t]);
                 bn[t] += toff[k + 1];
             }
         }
@@ -419,7 +557,7 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
     }
     if (s != PD_OK) /* no half-built list */
         memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
-    search_free(&c);
+    search_free(c);
     free(mv);
     free(who);
     free(toff);

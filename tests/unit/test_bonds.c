@@ -313,8 +313,20 @@ static void test_cell_rows(void)
             s = s * 6364136223846793005ULL + 1442695040888963407ULL;
             at[d] = (d + 1) * 0.012 * (double)(s >> 11) / 9007199254740992.0 - 0.001;
         }
-        int64_t cells[27], lo[9], hi[9];
+        int64_t cells[27], lo[9], hi[9], first[9], home[3];
+        int width, around[9], dx0;
         const int nc = pd_cells_adjacent(&c, at, cells), nr = pd_cells_adjacent_rows(&c, at, lo, hi);
+        /* the runs: the same rows, each of its width's cells, at the
+         * offsets they say from the point's cell */
+        pd_cells_locate(&c, at, home);
+        const int home_id = (int)((home[2] * c.dim[1] + home[1]) * c.dim[0] + home[0]);
+        bad += pd_cells_adjacent_runs(&c, at, first, &width, around, &dx0) != nr;
+        for (int r = 0; r < nr; r++) {
+            const int64_t want_first = home_id + ((around[r] / 3 - 1) * c.dim[1] +
+                                                  (around[r] % 3 - 1)) * c.dim[0] + dx0;
+            bad += first[r] != want_first || c.start[first[r]] != lo[r] ||
+                   c.start[first[r] + width] != hi[r];
+        }
         int64_t want[27 * 64], got[27 * 64], nw = 0, ng = 0;
         for (int k = 0; k < nc; k++)
             for (int64_t e = c.start[cells[k]]; e < c.start[cells[k] + 1] && nw < 27 * 64; e++)
@@ -330,7 +342,7 @@ static void test_cell_rows(void)
     pd_cells_free(&c);
     for (int d = 0; d < 3; d++)
         free(x[d]);
-    proved(f0, "the cells' rows hold the adjacent cells' points in their order");
+    proved(f0, "the cells' rows and runs hold the adjacent cells' points in their order");
 }
 
 int main(void)
