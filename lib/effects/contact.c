@@ -210,24 +210,37 @@ static pd_status search_build(const pd_sim *sim, double reach, double gap, cell_
                     cs->ub[6 * start[k] + d] = float_down(lo);
                     cs->ub[6 * start[k] + d + 3] = float_up(hi);
                 }
+        /* each pair of cells judged once: a cell's own bit and those of
+         * the 13 neighbours after it (bits 13 to 26: the cells of higher
+         * index), then the 13 before it from theirs (neighbour b's bit
+         * 26 - b points back; boxes_comove is symmetric) */
         const int64_t *dim = cs->c.dim;
+        uint32_t *pass = cs->pass;
+        for (int half = 0; half < 2; half++)
 #pragma omp parallel for schedule(static)
-        for (int64_t k = 0; k < ncell; k++)
-            if (start[k + 1] > start[k]) {
-                const int64_t kc[3] = {k % dim[0], k / dim[0] % dim[1], k / (dim[0] * dim[1])};
-                uint32_t pass = 0;
-                for (int b = 0; b < 27; b++) {
-                    const int64_t q[3] = {kc[0] + b % 3 - 1, kc[1] + b / 3 % 3 - 1,
-                                          kc[2] + b / 9 - 1};
-                    int out = 0;
-                    for (int d = 0; d < 3; d++)
-                        out |= q[d] < 0 || q[d] >= dim[d];
-                    const int64_t n = out ? 0 : (q[2] * dim[1] + q[1]) * dim[0] + q[0];
-                    if (out || start[n + 1] == start[n] || boxes_comove(cs, start[k], start[n]))
-                        pass |= 1u << b;
+            for (int64_t k = 0; k < ncell; k++)
+                if (start[k + 1] > start[k]) {
+                    const int64_t kc[3] = {k % dim[0], k / dim[0] % dim[1],
+                                           k / (dim[0] * dim[1])};
+                    uint32_t bits = 0;
+                    for (int b = half ? 0 : 13; b < (half ? 13 : 27); b++) {
+                        const int64_t q[3] = {kc[0] + b % 3 - 1, kc[1] + b / 3 % 3 - 1,
+                                              kc[2] + b / 9 - 1};
+                        int out = 0;
+                        for (int d = 0; d < 3; d++)
+                            out |= q[d] < 0 || q[d] >= dim[d];
+                        const int64_t n = out ? 0 : (q[2] * dim[1] + q[1]) * dim[0] + q[0];
+                        if (out || start[n + 1] == start[n] ||
+                            (half ? (int)((__atomic_load_n(&pass[start[n]], __ATOMIC_RELAXED) >>
+                                           (26 - b)) & 1u)
+                                  : boxes_comove(cs, start[k], start[n])))
+                            bits |= 1u << b;
+                    }
+                    if (half)
+                        __atomic_fetch_or(&pass[start[k]], bits, __ATOMIC_RELAXED);
+                    else
+                        __atomic_store_n(&pass[start[k]], bits, __ATOMIC_RELAXED);
                 }
-                cs->pass[start[k]] = pass;
-            }
     }
     return PD_OK;
 }
@@ -448,6 +461,16 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
     pd_status s = who && toff ? search_build(sim, reach, gap, c)
                               : pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
     if (s == PD_OK) {
+        if (c->prune) { /* a mover whose 27 cells are displaced as it is: 2, no search */
+            const int64_t ncell = c->c.dim[0] * c->c.dim[1] * c->c.dim[2];
+            const int64_t *start = c->c.start;
+#pragma omp parallel for schedule(static)
+            for (int64_t k = 0; k < ncell; k++)
+                if (start[k + 1] > start[k] && c->pass[start[k]] == ALL_PASSED)
+                    for (int64_t e = start[k]; e < start[k + 1]; e++)
+                        if (mv[c->c.index[e]])
+                            mv[c->c.index[e]] = 2;
+        }
         for (int64_t i = 0, k = 0; i < n; i++)
             if (mv[i])
                 who[k++] = i;
@@ -475,13 +498,13 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
             int64_t cap = 0;
             for (int64_t k = nm * t / T; k < nm * (t + 1) / T && !bad; k++) {
                 const int64_t i = who[k];
-                cell_rows r;
-                rows_around(sim, c, i, &r);
-                if (c->prune && c->pass[c->c.start[r.home]] == ALL_PASSED) {
-                    toff[k + 1] = 0; /* its 27 cells displaced as it is */
+                if (mv[i] == 2) { /* its 27 cells displaced as it is */
+                    toff[k + 1] = 0;
                     continue;
                 }
                 /* room for every particle of the mover's 27 cells */
+                cell_rows r;
+                rows_around(sim, c, i, &r);
                 int64_t most = 0;
                 for (int q = 0; q < r.n; q++)
                     most += r.hi[q] - r.lo[q];
