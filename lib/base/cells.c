@@ -109,7 +109,8 @@ pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], doub
     c->index = NULL;
     double lo0 = INFINITY, lo1 = INFINITY, lo2 = INFINITY;
     double hi0 = -INFINITY, hi1 = -INFINITY, hi2 = -INFINITY;
-#pragma omp parallel for schedule(static) reduction(min : lo0, lo1, lo2) reduction(max : hi0, hi1, hi2)
+#pragma omp parallel for schedule(static) reduction(min : lo0, lo1, lo2) \
+    reduction(max : hi0, hi1, hi2)
     for (int64_t i = 0; i < n; i++)
         if (!(skip && skip[i])) { /* fmin, fmax inlined */
             const double a = x[0][i], b = x[1][i], d = x[2][i];

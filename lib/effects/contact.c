@@ -260,7 +260,7 @@ static void rows_around(const pd_sim *sim, const cell_search *cs, int64_t i, cel
     for (int q = 0; q < r->n; q++) {
         r->lo[q] = cs->c.start[r->first[q]];
         r->hi[q] = cs->c.start[r->first[q] + r->width];
-        if (r->around[q] == 4) /* dy = dz = 0 */
+        if (r->around[q] == 4) /* dy = dz = 0: always there (i's own cell) */
             r->home = r->first[q] - r->dx0;
     }
 }
@@ -269,10 +269,10 @@ static void rows_around(const pd_sim *sim, const cell_search *cs, int64_t i, cel
  * is (|u_i - u_j|^2 below prune2, i's displacement ui)?  By its box's
  * farthest corner from ui: the box holds every point's displacement, each
  * difference is rounded as candidates() rounds a point's, and no smaller
- * (rounding keeps the order), so the corner's squares are no smaller; their sum is kept 1e-12 below prune2,
- * far above what summing in another order could change (this file's sums
- * may be reassociated), so a cell passed over holds no pair that
- * candidates() would keep. */
+ * (rounding keeps the order), so the corner's squares are no smaller;
+ * their sum is kept 1e-12 below prune2, far above what summing in another
+ * order could change (this file's sums may be reassociated), so a cell
+ * passed over holds no pair that candidates() would keep. */
 static int cell_comoves(const cell_search *cs, int64_t e, const double ui[3])
 {
     double t[3];
@@ -391,16 +391,16 @@ static pd_status list_room(contact_list *cl, int64_t total)
  * ends): without the lattice stencil. */
 static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
 {
-    cell_search search, *c = &search;
-    pd_status s = search_build(sim, reach, 0.0, c);
+    cell_search c;
+    pd_status s = search_build(sim, reach, 0.0, &c);
     if (s != PD_OK)
         return s;
     const int64_t n = sim->n;
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++) {
         cell_rows r;
-        rows_around(sim, c, i, &r);
-        cl->offset[i + 1] = candidates(sim, c, &r, reach * reach, i, NULL, NULL);
+        rows_around(sim, &c, i, &r);
+        cl->offset[i + 1] = candidates(sim, &c, &r, reach * reach, i, NULL, NULL);
     }
     cl->offset[0] = 0;
     for (int64_t i = 0; i < n; i++)
@@ -409,11 +409,11 @@ static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
 #pragma omp parallel for schedule(static)
         for (int64_t i = 0; i < n; i++) {
             cell_rows r;
-            rows_around(sim, c, i, &r);
-            candidates(sim, c, &r, reach * reach, i, cl->partner + cl->offset[i],
+            rows_around(sim, &c, i, &r);
+            candidates(sim, &c, &r, reach * reach, i, cl->partner + cl->offset[i],
                        cl->d + cl->offset[i]);
         }
-    search_free(c);
+    search_free(&c);
     return s;
 }
 
@@ -453,23 +453,23 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
         free(mv);
         return PD_OK;
     }
-    cell_search search, *c = &search;
-    memset(c, 0, sizeof *c);
+    cell_search c;
+    memset(&c, 0, sizeof c);
     int64_t *who = malloc((size_t)nm * sizeof(int64_t)), *toff = malloc((size_t)(nm + 1) * sizeof(int64_t));
     int32_t *tp = NULL;
     double *td = NULL;
-    pd_status s = who && toff ? search_build(sim, reach, gap, c)
+    pd_status s = who && toff ? search_build(sim, reach, gap, &c)
                               : pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
     if (s == PD_OK) {
-        if (c->prune) { /* a mover whose 27 cells are displaced as it is: 2, no search */
-            const int64_t ncell = c->c.dim[0] * c->c.dim[1] * c->c.dim[2];
-            const int64_t *start = c->c.start;
+        if (c.prune) { /* a mover whose 27 cells are displaced as it is: 2, no search */
+            const int64_t ncell = c.c.dim[0] * c.c.dim[1] * c.c.dim[2];
+            const int64_t *start = c.c.start;
 #pragma omp parallel for schedule(static)
             for (int64_t k = 0; k < ncell; k++)
-                if (start[k + 1] > start[k] && c->pass[start[k]] == ALL_PASSED)
+                if (start[k + 1] > start[k] && c.pass[start[k]] == ALL_PASSED)
                     for (int64_t e = start[k]; e < start[k + 1]; e++)
-                        if (mv[c->c.index[e]])
-                            mv[c->c.index[e]] = 2;
+                        if (mv[c.c.index[e]])
+                            mv[c.c.index[e]] = 2;
         }
         for (int64_t i = 0, k = 0; i < n; i++)
             if (mv[i])
@@ -504,7 +504,7 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
                 }
                 /* room for every particle of the mover's 27 cells */
                 cell_rows r;
-                rows_around(sim, c, i, &r);
+                rows_around(sim, &c, i, &r);
                 int64_t most = 0;
                 for (int q = 0; q < r.n; q++)
                     most += r.hi[q] - r.lo[q];
@@ -521,7 +521,7 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
                         break;
                 }
                 toff[k + 1] =
-                    candidates(sim, c, &r, reach * reach, i, bp[t] + bn[t], bd[t] + bn[t]);
+                    candidates(sim, &c, &r, reach * reach, i, bp[t] + bn[t], bd[t] + bn[t]);
                 bn[t] += toff[k + 1];
             }
         }
@@ -580,7 +580,7 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
     }
     if (s != PD_OK) /* no half-built list */
         memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
-    search_free(c);
+    search_free(&c);
     free(mv);
     free(who);
     free(toff);
