@@ -36,6 +36,9 @@ typedef struct {
     double *d;         /* d_ij per candidate, m                 */
     int64_t cap;
     double *ybuild[3]; /* positions at the last build           */
+    int32_t *rows;     /* the particles with candidates, ascending:
+                          the force's loop walks only them      */
+    int64_t nrows, rows_cap;
     /* a piece of a body on MPI ranks (lib/run/piece.c): the partners of
      * its particles that are neither its own nor its ghosts, their
      * positions received at each step, and its own particles that the
@@ -73,6 +76,7 @@ static void contact_free(void *state)
     free(cl->d);
     for (int k = 0; k < 3; k++)
         free(cl->ybuild[k]);
+    free(cl->rows);
     remote_free(cl);
     free(cl);
 }
@@ -1113,9 +1117,28 @@ static pd_status contact_build(pd_sim *sim, contact_list *cl)
     pd_status s = sim->piece                                        ? build_piece(sim, cl, reach)
                   : pd_grid_contact(sim->grid) || sim->half.contact ? build_movers(sim, cl, reach)
                                                                     : build_all(sim, cl, reach);
-    if (s != PD_OK)
-        return s;
     const int64_t n = sim->n;
+    int64_t nrows = 0;
+    for (int64_t i = 0; s == PD_OK && i < n; i++)
+        nrows += cl->offset[i + 1] > cl->offset[i];
+    if (s == PD_OK && nrows > cl->rows_cap) {
+        int32_t *r = realloc(cl->rows, (size_t)nrows * sizeof(int32_t));
+        if (r == NULL)
+            s = pd_fail(PD_ERR_NOMEM, "out of memory for the contact list");
+        else {
+            cl->rows = r;
+            cl->rows_cap = nrows;
+        }
+    }
+    if (s != PD_OK) { /* no half-built list */
+        memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
+        cl->nrows = 0;
+        return s;
+    }
+    cl->nrows = 0;
+    for (int64_t i = 0; i < n; i++)
+        if (cl->offset[i + 1] > cl->offset[i])
+            cl->rows[cl->nrows++] = (int32_t)i;
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++)
         for (int k = 0; k < 3; k++)
@@ -1183,7 +1206,8 @@ static pd_status contact_force(pd_sim *sim, void *state)
     double *const *y = sim->y;
     double *restrict fx = sim->f[0], *restrict fy = sim->f[1], *restrict fz = sim->f[2];
 #pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++) {
+    for (int64_t w = 0; w < cl->nrows; w++) { /* the particles with candidates */
+        const int64_t i = cl->rows[w];
         const double yi0 = y[0][i], yi1 = y[1][i], yi2 = y[2][i];
         double ax = 0, ay = 0, az = 0;
         for (int64_t q = cl->offset[i]; q < cl->offset[i + 1]; q++) {
@@ -1261,7 +1285,8 @@ static void contact_energy(const pd_sim *sim, void *state, double *e)
     const double *V = sim->p->volume;
     double *const *y = sim->y;
 #pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++) {
+    for (int64_t w = 0; w < cl->nrows; w++) { /* the particles with candidates */
+        const int64_t i = cl->rows[w];
         double sum = 0;
         for (int64_t q = cl->offset[i]; q < cl->offset[i + 1]; q++) {
             const int32_t j = cl->partner[q];
