@@ -120,16 +120,19 @@ typedef struct {
                        then greatest, each rounded outwards to a
                        float), so that a cell displaced as i is is
                        passed over whole                         */
-    uint32_t *pass; /* at the first point of each cell: bit
-                       9 (dz + 1) + 3 (dy + 1) + dx + 1 set when its
-                       neighbour at (dx, dy, dz) is outside the grid,
-                       empty, or displaced as one with it (judged by
-                       the two boxes): its points pass that neighbour
-                       over, and with all 27 set do not search     */
+    uint32_t *pass; /* at the first point of each cell that holds a
+                       mover (cells_passed): bit 9 (dz + 1) +
+                       3 (dy + 1) + dx + 1 set when its neighbour at
+                       (dx, dy, dz) is outside the grid, empty, or
+                       displaced as one with it (judged by the two
+                       boxes): its points pass that neighbour over,
+                       and with all 27 set do not search; bit 31:
+                       it holds a mover                          */
     double prune2;  /* |u_i - u_j|^2 below this: the kernel's pair */
 } cell_search;
 
 #define ALL_PASSED 0x7ffffffu /* the 27 bits of cell_search.pass */
+#define HOLDS_MOVER 0x80000000u /* its bit 31 */
 
 static void search_free(cell_search *cs)
 {
@@ -214,39 +217,63 @@ static pd_status search_build(const pd_sim *sim, double reach, double gap, cell_
                     cs->ub[6 * start[k] + d] = float_down(lo);
                     cs->ub[6 * start[k] + d + 3] = float_up(hi);
                 }
-        /* each pair of cells judged once: a cell's own bit and those of
-         * the 13 neighbours after it (bits 13 to 26: the cells of higher
-         * index), then the 13 before it from theirs (neighbour b's bit
-         * 26 - b points back; boxes_comove is symmetric) */
-        const int64_t *dim = cs->c.dim;
-        uint32_t *pass = cs->pass;
-        for (int half = 0; half < 2; half++)
-#pragma omp parallel for schedule(static)
-            for (int64_t k = 0; k < ncell; k++)
-                if (start[k + 1] > start[k]) {
-                    const int64_t kc[3] = {k % dim[0], k / dim[0] % dim[1],
-                                           k / (dim[0] * dim[1])};
-                    uint32_t bits = 0;
-                    for (int b = half ? 0 : 13; b < (half ? 13 : 27); b++) {
-                        const int64_t q[3] = {kc[0] + b % 3 - 1, kc[1] + b / 3 % 3 - 1,
-                                              kc[2] + b / 9 - 1};
-                        int out = 0;
-                        for (int d = 0; d < 3; d++)
-                            out |= q[d] < 0 || q[d] >= dim[d];
-                        const int64_t n = out ? 0 : (q[2] * dim[1] + q[1]) * dim[0] + q[0];
-                        if (out || start[n + 1] == start[n] ||
-                            (half ? (int)((__atomic_load_n(&pass[start[n]], __ATOMIC_RELAXED) >>
-                                           (26 - b)) & 1u)
-                                  : boxes_comove(cs, start[k], start[n])))
-                            bits |= 1u << b;
-                    }
-                    if (half)
-                        __atomic_fetch_or(&pass[start[k]], bits, __ATOMIC_RELAXED);
-                    else
-                        __atomic_store_n(&pass[start[k]], bits, __ATOMIC_RELAXED);
-                }
     }
     return PD_OK;
+}
+
+/* The pass bits of the cells that hold a mover (mv[i] set), after
+ * search_build with a gap to prune by; a mover whose 27 cells are all
+ * passed over gets mv[i] = 2 (it does not search).  Each pair of such
+ * cells is judged once: a cell's own bit and those of the 13 neighbours
+ * after it (bits 13 to 26: the cells of higher index), then the 13 before
+ * it, read back from theirs where they hold a mover (neighbour b's bit
+ * 26 - b; boxes_comove is symmetric). */
+static void cells_passed(cell_search *cs, uint8_t *mv)
+{
+    const int64_t *dim = cs->c.dim, *start = cs->c.start;
+    const int32_t *index = cs->c.index;
+    const int64_t ncell = dim[0] * dim[1] * dim[2];
+    uint32_t *pass = cs->pass;
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < ncell; k++)
+        if (start[k + 1] > start[k]) {
+            int any = 0;
+            for (int64_t e = start[k]; e < start[k + 1]; e++)
+                any |= mv[index[e]];
+            pass[start[k]] = any ? HOLDS_MOVER : 0;
+        }
+    for (int half = 0; half < 2; half++)
+#pragma omp parallel for schedule(static)
+        for (int64_t k = 0; k < ncell; k++) {
+            if (start[k + 1] == start[k] ||
+                !(__atomic_load_n(&pass[start[k]], __ATOMIC_RELAXED) & HOLDS_MOVER))
+                continue;
+            const int64_t kc[3] = {k % dim[0], k / dim[0] % dim[1], k / (dim[0] * dim[1])};
+            uint32_t bits = 0;
+            for (int b = half ? 0 : 13; b < (half ? 13 : 27); b++) {
+                const int64_t q[3] = {kc[0] + b % 3 - 1, kc[1] + b / 3 % 3 - 1, kc[2] + b / 9 - 1};
+                int out = 0;
+                for (int d = 0; d < 3; d++)
+                    out |= q[d] < 0 || q[d] >= dim[d];
+                const int64_t n = out ? 0 : (q[2] * dim[1] + q[1]) * dim[0] + q[0];
+                if (out || start[n + 1] == start[n]) {
+                    bits |= 1u << b;
+                    continue;
+                }
+                const uint32_t theirs =
+                    half ? __atomic_load_n(&pass[start[n]], __ATOMIC_RELAXED) : 0;
+                if (theirs & HOLDS_MOVER ? (theirs >> (26 - b)) & 1u
+                                         : (uint32_t)boxes_comove(cs, start[k], start[n]))
+                    bits |= 1u << b;
+            }
+            __atomic_fetch_or(&pass[start[k]], bits, __ATOMIC_RELAXED);
+        }
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < ncell; k++)
+        if (start[k + 1] > start[k] && (pass[start[k]] & ALL_PASSED) == ALL_PASSED)
+            for (int64_t e = start[k]; e < start[k + 1]; e++)
+                if (mv[index[e]])
+                    mv[index[e]] = 2;
 }
 
 /* The cells around particle i, as pd_cells_adjacent_runs gives them: rows
@@ -465,16 +492,8 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
     pd_status s = who && toff ? search_build(sim, reach, gap, &c)
                               : pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
     if (s == PD_OK) {
-        if (c.prune) { /* a mover whose 27 cells are displaced as it is: 2, no search */
-            const int64_t ncell = c.c.dim[0] * c.c.dim[1] * c.c.dim[2];
-            const int64_t *start = c.c.start;
-#pragma omp parallel for schedule(static)
-            for (int64_t k = 0; k < ncell; k++)
-                if (start[k + 1] > start[k] && c.pass[start[k]] == ALL_PASSED)
-                    for (int64_t e = start[k]; e < start[k + 1]; e++)
-                        if (mv[c.c.index[e]])
-                            mv[c.c.index[e]] = 2;
-        }
+        if (c.prune)
+            cells_passed(&c, mv);
         for (int64_t i = 0, k = 0; i < n; i++)
             if (mv[i])
                 who[k++] = i;
