@@ -2,11 +2,11 @@
 # pd-run --no-failure SET: a bond with an end in SET never breaks.  A bar
 # pulled apart by its grips, with failure: without the option the grips'
 # bonds break as any; with it none does, on every kernel (the stencil with
-# and without the AVX-512 tiles, the bond list, LPS on the stencil and on a
-# perturbed lattice's list), while the bar still breaks between them.  The
-# energy field of a frame counts a kept bond as intact (stencil and list
-# agree), the option is recorded in /scene and kept through a restart, and
-# bad uses are one-line errors.
+# and without the AVX-512 tiles, the bond list, LPS on the stencil with
+# and without them and on a perturbed lattice's list), while the bar still
+# breaks between them.  The energy field of a frame counts a kept bond as
+# intact (stencil and list agree), the option is recorded in /scene and
+# kept through a restart, and bad uses are one-line errors.
 
 load test_helper
 bats_require_minimum_version 1.5.0
@@ -54,7 +54,7 @@ print((mu[touch] == 0).sum(), (mu[~touch] == 0).sum())
     run py "$BROKEN" without.h5 300
     read -r touch other <<<"$output"
     [ "$touch" -gt 1000 ] && [ "$other" -gt 1000 ]
-    for kernel in stencil tiles-off list lps lps-list; do
+    for kernel in stencil tiles-off list lps lps-tiles-off lps-list; do
         case $kernel in
         stencil) pd-run -q "${k[@]}" "${PULL[@]}" "${GRIPS[@]}" --steps 300 --every 300 bar.h5 -o r.h5 ;;
         tiles-off) PD_NO_AVX512=1 pd-run -q "${k[@]}" "${PULL[@]}" "${GRIPS[@]}" --steps 300 \
@@ -62,6 +62,8 @@ print((mu[touch] == 0).sum(), (mu[~touch] == 0).sum())
         list) pd-run -q "${k[@]}" "${PULL[@]}" "${GRIPS[@]}" --bond-list --steps 300 --every 300 \
             bar.h5 -o r.h5 ;;
         lps) pd-run -q "${lps[@]}" "${PULL[@]}" "${GRIPS[@]}" --steps 200 --every 200 bar.h5 -o r.h5 ;;
+        lps-tiles-off) PD_NO_AVX512=1 pd-run -q "${lps[@]}" "${PULL[@]}" "${GRIPS[@]}" \
+            --steps 200 --every 200 bar.h5 -o r.h5 ;;
         lps-list) pd-run -q "${lps[@]}" "${PULL[@]}" "${GRIPS[@]}" --steps 200 --every 200 \
             perturbed.h5 -o r.h5 ;;
         esac

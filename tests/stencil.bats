@@ -140,6 +140,32 @@ for name in a['frames']:
     threads_and_restart model.h5
 }
 
+@test "LPS: the AVX-512 tiles and the portable segment walk (PD_NO_AVX512) give the same run" {
+    # rows of 24 particles, as above: the dilatation and the forces in
+    # tiles, and the rows' last tile moved back over the one before
+    pd-lattice -q --spacing "$SPACING" --density "$DENSITY" --box 0,0.024,0,0.01,0,0.01 \
+        -o long.h5
+    pd-bonds -q --horizon "$HORIZON" long.h5 -o model.h5
+    opts=(--model lps --bulk-modulus "$BULK" --shear-modulus 8e9 --failure 0.0005,0.25 --contact
+          --allow-overlap --indenter sphere,0.012,0.005,0.0125,0.003,1e17,0,0,-100 --every 20 -q)
+    pd-run "${opts[@]}" --steps 80 model.h5 -o tile.h5
+    PD_NO_AVX512=1 pd-run "${opts[@]}" --steps 80 model.h5 -o seg.h5
+    run -0 agree tile.h5 seg.h5
+    [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\  ]]
+    # the tiles did run where the processor has AVX-512: their sums are
+    # rounded in another order
+    if grep -qw avx512f /proc/cpuinfo 2>/dev/null; then
+        run -1 h5_same tile.h5 seg.h5 'history'
+    fi
+    # 1 and 2 threads, bit for bit; and a restart
+    pd-run "${opts[@]}" --steps 80 --threads 1 model.h5 -o t1.h5
+    pd-run "${opts[@]}" --steps 80 --threads 2 model.h5 -o t2.h5
+    run -0 h5_same t1.h5 t2.h5 'history|threads'
+    pd-run "${opts[@]}" --steps 40 --threads 2 model.h5 -o half.h5
+    pd-run -q --restart half.h5 --steps 40 --threads 2 -o rest.h5
+    run -0 h5_same t2.h5 rest.h5 'history|threads|^/scene|^/series'
+}
+
 @test "the bond list's AVX-512 rows and its portable loop (PD_NO_AVX512) give the same run" {
     # a perturbed body (no stencil: the bond list), rows of 25 particles
     # with 40 to 60 half bonds (full vectors of 8 and a masked last one),

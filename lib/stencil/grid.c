@@ -37,17 +37,20 @@
  *     segment is a loop over consecutive particles with consecutive
  *     partners: the loads and the force updates of both ends are
  *     contiguous, and the loop vectorizes without gathers or scatters.
- *   - Tiles (PMB, AVX-512).  A run at least GRID_TILE long is walked 16
- *     particles at a time: the tile keeps its own positions, forces and
- *     new s0 in registers over all its segments, so that a bond loads and
- *     stores only its partner's (a segment loop stores both ends, and the
- *     stores bound it).  The segments of a run are in tile order (by inner
- *     offset first), so that the partner windows of consecutive offsets do
- *     not overlap: a load that overlaps a store still in flight would wait
- *     for it.  Breaks and contacts are only flagged in the vector loop and
+ *   - Tiles (AVX-512; PMB's force pass, LPS's dilatation and force
+ *     passes).  A run at least GRID_TILE long is walked 16 particles at a
+ *     time: the tile keeps its own positions, forces and new s0 (LPS: and
+ *     theta/m, 1/m, or the dilatation sums) in registers over all its
+ *     segments, so that a bond loads and stores only its partner's (a
+ *     segment loop stores both ends, and the stores bound it).  The
+ *     segments of a run are in tile order (by inner offset first), so
+ *     that the partner windows of consecutive offsets do not overlap: a
+ *     load that overlaps a store still in flight would wait for it.
+ *     Contacts (and PMB's breaks) are only flagged in the vector loop and
  *     found by a scalar pass over the segment (bit for bit the same
- *     arithmetic).  Other processors, and PD_NO_AVX512 set in the
- *     environment, walk the segments alone.
+ *     arithmetic); LPS's breaks are taken lane by lane from the vector
+ *     test.  Other processors, and PD_NO_AVX512 set in the environment,
+ *     walk the segments alone.
  *   - Threads.  Outer planes are cut into blocks at least as thick as the
  *     stencil's reach, so a block's bonds write only to the block and the
  *     next one; even blocks run in parallel, then odd blocks (lib/models/pmb.c's
@@ -867,7 +870,7 @@ pd_status pd_grid_new(pd_sim *sim, pd_stencil_kind kind, pd_grid **out)
     }
     pd_grid_sync(sim, G);
 #if PD_AVX512_KERNELS
-    G->tile = !lps && G->words == 1 && __builtin_cpu_supports("avx512f") && !getenv("PD_NO_AVX512");
+    G->tile = G->words == 1 && __builtin_cpu_supports("avx512f") && !getenv("PD_NO_AVX512");
 #endif
     if (G->status != PD_OK) {
         pd_status s = G->status;

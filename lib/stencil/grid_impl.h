@@ -125,7 +125,8 @@ struct pd_grid {
     double *theta_m;     /* theta_i / m_i, 1/m^5 over omega's unit         */
     double *inv_m;       /* 1 / m_i, 1/m^5 over omega's unit               */
     uint64_t epoch;      /* of the half bonds the masks were built from    */
-    int tile;            /* PMB walks runs as tiles (AVX-512)              */
+    int tile;            /* the force pass walks runs as tiles (AVX-512;
+                            PMB and LPS)                                   */
     const double *s0n_ready; /* the s0 array the last step's end filled with
                             -inf for the next one's new s0 (PMB, lattice
                             order)                                         */
@@ -194,6 +195,28 @@ static inline int64_t grid_seg_lo(const grid_seg *sg, int64_t cut, int64_t from)
 {
     const int64_t lo = sg->lo > from ? sg->lo : from;
     return lo > cut - sg->shift ? lo : cut - sg->shift;
+}
+
+/* A tile (grid_pmb.c, grid_lps.c): GRID_TILE particles of a run from g0,
+ * of which those before `own` are the tile before's (the run's last tile
+ * is moved back to end with the run).  The lanes of the tile that segment
+ * sg walks, its partners cut or above: bit l for particle g0 + l, lanes
+ * [*lo, *hi) - g0; 0 when none. */
+static inline uint32_t grid_tile_acts(const grid_seg *sg, int64_t cut, int64_t own, int64_t g0,
+                                      int64_t *lo, int64_t *hi)
+{
+    *lo = grid_seg_lo(sg, cut, own);
+    *hi = sg->hi < g0 + GRID_TILE ? sg->hi : g0 + GRID_TILE;
+    if (*lo >= *hi)
+        return 0;
+    return (uint32_t)(((UINT64_C(1) << (*hi - g0)) - 1) & ~((UINT64_C(1) << (*lo - g0)) - 1));
+}
+
+/* The first particle of run R's tile that starts at t (the last one moved
+ * back to end with the run). */
+static inline int64_t grid_tile_g0(const grid_run *R, int64_t t)
+{
+    return R->start + (t + GRID_TILE <= R->len ? t : R->len - GRID_TILE);
 }
 
 /* Is block blk (of the phase being walked) the calling thread's?  Each

@@ -38,30 +38,38 @@
         }                                                                                      \
     } while (0)
 
+/* The dilatation sums of segment sg's bonds whose partner is cut or
+ * above, both ends in memory; with `energy` also the energy's sums of
+ * squared extensions. */
+static inline __attribute__((always_inline)) void
+theta_seg(const pd_grid *G, const grid_seg *sg, int64_t cut, const grid_arrays *A, double *sum,
+          double *sq, double V, const int energy)
+{
+    const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
+    const int W = G->words;
+    const int k = sg->k;
+    const uint64_t bit = UINT64_C(1) << (k & 63);
+    const uint64_t *restrict mask = G->mask + (k >> 6);
+    const int64_t shift = sg->shift, lo = grid_seg_lo(sg, cut, 0);
+    const double len = G->len[k], om = G->omega[k], oml = om * len, nu = G->nu[k];
+    if (shift >= GRID_SAFE) {
+#pragma omp simd safelen(GRID_SAFE)
+        for (int64_t g = lo; g < sg->hi; g++)
+            GRID_THETA_BODY;
+    } else
+        for (int64_t g = lo; g < sg->hi; g++)
+            GRID_THETA_BODY;
+}
+
 /* The dilatation sums of one block's bonds, and with `energy` the
  * energy's sums of squared extensions. */
 static inline __attribute__((always_inline)) void
 theta_walk(const pd_grid *G, int64_t blk, const grid_arrays *A, double *sum, double *sq, double V,
            const int energy)
 {
-    const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
-    const int W = G->words;
     const int64_t cut = grid_cut(G, blk);
-    for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++) {
-        const grid_seg *sg = &G->seg[si];
-        const int k = sg->k;
-        const uint64_t bit = UINT64_C(1) << (k & 63);
-        const uint64_t *restrict mask = G->mask + (k >> 6);
-        const int64_t shift = sg->shift, lo = grid_seg_lo(sg, cut, 0);
-        const double len = G->len[k], om = G->omega[k], oml = om * len, nu = G->nu[k];
-        if (shift >= GRID_SAFE) {
-#pragma omp simd safelen(GRID_SAFE)
-            for (int64_t g = lo; g < sg->hi; g++)
-                GRID_THETA_BODY;
-        } else
-            for (int64_t g = lo; g < sg->hi; g++)
-                GRID_THETA_BODY;
-    }
+    for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++)
+        theta_seg(G, &G->seg[si], cut, A, sum, sq, V, energy);
 }
 
 PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, const grid_arrays *A,
@@ -69,6 +77,106 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
 {
     theta_walk(G, blk, A, sum, NULL, V, 0);
 }
+
+#if PD_AVX512_KERNELS
+/* One half (8 lanes) of a dilatation tile against one segment:
+ * GRID_THETA_BODY in AVX-512, operation for operation, for the lanes of
+ * `act` (`all`: every lane); i's sums in registers, the partners' in
+ * memory. */
+#define THETA_HALF(h, all)                                                                     \
+    do {                                                                                       \
+        const __mmask8 act = (__mmask8)(acts >> (8 * (h)));                                    \
+        const __m512i mw = _mm512_loadu_si512((const void *)(M + 8 * (h)));                    \
+        const __m512d mu = _mm512_maskz_mov_pd(_mm512_mask_test_epi64_mask(act, mw, vbit), one); \
+        const __m512d xj = (all) ? _mm512_loadu_pd(Y0 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi0[h], act, Y0 + 8 * (h));            \
+        const __m512d yj = (all) ? _mm512_loadu_pd(Y1 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi1[h], act, Y1 + 8 * (h));            \
+        const __m512d zj = (all) ? _mm512_loadu_pd(Y2 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi2[h], act, Y2 + 8 * (h));            \
+        const __m512d dx = _mm512_sub_pd(xj, yi0[h]), dy = _mm512_sub_pd(yj, yi1[h]),          \
+                      dz = _mm512_sub_pd(zj, yi2[h]);                                          \
+        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(                                        \
+            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz))); \
+        __m512d e = _mm512_sub_pd(r, vlen);                                                    \
+        e = _mm512_mask_mov_pd(e, _mm512_cmp_pd_mask(_mm512_abs_pd(e), vnz, _CMP_LT_OQ), zero); \
+        const __m512d c = _mm512_mul_pd(                                                       \
+            mu, _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(voml, e), vV), vnu));                \
+        own[h] = _mm512_add_pd(own[h], c);                                                     \
+        if (all)                                                                               \
+            _mm512_storeu_pd(S + 8 * (h), _mm512_add_pd(_mm512_loadu_pd(S + 8 * (h)), c));     \
+        else                                                                                   \
+            _mm512_mask_storeu_pd(S + 8 * (h), act,                                            \
+                                  _mm512_add_pd(_mm512_maskz_loadu_pd(act, S + 8 * (h)), c));  \
+    } while (0)
+
+/* The dilatation sums of a run at least a tile long, as lps_tile_run
+ * walks its forces: each bond's term GRID_THETA_BODY's, bit for bit; the
+ * sums in another order than theta_seg's. */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) void
+theta_tile_run(const pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, double *sum,
+               double V)
+{
+    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+    const __m512d vnz = _mm512_set1_pd(PD_NEAR_ZERO), vV = _mm512_set1_pd(V);
+    for (int64_t t = 0; t < R->len; t += GRID_TILE) {
+        const int64_t g0 = grid_tile_g0(R, t);
+        const int64_t own0 = R->start + t; /* the lanes before are the last tile's */
+        __m512d yi0[2], yi1[2], yi2[2], own[2];
+        for (int h = 0; h < 2; h++) {
+            yi0[h] = _mm512_loadu_pd(A->y0 + g0 + 8 * h);
+            yi1[h] = _mm512_loadu_pd(A->y1 + g0 + 8 * h);
+            yi2[h] = _mm512_loadu_pd(A->y2 + g0 + 8 * h);
+            own[h] = zero;
+        }
+        for (int64_t q = R->seg0; q < R[1].seg0; q++) {
+            const grid_seg *sg = &G->seg[q];
+            int64_t lo, hi;
+            const uint32_t acts = grid_tile_acts(sg, cut, own0, g0, &lo, &hi);
+            if (acts == 0)
+                continue;
+            const int k = sg->k;
+            const __m512i vbit = _mm512_set1_epi64((long long)(UINT64_C(1) << k));
+            const double len = G->len[k], om = G->omega[k];
+            const __m512d vlen = _mm512_set1_pd(len), voml = _mm512_set1_pd(om * len);
+            const __m512d vnu = _mm512_set1_pd(G->nu[k]);
+            const int64_t j0 = g0 + sg->shift;
+            const uint64_t *M = G->mask + g0;
+            const double *Y0 = A->y0 + j0, *Y1 = A->y1 + j0, *Y2 = A->y2 + j0;
+            double *S = sum + j0;
+            if (acts == 0xffff) {
+                THETA_HALF(0, 1);
+                THETA_HALF(1, 1);
+            } else {
+                THETA_HALF(0, 0);
+                THETA_HALF(1, 0);
+            }
+        }
+        double ts[GRID_TILE];
+        for (int h = 0; h < 2; h++)
+            _mm512_storeu_pd(ts + 8 * h, own[h]);
+        for (int64_t g = own0; g < g0 + GRID_TILE; g++)
+            sum[g] += ts[g - g0];
+    }
+}
+
+/* The dilatation sums of one block: runs at least a tile long in tiles,
+ * shorter ones by theta_seg. */
+__attribute__((target("avx512f"))) static void lps_theta_tiles(const pd_grid *G, int64_t blk,
+                                                               const grid_arrays *A, double *sum,
+                                                               double V)
+{
+    const int64_t cut = grid_cut(G, blk);
+    for (int64_t r = G->block_run[blk]; r < G->block_run[blk + 1]; r++) {
+        const grid_run *R = &G->run[r];
+        if (R->len >= GRID_TILE)
+            theta_tile_run(G, R, cut, A, sum, V);
+        else
+            for (int64_t s = R->seg0; s < R[1].seg0; s++)
+                theta_seg(G, &G->seg[s], cut, A, sum, NULL, V, 0);
+    }
+}
+#endif
 
 /* The pair force of bond g-j (Algorithm 2), its force on g and -it on j,
  * and with failure the test and the new s0 of both ends (as seg_bonds).
@@ -105,52 +213,249 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
         }                                                                                      \
     } while (0)
 
+/* The pair forces of segment sg's bonds whose partner is cut or above
+ * (grid_cut), chunk by chunk, both ends in memory; with `failure` the
+ * bonds that break into bl.  0, or -1 when out of memory. */
+static inline __attribute__((always_inline)) int
+lps_seg(pd_grid *G, const grid_seg *sg, int64_t cut, const grid_arrays *A,
+        const double *restrict ta, const double *restrict tb, double V, double dil, double shear,
+        const int failure, grid_breaks *bl)
+{
+    const int W = G->words;
+    const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;
+    const double *restrict s0 = A->s0;
+    double *f0 = A->f0, *f1 = A->f1, *f2 = A->f2, *s0n = A->s0n;
+    const double s00 = A->s00, alpha = A->alpha;
+    double brk[GRID_CHUNK];
+    const int k = sg->k;
+    const uint64_t bit = UINT64_C(1) << (k & 63);
+    const uint64_t *restrict mask = G->mask + (k >> 6);
+    const int64_t shift = sg->shift;
+    const double len = G->len[k], il = G->inv_len[k], dc = G->dc[k];
+    const double c1 = dil * V * G->nu[k] * G->omega[k] * len,
+                 c2 = PD_LPS_SHEAR_FACTOR * shear * V * G->nu[k] * G->omega[k];
+    for (int64_t c0 = grid_seg_lo(sg, cut, 0); c0 < sg->hi; c0 += GRID_CHUNK) {
+        const int64_t n = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;
+        double nbreak = 0, near = 0;
+        if (shift >= GRID_SAFE) {
+#pragma omp simd reduction(+ : nbreak, near) safelen(16)
+            for (int64_t q = 0; q < n; q++)
+                GRID_LPS_BODY;
+        } else
+            for (int64_t q = 0; q < n; q++)
+                GRID_LPS_BODY;
+        if (G->cmask && near > 0)
+            seg_contact(G, sg, A, c0, n, W);
+        if (failure && nbreak > 0)
+            for (int64_t q = 0; q < n; q++)
+                if (brk[q] > 0 && grid_may_break(G, c0 + q, c0 + q + shift)) {
+                    G->mask[(c0 + q) * W + (k >> 6)] &= ~bit;
+                    if (record_break(bl, c0 + q, k, c0 + q + shift))
+                        return -1;
+                }
+    }
+    return 0;
+}
+
 #define GRID_LPS_BLOCK(name, with_failure)                                                     \
     PD_VECTOR_CLONES static int name(pd_grid *G, int64_t blk, const grid_arrays *A,            \
                                      const double *restrict ta, const double *restrict tb,     \
                                      double V, double dil, double shear)                       \
     {                                                                                          \
-        const int W = G->words, failure = with_failure;                                        \
-        const double *restrict y0 = A->y0, *restrict y1 = A->y1, *restrict y2 = A->y2;         \
-        const double *restrict s0 = A->s0;                                                     \
-        double *f0 = A->f0, *f1 = A->f1, *f2 = A->f2, *s0n = A->s0n;                           \
-        const double s00 = A->s00, alpha = A->alpha;                                           \
         const int64_t cut = grid_cut(G, blk);                                                  \
-        double brk[GRID_CHUNK];                                                                \
-        for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++) {             \
-            const grid_seg *sg = &G->seg[si];                                                  \
-            const int k = sg->k;                                                               \
-            const uint64_t bit = UINT64_C(1) << (k & 63);                                      \
-            const uint64_t *restrict mask = G->mask + (k >> 6);                                \
-            const int64_t shift = sg->shift;                                                   \
-            const double len = G->len[k], il = G->inv_len[k], dc = G->dc[k];                   \
-            const double c1 = dil * V * G->nu[k] * G->omega[k] * len,                          \
-                         c2 = PD_LPS_SHEAR_FACTOR * shear * V * G->nu[k] * G->omega[k];        \
-            for (int64_t c0 = grid_seg_lo(sg, cut, 0); c0 < sg->hi; c0 += GRID_CHUNK) {        \
-                const int64_t n = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;         \
-                double nbreak = 0, near = 0;                                                   \
-                if (shift >= GRID_SAFE) {                                                      \
-                    _Pragma("omp simd reduction(+ : nbreak, near) safelen(16)")               \
-                    for (int64_t q = 0; q < n; q++)                                            \
-                        GRID_LPS_BODY;                                                         \
-                } else                                                                         \
-                    for (int64_t q = 0; q < n; q++)                                            \
-                        GRID_LPS_BODY;                                                         \
-                if (G->cmask && near > 0)                                                      \
-                    seg_contact(G, sg, A, c0, n, W);                                           \
-                if (failure && nbreak > 0)                                                     \
-                    for (int64_t q = 0; q < n; q++)                                            \
-                        if (brk[q] > 0 && grid_may_break(G, c0 + q, c0 + q + shift)) {        \
-                            G->mask[(c0 + q) * W + (k >> 6)] &= ~bit;                          \
-                            if (record_break(&G->breaks[blk], c0 + q, k, c0 + q + shift))      \
-                                return -1;                                                     \
-                        }                                                                      \
-            }                                                                                  \
-        }                                                                                      \
+        for (int64_t si = block_seg0(G, blk); si < block_seg0(G, blk + 1); si++)               \
+            if (lps_seg(G, &G->seg[si], cut, A, ta, tb, V, dil, shear, with_failure,           \
+                        &G->breaks[blk]))                                                      \
+                return -1;                                                                     \
         return 0;                                                                              \
     }
 GRID_LPS_BLOCK(lps_force_block_0, 0)
 GRID_LPS_BLOCK(lps_force_block_1, 1)
+
+#if PD_AVX512_KERNELS
+/* One half (8 lanes) of an LPS tile against one segment: GRID_LPS_BODY in
+ * AVX-512, operation for operation (no fused multiply-adds), for the
+ * lanes of `act` (the others load nothing and store nothing; `all`: every
+ * lane is).  Own sums in registers, the partners' forces and new s0 in
+ * memory; the lanes whose bond breaks are cleared and recorded at once
+ * (bl), in lane order. */
+#define LPS_HALF(h, all)                                                                       \
+    do {                                                                                       \
+        const __mmask8 act = (__mmask8)(acts >> (8 * (h)));                                    \
+        const __m512i mw = _mm512_loadu_si512((const void *)(M + 8 * (h)));                    \
+        const __mmask8 kmu = _mm512_mask_test_epi64_mask(act, mw, vbit);                       \
+        const __m512d mu = _mm512_maskz_mov_pd(kmu, one);                                      \
+        const __m512d xj = (all) ? _mm512_loadu_pd(Y0 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi0[h], act, Y0 + 8 * (h));            \
+        const __m512d yj = (all) ? _mm512_loadu_pd(Y1 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi1[h], act, Y1 + 8 * (h));            \
+        const __m512d zj = (all) ? _mm512_loadu_pd(Y2 + 8 * (h))                               \
+                                 : _mm512_mask_loadu_pd(yi2[h], act, Y2 + 8 * (h));            \
+        const __m512d taj = (all) ? _mm512_loadu_pd(TA + 8 * (h))                              \
+                                  : _mm512_mask_loadu_pd(tai[h], act, TA + 8 * (h));           \
+        const __m512d tbj = (all) ? _mm512_loadu_pd(TB + 8 * (h))                              \
+                                  : _mm512_mask_loadu_pd(tbi[h], act, TB + 8 * (h));           \
+        const __m512d dx = _mm512_sub_pd(xj, yi0[h]), dy = _mm512_sub_pd(yj, yi1[h]),          \
+                      dz = _mm512_sub_pd(zj, yi2[h]);                                          \
+        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(                                        \
+            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz))); \
+        __m512d e = _mm512_sub_pd(r, vlen);                                                    \
+        e = _mm512_mask_mov_pd(e, _mm512_cmp_pd_mask(_mm512_abs_pd(e), vnz, _CMP_LT_OQ), zero); \
+        const __m512d t =                                                                      \
+            _mm512_add_pd(_mm512_mul_pd(vc1, _mm512_add_pd(tai[h], taj)),                      \
+                          _mm512_mul_pd(_mm512_mul_pd(vc2, _mm512_add_pd(tbi[h], tbj)), e));   \
+        const __m512d fb = _mm512_maskz_div_pd(_mm512_cmp_pd_mask(r, zero, _CMP_GT_OQ),        \
+                                               _mm512_mul_pd(mu, t), r);                       \
+        const __m512d gx = _mm512_mul_pd(dx, fb), gy = _mm512_mul_pd(dy, fb),                  \
+                      gz = _mm512_mul_pd(dz, fb);                                              \
+        ax[h] = _mm512_add_pd(ax[h], gx);                                                      \
+        ay[h] = _mm512_add_pd(ay[h], gy);                                                      \
+        az[h] = _mm512_add_pd(az[h], gz);                                                      \
+        if (all) {                                                                             \
+            _mm512_storeu_pd(F0 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F0 + 8 * (h)), gx));  \
+            _mm512_storeu_pd(F1 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F1 + 8 * (h)), gy));  \
+            _mm512_storeu_pd(F2 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F2 + 8 * (h)), gz));  \
+        } else {                                                                               \
+            _mm512_mask_storeu_pd(F0 + 8 * (h), act,                                           \
+                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F0 + 8 * (h)), gx)); \
+            _mm512_mask_storeu_pd(F1 + 8 * (h), act,                                           \
+                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F1 + 8 * (h)), gy)); \
+            _mm512_mask_storeu_pd(F2 + 8 * (h), act,                                           \
+                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F2 + 8 * (h)), gz)); \
+        }                                                                                      \
+        if (contact)                                                                           \
+            near |= _mm512_mask_cmp_pd_mask(act, r, vdc, _CMP_LT_OQ);                          \
+        if (failure) {                                                                         \
+            const __m512d s = _mm512_mul_pd(e, vil);                                           \
+            const __m512d sj = (all) ? _mm512_loadu_pd(S0 + 8 * (h))                           \
+                                     : _mm512_mask_loadu_pd(si[h], act, S0 + 8 * (h));         \
+            const __mmask8 hb =                                                                \
+                _mm512_mask_cmp_pd_mask(kmu, s, _mm512_min_pd(si[h], sj), _CMP_GT_OQ);         \
+            const __m512d tt =                                                                 \
+                _mm512_mask_sub_pd(ninf, kmu, vs00, _mm512_mul_pd(valpha, s));                 \
+            sm[h] = _mm512_max_pd(tt, sm[h]);                                                  \
+            const __m512d sn = (all) ? _mm512_loadu_pd(SN + 8 * (h))                           \
+                                     : _mm512_maskz_loadu_pd(act, SN + 8 * (h));               \
+            _mm512_mask_storeu_pd(SN + 8 * (h), act, _mm512_max_pd(tt, sn));                   \
+            for (int l = 0; hb >> l; l++) { /* breaks are rare */                             \
+                const int64_t g = g0 + 8 * (h) + l, j = g + sg->shift;                         \
+                if (((hb >> l) & 1) && grid_may_break(G, g, j)) {                              \
+                    G->mask[g] &= ~bit;                                                        \
+                    if (record_break(bl, g, k, j))                                             \
+                        return -1;                                                             \
+                }                                                                              \
+            }                                                                                  \
+        }                                                                                      \
+    } while (0)
+
+/* The pair forces of a run at least a tile long (one mask word per
+ * particle) whose partner is cut or above (grid_cut), as grid_pmb.c's
+ * tile_run walks PMB's: a tile of 16 consecutive particles at a time (the
+ * last one moved back to end with the run; its lanes of the tile before
+ * left out) walks the run's segments with its own positions, theta/m,
+ * 1/m, s0, forces and new s0 in registers, so that a bond loads and
+ * stores only its partner's.  Each bond's arithmetic is GRID_LPS_BODY's,
+ * bit for bit; the sums are taken in another order than lps_seg's, so the
+ * two agree to rounding. */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) int
+lps_tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A,
+             const double *ta, const double *tb, double V, double dil, double shear,
+             const int failure, grid_breaks *bl)
+{
+    const int contact = G->cmask != NULL;
+    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+    const __m512d ninf = _mm512_set1_pd(-INFINITY), vnz = _mm512_set1_pd(PD_NEAR_ZERO);
+    const __m512d vs00 = _mm512_set1_pd(A->s00), valpha = _mm512_set1_pd(A->alpha);
+    for (int64_t t = 0; t < R->len; t += GRID_TILE) {
+        const int64_t g0 = grid_tile_g0(R, t);
+        const int64_t own = R->start + t; /* the lanes before are the last tile's */
+        __m512d yi0[2], yi1[2], yi2[2], tai[2], tbi[2], si[2], ax[2], ay[2], az[2], sm[2];
+        for (int h = 0; h < 2; h++) {
+            yi0[h] = _mm512_loadu_pd(A->y0 + g0 + 8 * h);
+            yi1[h] = _mm512_loadu_pd(A->y1 + g0 + 8 * h);
+            yi2[h] = _mm512_loadu_pd(A->y2 + g0 + 8 * h);
+            tai[h] = _mm512_loadu_pd(ta + g0 + 8 * h);
+            tbi[h] = _mm512_loadu_pd(tb + g0 + 8 * h);
+            si[h] = failure ? _mm512_loadu_pd(A->s0 + g0 + 8 * h) : zero;
+            ax[h] = ay[h] = az[h] = zero;
+            sm[h] = ninf;
+        }
+        for (int64_t q = R->seg0; q < R[1].seg0; q++) {
+            const grid_seg *sg = &G->seg[q];
+            int64_t lo, hi;
+            const uint32_t acts = grid_tile_acts(sg, cut, own, g0, &lo, &hi);
+            if (acts == 0)
+                continue;
+            const int k = sg->k;
+            const uint64_t bit = UINT64_C(1) << k;
+            const __m512i vbit = _mm512_set1_epi64((long long)bit);
+            const double len = G->len[k];
+            const __m512d vlen = _mm512_set1_pd(len), vil = _mm512_set1_pd(G->inv_len[k]);
+            const __m512d vdc = _mm512_set1_pd(G->dc[k]);
+            /* lps_seg's c1 and c2, the same products */
+            const __m512d vc1 = _mm512_set1_pd(dil * V * G->nu[k] * G->omega[k] * len);
+            const __m512d vc2 =
+                _mm512_set1_pd(PD_LPS_SHEAR_FACTOR * shear * V * G->nu[k] * G->omega[k]);
+            const int64_t j0 = g0 + sg->shift;
+            const uint64_t *M = G->mask + g0;
+            const double *Y0 = A->y0 + j0, *Y1 = A->y1 + j0, *Y2 = A->y2 + j0;
+            const double *TA = ta + j0, *TB = tb + j0, *S0 = failure ? A->s0 + j0 : NULL;
+            double *F0 = A->f0 + j0, *F1 = A->f1 + j0, *F2 = A->f2 + j0;
+            double *SN = failure ? A->s0n + j0 : NULL;
+            __mmask8 near = 0;
+            if (acts == 0xffff) {
+                LPS_HALF(0, 1);
+                LPS_HALF(1, 1);
+            } else {
+                LPS_HALF(0, 0);
+                LPS_HALF(1, 0);
+            }
+            if (contact && near)
+                seg_contact(G, sg, A, lo, hi - lo, 1);
+        }
+        double tx[GRID_TILE], ty[GRID_TILE], tz[GRID_TILE], ts[GRID_TILE];
+        for (int h = 0; h < 2; h++) {
+            _mm512_storeu_pd(tx + 8 * h, ax[h]);
+            _mm512_storeu_pd(ty + 8 * h, ay[h]);
+            _mm512_storeu_pd(tz + 8 * h, az[h]);
+            _mm512_storeu_pd(ts + 8 * h, sm[h]);
+        }
+        for (int64_t g = own; g < g0 + GRID_TILE; g++) {
+            A->f0[g] += tx[g - g0];
+            A->f1[g] += ty[g - g0];
+            A->f2[g] += tz[g - g0];
+            if (failure)
+                A->s0n[g] = ts[g - g0] > A->s0n[g] ? ts[g - g0] : A->s0n[g];
+        }
+    }
+    return 0;
+}
+
+/* The AVX-512 variants: runs at least a tile long take lps_tile_run,
+ * shorter ones lps_seg. */
+#define LPS_TILE_BLOCK(name, with_failure)                                                     \
+    __attribute__((target("avx512f"))) static int name(                                        \
+        pd_grid *G, int64_t blk, const grid_arrays *A, const double *restrict ta,              \
+        const double *restrict tb, double V, double dil, double shear)                         \
+    {                                                                                          \
+        const int64_t cut = grid_cut(G, blk);                                                  \
+        for (int64_t r = G->block_run[blk]; r < G->block_run[blk + 1]; r++) {                  \
+            const grid_run *R = &G->run[r];                                                    \
+            if (R->len >= GRID_TILE) {                                                         \
+                if (lps_tile_run(G, R, cut, A, ta, tb, V, dil, shear, with_failure,            \
+                                 &G->breaks[blk]))                                             \
+                    return -1;                                                                 \
+            } else                                                                             \
+                for (int64_t s = R->seg0; s < R[1].seg0; s++)                                  \
+                    if (lps_seg(G, &G->seg[s], cut, A, ta, tb, V, dil, shear, with_failure,    \
+                                &G->breaks[blk]))                                              \
+                        return -1;                                                             \
+        }                                                                                      \
+        return 0;                                                                              \
+    }
+LPS_TILE_BLOCK(lps_tile_block_0, 0)
+LPS_TILE_BLOCK(lps_tile_block_1, 1)
+#endif
 
 /* Of one block's intact bonds (with their partner cut or above), both
  * ends: th += omega |xi| e nu V and sq += omega e e nu V (energy_row's). */
@@ -223,8 +528,15 @@ pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode 
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel
         for (int64_t blk = grid_walk0(G, phase); blk < G->walk; blk += 2)
-            if (grid_mine(G, blk))
+            if (grid_mine(G, blk)) {
+#if PD_AVX512_KERNELS
+                if (G->tile) {
+                    lps_theta_tiles(G, blk, &A, theta, V);
+                    continue;
+                }
+#endif
                 lps_theta_block(G, blk, &A, theta, V);
+            }
     }
     double *ta = G->theta_m, *tb = G->inv_m;
 #pragma omp parallel for schedule(static)
@@ -243,12 +555,18 @@ pd_status pd_grid_lps(pd_sim *sim, const double *m, double *theta, pd_bond_mode 
     int bad = 0;
     for (int64_t blk = 0; blk < G->nblocks; blk++)
         G->breaks[blk].n = 0;
+    typedef int (*lps_block_fn)(pd_grid *, int64_t, const grid_arrays *, const double *,
+                                const double *, double, double, double);
+    lps_block_fn fn = failure ? lps_force_block_1 : lps_force_block_0;
+#if PD_AVX512_KERNELS
+    if (G->tile)
+        fn = failure ? lps_tile_block_1 : lps_tile_block_0;
+#endif
     for (int phase = 0; phase < 2; phase++) {
 #pragma omp parallel reduction(| : bad)
         for (int64_t blk = grid_walk0(G, phase); blk < G->walk; blk += 2)
             if (grid_mine(G, blk))
-                bad |= (failure ? lps_force_block_1 : lps_force_block_0)(
-                           G, blk, &A, ta, tb, V, dil, sim->sc.shear_modulus) != 0;
+                bad |= fn(G, blk, &A, ta, tb, V, dil, sim->sc.shear_modulus) != 0;
     }
     if (bad)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the broken bonds of a step");

@@ -298,7 +298,7 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
     const __m512d ninf = _mm512_set1_pd(-INFINITY), vnz = _mm512_set1_pd(PD_NEAR_ZERO);
     const __m512d vs00 = _mm512_set1_pd(A->s00), valpha = _mm512_set1_pd(A->alpha);
     for (int64_t t = 0; t < R->len; t += GRID_TILE) {
-        const int64_t g0 = R->start + (t + GRID_TILE <= R->len ? t : R->len - GRID_TILE);
+        const int64_t g0 = grid_tile_g0(R, t);
         const int64_t own = R->start + t; /* the lanes before are the last tile's */
         __m512d yi0[2], yi1[2], yi2[2], si[2], ax[2], ay[2], az[2], sm[2];
         for (int h = 0; h < 2; h++) {
@@ -311,9 +311,9 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
         }
         for (int64_t q = R->seg0; q < R[1].seg0; q++) {
             const grid_seg *sg = &G->seg[q];
-            const int64_t lo = grid_seg_lo(sg, cut, own);
-            const int64_t hi = sg->hi < g0 + GRID_TILE ? sg->hi : g0 + GRID_TILE;
-            if (lo >= hi)
+            int64_t lo, hi;
+            const uint32_t acts = grid_tile_acts(sg, cut, own, g0, &lo, &hi);
+            if (acts == 0)
                 continue;
             const int k = sg->k;
             const __m512i vbit = _mm512_set1_epi64((long long)(UINT64_C(1) << k));
@@ -328,8 +328,6 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
                    *F2 = forces ? A->f2 + j0 : NULL;
             double *SN = failure ? A->s0n + j0 : NULL;
             double *EB = energy ? A->eb + j0 : NULL, *OB = energy ? A->eb + g0 : NULL;
-            const uint32_t acts = (uint32_t)(((UINT64_C(1) << (hi - g0)) - 1) &
-                                             ~((UINT64_C(1) << (lo - g0)) - 1));
             __mmask8 near = 0, brk = 0;
             if (acts == 0xffff) {
                 TILE_HALF(0, 1);
@@ -498,7 +496,8 @@ int grid_tile_energies(const pd_sim *sim)
 {
 #if PD_AVX512_KERNELS
     pd_grid *G = sim->grid;
-    if (!G->tile || G->epoch != sim->half.epoch || !energy_buffers(G))
+    /* PMB's: an LPS grid (omega) walks tiles too, but not these energies */
+    if (!G->tile || G->omega || G->epoch != sim->half.epoch || !energy_buffers(G))
         return 0;
     grid_arrays A = {.V = sim->p->volume[0], .eb = G->eb, .ec = G->ec};
     if (G->perm) {
