@@ -162,13 +162,14 @@ static inline double weight(const lps_state *st, const pd_bonds *b, int64_t k)
 
 /* The weight of every directed bond, omega[k] = omega(|xi|) d(xi/|xi|)
  * (lib/bonds/influence.c: d = 1 without ellipsoids), and m_i from it (Algorithm
- * 3, in pd_lps_weighted_volume's order of products); omega NULL: m only. */
+ * 3, in pd_lps_weighted_volume's order of products); omega NULL: m only.
+ * With S (pd_lps_stable_dt's) also S_i = sum_j omega |xi| nu V_j. */
 static void bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
-                         double *omega, double *m)
+                         double *omega, double *m, double *S)
 {
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < b->n; i++) {
-        double sum = 0;
+        double sum = 0, sl = 0;
         pd_bond_iter it;
         for (pd_family_start(b, p, i, &it); pd_family_next(&it);) {
             const int32_t j = it.j;
@@ -179,8 +180,12 @@ static void bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scen
             if (omega != NULL)
                 omega[it.q] = om;
             sum += om * rsq * p->volume[j] * it.vfactor;
+            if (S != NULL)
+                sl += om * it.length * it.vfactor * p->volume[j];
         }
         m[i] = sum;
+        if (S != NULL)
+            S[i] = sl;
     }
 }
 
@@ -313,7 +318,7 @@ static pd_status lps_init(pd_sim *sim, void **state)
         lps_free(st);
         return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS scratch");
     }
-    bond_weights(sim->p, b, &sim->sc, st->omega, st->m);
+    bond_weights(sim->p, b, &sim->sc, st->omega, st->m, NULL);
     /* the directed bits from the half bonds, so that both copies of a bond
      * agree (the file's bits may not) */
     sim->intact_stale = 1;
@@ -1025,13 +1030,7 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
         free(S);
         return NAN;
     }
-    bond_weights(p, b, s, NULL, m);
-    for (int64_t i = 0; i < n; i++) {
-        S[i] = 0;
-        pd_bond_iter it;
-        for (pd_family_start(b, p, i, &it); pd_family_next(&it);)
-            S[i] += bond_omega(p, b, s, i, &it) * it.length * it.vfactor * p->volume[it.j];
-    }
+    bond_weights(p, b, s, NULL, m, S);
     /* VES (see the top): theta_i enters t_ij with 3K omega/m_i - 5G omega
      * (1/m_i + 1/m_j), theta_j with 3K omega/m_j; with m_i ~ m_j both are
      * bounded by max(3K, 10G - 3K) omega/m, which takes the place of
@@ -1044,6 +1043,7 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
     /* a window's own rows (pd_read_body_ranks), whose partners' families
      * are whole; the other rows' are their ranks' */
     const int64_t lo = p->window ? p->own_lo : 0, hi = p->window ? p->own_hi : n;
+#pragma omp parallel for schedule(static) reduction(min : best)
     for (int64_t i = lo; i < hi; i++) {
         double sum = 0;
         pd_bond_iter it;
