@@ -496,8 +496,8 @@ int grid_tile_energies(const pd_sim *sim)
 {
 #if PD_AVX512_KERNELS
     pd_grid *G = sim->grid;
-    /* PMB's: an LPS grid (omega) walks tiles too, but not these energies */
-    if (!G->tile || G->omega || G->epoch != sim->half.epoch || !energy_buffers(G))
+    /* PMB's: an LPS grid (theta_m) walks tiles too, but not these energies */
+    if (!G->tile || G->theta_m || G->epoch != sim->half.epoch || !energy_buffers(G))
         return 0;
     grid_arrays A = {.V = sim->p->volume[0], .eb = G->eb, .ec = G->ec};
     if (G->perm) {
