@@ -219,6 +219,62 @@ static inline int64_t grid_tile_g0(const grid_run *R, int64_t t)
     return R->start + (t + GRID_TILE <= R->len ? t : R->len - GRID_TILE);
 }
 
+#if PD_AVX512_KERNELS
+/* Eight lanes of a tile (own positions yi0, yi1, yi2; the lanes of `act`,
+ * `all`: every lane) against their partners' positions at Y0, Y1, Y2 (a
+ * lane outside act loads nothing and takes its own): the bond vectors d,
+ * the lengths r and the extensions e = r - L, 0 below eps_machine of
+ * extension, operation for operation as the segment loops take them
+ * (GRID_PMB_PAIR's dr, GRID_LPS_BODY's and GRID_THETA_BODY's e). */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) void
+grid_tile_pair(__mmask8 act, const int all, const double *Y0, const double *Y1, const double *Y2,
+               __m512d yi0, __m512d yi1, __m512d yi2, __m512d L, __m512d d[3], __m512d *r,
+               __m512d *e)
+{
+    const __m512d xj = all ? _mm512_loadu_pd(Y0) : _mm512_mask_loadu_pd(yi0, act, Y0);
+    const __m512d yj = all ? _mm512_loadu_pd(Y1) : _mm512_mask_loadu_pd(yi1, act, Y1);
+    const __m512d zj = all ? _mm512_loadu_pd(Y2) : _mm512_mask_loadu_pd(yi2, act, Y2);
+    d[0] = _mm512_sub_pd(xj, yi0);
+    d[1] = _mm512_sub_pd(yj, yi1);
+    d[2] = _mm512_sub_pd(zj, yi2);
+    *r = _mm512_sqrt_pd(_mm512_add_pd(
+        _mm512_add_pd(_mm512_mul_pd(d[0], d[0]), _mm512_mul_pd(d[1], d[1])),
+        _mm512_mul_pd(d[2], d[2])));
+    const __m512d x = _mm512_sub_pd(*r, L);
+    *e = _mm512_mask_mov_pd(x,
+                            _mm512_cmp_pd_mask(_mm512_abs_pd(x), _mm512_set1_pd(PD_NEAR_ZERO),
+                                               _CMP_LT_OQ),
+                            _mm512_setzero_pd());
+}
+
+/* A tile's own sums into memory at its end: the forces (ax, ay, az; two
+ * halves each) added to f0, f1, f2 and, with `failure`, the new s0 (sm)
+ * the larger into s0n, for the particles from `own` on (those before are
+ * the tile before's). */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) void
+grid_tile_add(const grid_arrays *A, int64_t g0, int64_t own, const __m512d ax[2],
+              const __m512d ay[2], const __m512d az[2], const __m512d sm[2], const int forces,
+              const int failure)
+{
+    double tx[GRID_TILE], ty[GRID_TILE], tz[GRID_TILE], ts[GRID_TILE];
+    for (int h = 0; h < 2; h++) {
+        _mm512_storeu_pd(tx + 8 * h, ax[h]);
+        _mm512_storeu_pd(ty + 8 * h, ay[h]);
+        _mm512_storeu_pd(tz + 8 * h, az[h]);
+        _mm512_storeu_pd(ts + 8 * h, sm[h]);
+    }
+    for (int64_t g = own; g < g0 + GRID_TILE; g++) {
+        if (forces) {
+            A->f0[g] += tx[g - g0];
+            A->f1[g] += ty[g - g0];
+            A->f2[g] += tz[g - g0];
+        }
+        if (failure)
+            A->s0n[g] = ts[g - g0] > A->s0n[g] ? ts[g - g0] : A->s0n[g];
+    }
+}
+#endif
+
 /* Is block blk (of the phase being walked) the calling thread's?  Each
  * thread takes a contiguous run of the phase's blocks holding about its
  * share of the particles, the same in every pass of every step: a thread

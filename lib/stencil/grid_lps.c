@@ -88,18 +88,9 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
         const __mmask8 act = (__mmask8)(acts >> (8 * (h)));                                    \
         const __m512i mw = _mm512_loadu_si512((const void *)(M + 8 * (h)));                    \
         const __m512d mu = _mm512_maskz_mov_pd(_mm512_mask_test_epi64_mask(act, mw, vbit), one); \
-        const __m512d xj = (all) ? _mm512_loadu_pd(Y0 + 8 * (h))                               \
-                                 : _mm512_mask_loadu_pd(yi0[h], act, Y0 + 8 * (h));            \
-        const __m512d yj = (all) ? _mm512_loadu_pd(Y1 + 8 * (h))                               \
-                                 : _mm512_mask_loadu_pd(yi1[h], act, Y1 + 8 * (h));            \
-        const __m512d zj = (all) ? _mm512_loadu_pd(Y2 + 8 * (h))                               \
-                                 : _mm512_mask_loadu_pd(yi2[h], act, Y2 + 8 * (h));            \
-        const __m512d dx = _mm512_sub_pd(xj, yi0[h]), dy = _mm512_sub_pd(yj, yi1[h]),          \
-                      dz = _mm512_sub_pd(zj, yi2[h]);                                          \
-        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(                                        \
-            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz))); \
-        __m512d e = _mm512_sub_pd(r, vlen);                                                    \
-        e = _mm512_mask_mov_pd(e, _mm512_cmp_pd_mask(_mm512_abs_pd(e), vnz, _CMP_LT_OQ), zero); \
+        __m512d d[3], r, e;                                                                    \
+        grid_tile_pair(act, (all), Y0 + 8 * (h), Y1 + 8 * (h), Y2 + 8 * (h), yi0[h], yi1[h],   \
+                       yi2[h], vlen, d, &r, &e);                                               \
         const __m512d c = _mm512_mul_pd(                                                       \
             mu, _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(voml, e), vV), vnu));                \
         own[h] = _mm512_add_pd(own[h], c);                                                     \
@@ -117,8 +108,7 @@ __attribute__((target("avx512f"))) static inline __attribute__((always_inline)) 
 theta_tile_run(const pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, double *sum,
                double V)
 {
-    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
-    const __m512d vnz = _mm512_set1_pd(PD_NEAR_ZERO), vV = _mm512_set1_pd(V);
+    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0), vV = _mm512_set1_pd(V);
     for (int64_t t = 0; t < R->len; t += GRID_TILE) {
         const int64_t g0 = grid_tile_g0(R, t);
         const int64_t own0 = R->start + t; /* the lanes before are the last tile's */
@@ -285,22 +275,14 @@ GRID_LPS_BLOCK(lps_force_block_1, 1)
         const __m512i mw = _mm512_loadu_si512((const void *)(M + 8 * (h)));                    \
         const __mmask8 kmu = _mm512_mask_test_epi64_mask(act, mw, vbit);                       \
         const __m512d mu = _mm512_maskz_mov_pd(kmu, one);                                      \
-        const __m512d xj = (all) ? _mm512_loadu_pd(Y0 + 8 * (h))                               \
-                                 : _mm512_mask_loadu_pd(yi0[h], act, Y0 + 8 * (h));            \
-        const __m512d yj = (all) ? _mm512_loadu_pd(Y1 + 8 * (h))                               \
-                                 : _mm512_mask_loadu_pd(yi1[h], act, Y1 + 8 * (h));            \
-        const __m512d zj = (all) ? _mm512_loadu_pd(Y2 + 8 * (h))                               \
-                                 : _mm512_mask_loadu_pd(yi2[h], act, Y2 + 8 * (h));            \
         const __m512d taj = (all) ? _mm512_loadu_pd(TA + 8 * (h))                              \
                                   : _mm512_mask_loadu_pd(tai[h], act, TA + 8 * (h));           \
         const __m512d tbj = (all) ? _mm512_loadu_pd(TB + 8 * (h))                              \
                                   : _mm512_mask_loadu_pd(tbi[h], act, TB + 8 * (h));           \
-        const __m512d dx = _mm512_sub_pd(xj, yi0[h]), dy = _mm512_sub_pd(yj, yi1[h]),          \
-                      dz = _mm512_sub_pd(zj, yi2[h]);                                          \
-        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(                                        \
-            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz))); \
-        __m512d e = _mm512_sub_pd(r, vlen);                                                    \
-        e = _mm512_mask_mov_pd(e, _mm512_cmp_pd_mask(_mm512_abs_pd(e), vnz, _CMP_LT_OQ), zero); \
+        __m512d d[3], r, e;                                                                    \
+        grid_tile_pair(act, (all), Y0 + 8 * (h), Y1 + 8 * (h), Y2 + 8 * (h), yi0[h], yi1[h],   \
+                       yi2[h], vlen, d, &r, &e);                                               \
+        const __m512d dx = d[0], dy = d[1], dz = d[2];                                         \
         const __m512d t =                                                                      \
             _mm512_add_pd(_mm512_mul_pd(vc1, _mm512_add_pd(tai[h], taj)),                      \
                           _mm512_mul_pd(_mm512_mul_pd(vc2, _mm512_add_pd(tbi[h], tbj)), e));   \
@@ -364,7 +346,7 @@ lps_tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A,
 {
     const int contact = G->cmask != NULL;
     const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
-    const __m512d ninf = _mm512_set1_pd(-INFINITY), vnz = _mm512_set1_pd(PD_NEAR_ZERO);
+    const __m512d ninf = _mm512_set1_pd(-INFINITY);
     const __m512d vs00 = _mm512_set1_pd(A->s00), valpha = _mm512_set1_pd(A->alpha);
     for (int64_t t = 0; t < R->len; t += GRID_TILE) {
         const int64_t g0 = grid_tile_g0(R, t);
@@ -413,20 +395,7 @@ lps_tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A,
             if (contact && near)
                 seg_contact(G, sg, A, lo, hi - lo, 1);
         }
-        double tx[GRID_TILE], ty[GRID_TILE], tz[GRID_TILE], ts[GRID_TILE];
-        for (int h = 0; h < 2; h++) {
-            _mm512_storeu_pd(tx + 8 * h, ax[h]);
-            _mm512_storeu_pd(ty + 8 * h, ay[h]);
-            _mm512_storeu_pd(tz + 8 * h, az[h]);
-            _mm512_storeu_pd(ts + 8 * h, sm[h]);
-        }
-        for (int64_t g = own; g < g0 + GRID_TILE; g++) {
-            A->f0[g] += tx[g - g0];
-            A->f1[g] += ty[g - g0];
-            A->f2[g] += tz[g - g0];
-            if (failure)
-                A->s0n[g] = ts[g - g0] > A->s0n[g] ? ts[g - g0] : A->s0n[g];
-        }
+        grid_tile_add(A, g0, own, ax, ay, az, sm, 1, failure);
     }
     return 0;
 }

@@ -215,19 +215,10 @@ static __mmask8 tile_gone(const pd_grid *G, int64_t g8, int64_t shift, __mmask8 
         const __mmask8 act = (__mmask8)(acts >> (8 * (h)));                                    \
         const __m512i mw = _mm512_loadu_si512((const void *)(M + 8 * (h)));                    \
         const __mmask8 kmu = _mm512_mask_test_epi64_mask(act, mw, vbit);                       \
-        const __m512d xj = (all) ? _mm512_loadu_pd(Y0 + 8 * (h))                               \
-                                 : _mm512_mask_loadu_pd(yi0[h], act, Y0 + 8 * (h));            \
-        const __m512d yj = (all) ? _mm512_loadu_pd(Y1 + 8 * (h))                               \
-                                 : _mm512_mask_loadu_pd(yi1[h], act, Y1 + 8 * (h));            \
-        const __m512d zj = (all) ? _mm512_loadu_pd(Y2 + 8 * (h))                               \
-                                 : _mm512_mask_loadu_pd(yi2[h], act, Y2 + 8 * (h));            \
-        const __m512d dx = _mm512_sub_pd(xj, yi0[h]), dy = _mm512_sub_pd(yj, yi1[h]),          \
-                      dz = _mm512_sub_pd(zj, yi2[h]);                                          \
-        const __m512d r = _mm512_sqrt_pd(_mm512_add_pd(                                        \
-            _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz))); \
-        __m512d dr = _mm512_sub_pd(r, vL);                                                     \
-        dr = _mm512_mask_mov_pd(dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), vnz, _CMP_LT_OQ),    \
-                                zero);                                                         \
+        __m512d d[3], r, dr;                                                                   \
+        grid_tile_pair(act, (all), Y0 + 8 * (h), Y1 + 8 * (h), Y2 + 8 * (h), yi0[h], yi1[h],   \
+                       yi2[h], vL, d, &r, &dr);                                                \
+        const __m512d dx = d[0], dy = d[1], dz = d[2];                                         \
         const __m512d s = _mm512_mul_pd(dr, viL);                                              \
         const __m512d fb = _mm512_maskz_mul_pd(kmu, _mm512_mul_pd(vw, s), one);                \
         const __m512d fs =                                                                     \
@@ -295,7 +286,7 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
          const int contact, const int energy, const int forces, grid_breaks *bl)
 {
     const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
-    const __m512d ninf = _mm512_set1_pd(-INFINITY), vnz = _mm512_set1_pd(PD_NEAR_ZERO);
+    const __m512d ninf = _mm512_set1_pd(-INFINITY);
     const __m512d vs00 = _mm512_set1_pd(A->s00), valpha = _mm512_set1_pd(A->alpha);
     for (int64_t t = 0; t < R->len; t += GRID_TILE) {
         const int64_t g0 = grid_tile_g0(R, t);
@@ -341,22 +332,7 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
             if (failure && brk && tile_breaks(G, sg, A, lo, hi, 1, bl))
                 return -1;
         }
-        double tx[GRID_TILE], ty[GRID_TILE], tz[GRID_TILE], ts[GRID_TILE];
-        for (int h = 0; h < 2; h++) {
-            _mm512_storeu_pd(tx + 8 * h, ax[h]);
-            _mm512_storeu_pd(ty + 8 * h, ay[h]);
-            _mm512_storeu_pd(tz + 8 * h, az[h]);
-            _mm512_storeu_pd(ts + 8 * h, sm[h]);
-        }
-        for (int64_t g = own; g < g0 + GRID_TILE; g++) {
-            if (forces) {
-                A->f0[g] += tx[g - g0];
-                A->f1[g] += ty[g - g0];
-                A->f2[g] += tz[g - g0];
-            }
-            if (failure)
-                A->s0n[g] = ts[g - g0] > A->s0n[g] ? ts[g - g0] : A->s0n[g];
-        }
+        grid_tile_add(A, g0, own, ax, ay, az, sm, forces, failure);
     }
     return 0;
 }
