@@ -203,6 +203,17 @@ __attribute__((target("avx512f"))) static void lps_theta_tiles(const pd_grid *G,
         }                                                                                      \
     } while (0)
 
+/* The per-offset factors of GRID_LPS_BODY's pair force for offset k:
+ * c1 = (3K - 5G) V nu omega |xi| (dil = the pair factor of K and G) and
+ * c2 = 15 G V nu omega (shear = G); the segment loop and the tile take
+ * them from here, so that their products are the same bits. */
+static inline void lps_factors(const pd_grid *G, int k, double V, double dil, double shear,
+                               double *c1, double *c2)
+{
+    *c1 = dil * V * G->nu[k] * G->omega[k] * G->len[k];
+    *c2 = PD_LPS_SHEAR_FACTOR * shear * V * G->nu[k] * G->omega[k];
+}
+
 /* The pair forces of segment sg's bonds whose partner is cut or above
  * (grid_cut), chunk by chunk, both ends in memory; with `failure` the
  * bonds that break into bl.  0, or -1 when out of memory. */
@@ -222,8 +233,8 @@ lps_seg(pd_grid *G, const grid_seg *sg, int64_t cut, const grid_arrays *A,
     const uint64_t *restrict mask = G->mask + (k >> 6);
     const int64_t shift = sg->shift;
     const double len = G->len[k], il = G->inv_len[k], dc = G->dc[k];
-    const double c1 = dil * V * G->nu[k] * G->omega[k] * len,
-                 c2 = PD_LPS_SHEAR_FACTOR * shear * V * G->nu[k] * G->omega[k];
+    double c1, c2;
+    lps_factors(G, k, V, dil, shear, &c1, &c2);
     for (int64_t c0 = grid_seg_lo(sg, cut, 0); c0 < sg->hi; c0 += GRID_CHUNK) {
         const int64_t n = sg->hi - c0 < GRID_CHUNK ? sg->hi - c0 : GRID_CHUNK;
         double nbreak = 0, near = 0;
@@ -374,10 +385,9 @@ lps_tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A,
             const double len = G->len[k];
             const __m512d vlen = _mm512_set1_pd(len), vil = _mm512_set1_pd(G->inv_len[k]);
             const __m512d vdc = _mm512_set1_pd(G->dc[k]);
-            /* lps_seg's c1 and c2, the same products */
-            const __m512d vc1 = _mm512_set1_pd(dil * V * G->nu[k] * G->omega[k] * len);
-            const __m512d vc2 =
-                _mm512_set1_pd(PD_LPS_SHEAR_FACTOR * shear * V * G->nu[k] * G->omega[k]);
+            double c1, c2;
+            lps_factors(G, k, V, dil, shear, &c1, &c2);
+            const __m512d vc1 = _mm512_set1_pd(c1), vc2 = _mm512_set1_pd(c2);
             const int64_t j0 = g0 + sg->shift;
             const uint64_t *M = G->mask + g0;
             const double *Y0 = A->y0 + j0, *Y1 = A->y1 + j0, *Y2 = A->y2 + j0;
