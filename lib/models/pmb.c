@@ -35,44 +35,6 @@
 
 #define PMB_CHUNK 256 /* bonds per vector pass */
 
-pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h)
-{
-    const int64_t n = h->n;
-    size_t m = (size_t)(h->count > 0 ? h->count : 1);
-    h->length = malloc(m * sizeof(double));
-    h->w_ij = malloc(m * sizeof(double));
-    h->w_ji = malloc(m * sizeof(double));
-    if (!h->length || !h->w_ij || !h->w_ji)
-        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)h->count);
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < n; i++) {
-        int64_t k = b->offset[i + 1] - (h->offset[i + 1] - h->offset[i]);
-        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++, k++) {
-            h->length[q] = b->length[k];
-            /* (c V_j) nu in the order LAMMPS peri/pmb multiplies them */
-            h->w_ij[q] = c * p->volume[h->neighbor[q]] * b->vfactor[k];
-        }
-    }
-    /* the mirror j-i of each bond: rows i meet the entries below the
-     * diagonal of row j in ascending order, so a cursor per row finds it */
-    for (int64_t j = 0; j < n; j++)
-        h->cursor[j] = b->offset[j];
-    int same = 1;
-    for (int64_t i = 0; i < n; i++)
-        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
-            int64_t back = h->cursor[h->neighbor[q]]++;
-            h->w_ji[q] = c * p->volume[i] * b->vfactor[back];
-            same &= h->w_ji[q] == h->w_ij[q];
-        }
-    /* equal volumes and radii (any pd-lattice body): one weight per bond,
-     * one stream less for the kernel to read */
-    if (same) {
-        free(h->w_ji);
-        h->w_ji = h->w_ij;
-    }
-    return PD_OK;
-}
-
 /* mu[q] = the state bit of bond c0 + q, q < m (0 or 1): a word at a time,
  * its bits in a loop the compiler vectorizes. */
 static inline __attribute__((always_inline)) void chunk_states(const uint64_t *bits, int64_t c0,

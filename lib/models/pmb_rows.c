@@ -1,8 +1,8 @@
 /*
  * pmb_rows.c -- the PMB bond list in AVX-512 rows (lib/models/pmb.c walks
- * the blocks and holds the maths; pmb_rows.h the interface): the bond
- * pass of a block's rows, the energies counted in it or in passes of their
- * own, each bond once for both ends.
+ * the blocks and holds the maths; pmb_rows.h the interface): the half
+ * bonds' weights, the bond pass of a block's rows, the energies counted in
+ * it or in passes of their own, each bond once for both ends.
  *
  * Built without -fassociative-math (pmb.c's portable loops need it to
  * vectorize; these are written in intrinsics): the compiler keeps every
@@ -15,6 +15,51 @@
 
 #include "models/model.h"
 #include "models/pmb_rows.h"
+
+/* The half bonds' lengths and weights (model.h).  Here rather than in
+ * pmb.c, whose portable loops are built with -fassociative-math: that let
+ * the compiler take c V_j nu_ij as (c nu_ij) V_j in one of the two loops
+ * below and (c V_i) nu_ji in the other, so that a bond's two weights,
+ * equal on any body of equal volumes, differed in their last bit and
+ * every body took the kernels' two-weight path.  Each product is taken
+ * as written: (c V) nu, as LAMMPS peri/pmb and the stencil take it. */
+pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd_half_bonds *h)
+{
+    const int64_t n = h->n;
+    size_t m = (size_t)(h->count > 0 ? h->count : 1);
+    h->length = malloc(m * sizeof(double));
+    h->w_ij = malloc(m * sizeof(double));
+    h->w_ji = malloc(m * sizeof(double));
+    if (!h->length || !h->w_ij || !h->w_ji)
+        return pd_fail(PD_ERR_NOMEM, "out of memory for %lld bonds", (long long)h->count);
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; i++) {
+        int64_t k = b->offset[i + 1] - (h->offset[i + 1] - h->offset[i]);
+        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++, k++) {
+            h->length[q] = b->length[k];
+            /* (c V_j) nu in the order LAMMPS peri/pmb multiplies them */
+            h->w_ij[q] = c * p->volume[h->neighbor[q]] * b->vfactor[k];
+        }
+    }
+    /* the mirror j-i of each bond: rows i meet the entries below the
+     * diagonal of row j in ascending order, so a cursor per row finds it */
+    for (int64_t j = 0; j < n; j++)
+        h->cursor[j] = b->offset[j];
+    int same = 1;
+    for (int64_t i = 0; i < n; i++)
+        for (int64_t q = h->offset[i]; q < h->offset[i + 1]; q++) {
+            int64_t back = h->cursor[h->neighbor[q]]++;
+            h->w_ji[q] = c * p->volume[i] * b->vfactor[back];
+            same &= h->w_ji[q] == h->w_ij[q];
+        }
+    /* equal volumes and radii (any pd-lattice body): one weight per bond,
+     * one stream less for the kernel to read */
+    if (same) {
+        free(h->w_ji);
+        h->w_ji = h->w_ij;
+    }
+    return PD_OK;
+}
 
 /* The elastic energy of half bond k of row i, J: 1/2 c s^2 |xi| nu V_i V_j,
  * with the mean of nu_ij and nu_ji (w = c V nu holds the rest). */
