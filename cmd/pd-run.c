@@ -1016,7 +1016,8 @@ static void log_scene(const struct options *o, const struct held *h, int64_t fir
                 pd_sim_stencil(sim), pd_sim_stencil_tiles(sim) ? " in AVX-512 tiles" : "",
                 sc->has_contact ? ", with the contact of its pairs" : "");
     else if (pd_sim_list_rows(sim))
-        fprintf(stderr, PROG ": bonds walked as a bond list in AVX-512 rows%s\n",
+        fprintf(stderr, PROG ": bonds walked as a bond list in AVX-512 rows%s%s\n",
+                pd_sim_list_lanes(sim) ? ", 8 at a time in lanes" : "",
                 sc->has_contact ? ", with the contact of its pairs" : "");
     log_constants(p, sc, o);
     if (sc->relax)

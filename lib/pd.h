@@ -994,10 +994,12 @@ const char *pd_sim_effects(const pd_sim *sim);
 /* The PMB bonds' kernel: the half-stencil offsets of the lattice kernel
  * (lib/stencil/grid.c), or 0 when the bond list is walked; whether the stencil
  * walks its rows in AVX-512 tiles; whether the PMB bond list is walked in
- * AVX-512 rows (lib/models/pmb.c). */
+ * AVX-512 rows (lib/models/pmb.c), and whether 8 rows at a time, in lanes
+ * (lib/models/pmb_lanes.c). */
 int pd_sim_stencil(const pd_sim *sim);
 int pd_sim_stencil_tiles(const pd_sim *sim);
 int pd_sim_list_rows(const pd_sim *sim);
+int pd_sim_list_lanes(const pd_sim *sim);
 int64_t pd_sim_stepno(const pd_sim *sim);
 double pd_sim_time(const pd_sim *sim);
 double pd_sim_kinetic(const pd_sim *sim);

@@ -208,6 +208,51 @@ for name in a['frames']:
     [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\ [0-9.e-]+$ ]]
 }
 
+@test "the bond list's lanes and its rows (PD_NO_LANES) give the same run, each on any threads" {
+    # the lanes (lib/models/pmb_lanes.c) walk 8 rows at a time; on the
+    # perturbed body of the test above (rows of 40 to 60 half bonds: groups
+    # whose lanes end at different columns) with failure, contact and the
+    # indenter, per-bond laws and --no-failure, and a meshed block (unequal
+    # volumes: two weights a bond, node radii of their own), they give the
+    # rows' run to rounding with the same bonds broken.  Where the processor
+    # has no AVX-512 both runs take the portable loop and agree trivially.
+    pd-lattice -q --spacing "$SPACING" --density "$DENSITY" --perturb 1e-4 --seed 5 \
+        --box 0,0.024,0,0.01,0,0.01 --set bottom=box,-1,1,-1,1,-1,0.0015 -o shaken.h5
+    pd-bonds -q --horizon "$HORIZON" shaken.h5 -o model.h5
+    pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 model.h5 -o lanes.h5
+    PD_NO_LANES=1 pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 model.h5 -o rows.h5
+    run -0 agree lanes.h5 rows.h5
+    [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\  ]]
+    if grep -qw avx512f /proc/cpuinfo 2>/dev/null; then
+        # the lanes did run: the log says so, and the sums differ
+        run -0 --separate-stderr pd-run "${RUN_OPTS[@]}" --steps 1 model.h5 -o log.h5
+        [[ "$stderr" == *"bonds walked as a bond list in AVX-512 rows, 8 at a time in lanes"* ]]
+        run -1 h5_same lanes.h5 rows.h5 'history'
+    fi
+    run -0 --separate-stderr env PD_NO_LANES=1 pd-run "${RUN_OPTS[@]}" --steps 1 model.h5 -o log.h5
+    [[ "$stderr" != *"lanes"* ]]
+    laws=(--material 1,c=1.2e21,s00=0.0004 --no-failure bottom)
+    pd-run -q "${RUN_OPTS[@]}" "${laws[@]}" --steps 80 --every 20 model.h5 -o lanes-laws.h5
+    PD_NO_LANES=1 pd-run -q "${RUN_OPTS[@]}" "${laws[@]}" --steps 80 --every 20 model.h5 \
+        -o rows-laws.h5
+    run -0 agree lanes-laws.h5 rows-laws.h5
+    [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\  ]]
+    # 1 and 2 threads bit for bit, and a restart, in lanes and in rows
+    threads_and_restart model.h5
+    export PD_NO_LANES=1
+    threads_and_restart model.h5
+    unset PD_NO_LANES
+    gmsh -v 0 -3 -format msh41 -o box.msh "$BATS_TEST_DIRNAME/fixtures/mesh/box.geo"
+    pd-mesh -q --density "$DENSITY" box.msh -o mesh.h5
+    pd-bonds -q --horizon 0.0016 mesh.h5 -o mesh-model.h5
+    mesh=(--bulk-modulus "$BULK" --failure 0.0005,0.25 --contact --allow-overlap
+          --indenter sphere,0.005,0.002,0.0045,0.003,1e17,0,0,-100 --steps 80 --every 20 -q)
+    pd-run "${mesh[@]}" mesh-model.h5 -o mesh-lanes.h5
+    PD_NO_LANES=1 pd-run "${mesh[@]}" mesh-model.h5 -o mesh-rows.h5
+    run -0 agree mesh-lanes.h5 mesh-rows.h5
+    [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\ [0-9.e-]+$ ]]
+}
+
 @test "the status line's largest damage (counted on the stencil) is pd-damage's, and the list's" {
     pd-lattice -q --spacing "$SPACING" --density "$DENSITY" --box 0,0.024,0,0.01,0,0.01 \
         -o long.h5

@@ -43,6 +43,26 @@ void pd_half_free(pd_half_bonds *h)
     free(h->pack);
     free(h->eb);
     free(h->ec);
+    pd_half_lanes_free(h);
+}
+
+void pd_half_lanes_free(pd_half_bonds *h)
+{
+    pd_half_lanes *L = h->lanes;
+    if (L == NULL)
+        return;
+    free(L->first);
+    free(L->col);
+    free(L->row);
+    free(L->at);
+    free(L->length);
+    free(L->w);
+    free(L->wji);
+    free(L->kfail);
+    free(L->act);
+    free(L->bits);
+    free(L);
+    h->lanes = NULL;
 }
 
 /* The state bits of row i's half bonds (i-j, j > i: the bit of its copy

@@ -7,6 +7,30 @@
 
 #include "pd.h"
 
+/* The PMB bond list in lanes (lib/models/pmb_lanes.c): each block's rows
+ * in groups of 8, one row a lane of a vector, and each group's columns,
+ * a half bond of each lane a column (row i's k-th half bond in its k-th
+ * column, partners ascending).  Within windows of PMB_LANES_WINDOW rows
+ * of a block, the rows with more half bonds come first, so that a group's
+ * lanes have about as many. */
+typedef struct {
+    int64_t groups;
+    int64_t *first;   /* nblocks + 1: each block's first group            */
+    int64_t *col;     /* groups + 1: each group's first column            */
+    int64_t *row;     /* 8 per group: each lane's row, or -1 (no row)     */
+    uint32_t *at;     /* 8 per column: the partner j's place 8 j in
+                         h->pack (a lane without a bond there: its own
+                         row's, or the group's first row's)               */
+    double *length;   /* 8 per column: |xi|, m (1 where no bond)          */
+    double *w, *wji;  /* 8 per column: w_ij and w_ji of the half bond (0
+                         where none); wji NULL when they are the same     */
+    double *kfail;    /* 8 per column with per-bond laws, else NULL       */
+    uint8_t *act;     /* per column: the lanes with a bond there          */
+    uint8_t *bits;    /* per column: the lanes whose bond is intact, as
+                         the half bonds' bits say at `epoch`              */
+    uint64_t epoch;
+} pd_half_lanes;
+
 /* The bonds of a run, each stored once (i < j), as the PMB kernel walks
  * them; the directed bonds of the file are expanded from it on demand. */
 typedef struct {
@@ -61,9 +85,15 @@ typedef struct {
                           bits at energy_epoch                           */
     int64_t energy_step;
     uint64_t energy_epoch;
+    pd_half_lanes *lanes; /* NULL, or the bond list in lanes (the AVX-512
+                             rows' faster walk, lib/models/pmb_lanes.c),
+                             which then hold the lengths and weights:
+                             length, w_ij and w_ji are NULL              */
 } pd_half_bonds;
+/* Free the lanes of h (NULL after). */
+void pd_half_lanes_free(pd_half_bonds *h);
 /* The half bonds of b: rows, partners and state (what every kernel needs);
- * lib/models/pmb.c's pd_half_weights adds the lengths and the weights
+ * lib/models/pmb_rows.c's pd_half_weights adds the lengths and the weights
  * c V nu that its bond list walks. */
 pd_status pd_half_build(const pd_bonds *b, pd_half_bonds *h);
 /* The largest span j - i of a bond of b (at least 1), and the rows of

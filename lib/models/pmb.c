@@ -145,9 +145,22 @@ PD_VECTOR_CLONES static void pmb_block_failure_laws(pd_sim *sim, int64_t lo, int
         pmb_row(sim, i, PD_BONDS_FAILURE_LAWS, released);
 }
 
+/* pmb_rows_energy, in lanes where the run has them (their bits first
+ * brought up to the half bonds'). */
+static int rows_energy(const pd_sim *sim, double *e, int contact)
+{
+#if PD_AVX512_KERNELS
+    if (sim->half.lanes) {
+        pmb_lanes_sync((pd_sim *)sim); /* scratch the run keeps */
+        return pmb_rows_energy(sim, e, contact, pmb_lanes_energy_block);
+    }
+#endif
+    return pmb_rows_energy(sim, e, contact, NULL);
+}
+
 void pd_half_contact_energy(const pd_sim *sim, double *e)
 {
-    if (!sim->half.contact || pmb_rows_energy(sim, e, 1))
+    if (!sim->half.contact || rows_energy(sim, e, 1))
         return;
     const pd_bonds *b = sim->b;
     const double k = PD_CONTACT_SCALE * sim->sc.c / b->horizon;
@@ -202,8 +215,10 @@ static pd_status pmb_rows_init(pd_sim *sim)
     size_t bytes = (size_t)(sim->n > 0 ? sim->n : 1) * 8 * sizeof(double);
     if ((h->pack = aligned_alloc(64, bytes)) == NULL)
         return pd_fail(PD_ERR_NOMEM, "out of memory for the bond list's rows");
-    if (!sim->sc.has_contact)
+    if (!sim->sc.has_contact) {
+        pmb_lanes_build(sim);
         return PD_OK;
+    }
     /* the rows take the contact of the half bonds' pairs; the contact list
      * the others, which started at least `gap` apart (the horizon, unless
      * the families leave out a closer pair) */
@@ -212,6 +227,7 @@ static pd_status pmb_rows_init(pd_sim *sim)
         return s;
     h->contact_cap = pd_half_contact_cap(sim->p);
     h->contact = 1;
+    pmb_lanes_build(sim);
 #else
     (void)sim;
 #endif
@@ -235,6 +251,10 @@ static void pmb_block(const pd_sim *csim, int64_t blk, int64_t lo, int64_t hi, v
     if (ps->failure)
         h->released[blk] = 0;
 #if PD_AVX512_KERNELS
+    if (h->lanes) {
+        pmb_lanes_block(sim, blk, lo, ps->failure, ps->energy, &h->released[blk]);
+        return;
+    }
     if (h->pack) {
         pmb_rows_block(sim, lo, hi, ps->failure, ps->energy, &h->released[blk]);
         return;
@@ -283,6 +303,7 @@ static void pmb_kernel(pd_sim *sim, pd_bond_mode failure)
         tf += pd_wtime() - t0;
     }
     const int energy = pmb_rows_count(sim);
+    pmb_lanes_sync(sim); /* the lanes' bits, where the half bonds' moved on */
     pmb_blocks(sim, !failure ? PD_BONDS_ELASTIC : h->kfail ? PD_BONDS_FAILURE_LAWS : failure,
                energy);
     if (energy) { /* the step's energies, counted */
@@ -506,7 +527,7 @@ static void pmb_energy(const pd_sim *sim, void *state, double *e)
         pd_grid_pmb_energy(sim, e);
     else if (pd_scene_has_laws(&sim->sc))
         pmb_energy_laws(sim, e);
-    else if (!pmb_rows_energy(sim, e, 0))
+    else if (!rows_energy(sim, e, 0))
         pmb_energy_uniform(sim, state, e);
 }
 

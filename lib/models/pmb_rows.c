@@ -61,19 +61,21 @@ pd_status pd_half_weights(const pd_particles *p, const pd_bonds *b, double c, pd
     return PD_OK;
 }
 
-/* The elastic energy of half bond k of row i, J: 1/2 c s^2 |xi| nu V_i V_j,
- * with the mean of nu_ij and nu_ji (w = c V nu holds the rest). */
+double pmb_pair_energy(const pd_sim *sim, int64_t i, int64_t j, double L, double wij, double wji)
+{
+    const double dx = sim->y[0][j] - sim->y[0][i], dy = sim->y[1][j] - sim->y[1][i],
+                 dz = sim->y[2][j] - sim->y[2][i];
+    double dr = sqrt(dx * dx + dy * dy + dz * dz) - L;
+    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
+    const double s = dr / L;
+    const double *V = sim->p->volume;
+    return 0.25 * s * s * L * (wij * V[i] + wji * V[j]);
+}
+
 double pmb_bond_energy(const pd_sim *sim, int64_t i, int64_t k)
 {
     const pd_half_bonds *h = &sim->half;
-    const int32_t j = h->neighbor[k];
-    const double dx = sim->y[0][j] - sim->y[0][i], dy = sim->y[1][j] - sim->y[1][i],
-                 dz = sim->y[2][j] - sim->y[2][i];
-    double dr = sqrt(dx * dx + dy * dy + dz * dz) - h->length[k];
-    dr = fabs(dr) < PD_NEAR_ZERO ? 0.0 : dr;
-    const double s = dr / h->length[k];
-    const double *V = sim->p->volume;
-    return 0.25 * s * s * h->length[k] * (h->w_ij[k] * V[i] + h->w_ji[k] * V[j]);
+    return pmb_pair_energy(sim, i, h->neighbor[k], h->length[k], h->w_ij[k], h->w_ji[k]);
 }
 
 #if PD_AVX512_KERNELS
@@ -94,44 +96,6 @@ double pmb_bond_energy(const pd_sim *sim, int64_t i, int64_t k)
  * the stretch dr (r q) (the stencil too takes the stretch as a product,
  * dr times 1/|xi|), so the two kernels agree to rounding; each is the same
  * at any thread count. */
-
-/* 8 rows of 4 (a_l b_l c_l d_l, lanes l = 0..7) into 4 vectors of 8. */
-PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
-rows_to_lanes(const __m256d r[8], __m512d *a, __m512d *b, __m512d *c, __m512d *d)
-{
-    const __m512d p0 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[0]), r[4], 1);
-    const __m512d p1 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[1]), r[5], 1);
-    const __m512d p2 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[2]), r[6], 1);
-    const __m512d p3 = _mm512_insertf64x4(_mm512_castpd256_pd512(r[3]), r[7], 1);
-    const __m512d q0 = _mm512_unpacklo_pd(p0, p1), q1 = _mm512_unpackhi_pd(p0, p1);
-    const __m512d q2 = _mm512_unpacklo_pd(p2, p3), q3 = _mm512_unpackhi_pd(p2, p3);
-    const __m512i lo = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0),
-                  hi = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
-    *a = _mm512_permutex2var_pd(q0, lo, q2);
-    *c = _mm512_permutex2var_pd(q0, hi, q2);
-    *b = _mm512_permutex2var_pd(q1, lo, q3);
-    *d = _mm512_permutex2var_pd(q1, hi, q3);
-}
-
-/* The inverse: 4 vectors of 8 into 8 rows of 4. */
-PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
-lanes_to_rows(__m512d a, __m512d b, __m512d c, __m512d d, __m256d r[8])
-{
-    const __m512d q0 = _mm512_unpacklo_pd(a, b), q1 = _mm512_unpackhi_pd(a, b);
-    const __m512d q2 = _mm512_unpacklo_pd(c, d), q3 = _mm512_unpackhi_pd(c, d);
-    const __m512i lo = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0),
-                  hi = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
-    const __m512d p0 = _mm512_permutex2var_pd(q0, lo, q2), p2 = _mm512_permutex2var_pd(q0, hi, q2);
-    const __m512d p1 = _mm512_permutex2var_pd(q1, lo, q3), p3 = _mm512_permutex2var_pd(q1, hi, q3);
-    r[0] = _mm512_castpd512_pd256(p0);
-    r[4] = _mm512_extractf64x4_pd(p0, 1);
-    r[1] = _mm512_castpd512_pd256(p1);
-    r[5] = _mm512_extractf64x4_pd(p1, 1);
-    r[2] = _mm512_castpd512_pd256(p2);
-    r[6] = _mm512_extractf64x4_pd(p2, 1);
-    r[3] = _mm512_castpd512_pd256(p3);
-    r[7] = _mm512_extractf64x4_pd(p3, 1);
-}
 
 /* The state bits of bonds k .. k+7 (those past the last word read 0). */
 static inline unsigned bits8(const uint64_t *bits, int64_t k, int64_t nwords)
@@ -200,21 +164,6 @@ static void row_breaks(pd_sim *sim, int64_t i, int64_t k, const uint8_t *brks, i
         }
 }
 
-/* The stretch of 8 bonds of length L at distance r (dr = r - L, 0 below
- * eps of extension): dr (r q) with q = 1/(|xi| r) (pmb_row512's one
- * division, *q for its force), dr/|xi| where r = 0; every pass of the
- * rows takes it, so that their energies are the same bits. */
-PMB_TARGET_AVX512 static inline __attribute__((always_inline)) __m512d
-row_stretch(__m512d r, __m512d L, __m512d dr, __mmask8 act, __mmask8 *pos, __m512d *q)
-{
-    *pos = _mm512_mask_cmp_pd_mask(act, r, _mm512_setzero_pd(), _CMP_GT_OQ);
-    *q = _mm512_maskz_div_pd(*pos, _mm512_set1_pd(1.0), _mm512_mul_pd(L, r));
-    __m512d s = _mm512_mul_pd(dr, _mm512_mul_pd(r, *q));
-    if ((__mmask8)(act & ~*pos))
-        s = _mm512_mask_div_pd(s, (__mmask8)(act & ~*pos), dr, L);
-    return s;
-}
-
 /* The energies in the rows (pmb_rows_energy): h->pack holds each particle's
  * position and, in the place of its s0, its volume.  Row i's partners j
  * are loaded and transposed as pmb_row512 does. */
@@ -260,14 +209,6 @@ row_chunk_of(const double *pk, const int32_t *nb, const double *len, int64_t i, 
         dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), _mm512_set1_pd(PD_NEAR_ZERO), _CMP_LT_OQ),
         _mm512_setzero_pd());
     c->s = row_stretch(c->r, c->L, c->dr, act, &c->pos, &c->q);
-}
-
-/* 1/4 s^2 |xi| of the lanes of `keep`, 0 elsewhere: a bond's elastic
- * energy over w = c V nu and the volume of the end it goes to. */
-PMB_TARGET_AVX512 static inline __attribute__((always_inline)) __m512d
-row_energy(__m512d s, __m512d L, __mmask8 keep)
-{
-    return _mm512_maskz_mul_pd(keep, _mm512_mul_pd(_mm512_mul_pd(_mm512_set1_pd(0.25), s), s), L);
 }
 
 /* Of the lanes `brk` of bonds k.. of row i, those that do break (not kept
@@ -543,6 +484,7 @@ PMB_TARGET_AVX512 static void contact_row512(const pd_sim *sim, int64_t i, doubl
 typedef struct {
     int contact;
     double *e;
+    pmb_energy_block_fn *lanes; /* or NULL: the rows' own */
 } energy_pass;
 
 PMB_TARGET_AVX512 static void energy_block512(const pd_sim *sim, int64_t blk, int64_t lo,
@@ -550,7 +492,10 @@ PMB_TARGET_AVX512 static void energy_block512(const pd_sim *sim, int64_t blk, in
 {
     const energy_pass *ps = ctx;
     const int64_t nwords = pd_bits_words(sim->half.count);
-    (void)blk;
+    if (ps->lanes) {
+        ps->lanes(sim, blk, lo, ps->contact, ps->e);
+        return;
+    }
     for (int64_t i = lo; i < hi; i++)
         if (ps->contact)
             contact_row512(sim, i, ps->e);
@@ -593,7 +538,7 @@ void pmb_walk_blocks(const pd_sim *sim, pmb_block_fn *fn, void *ctx)
  * ends, in the blocks' order as the forces are (the same sums at any
  * thread count, and the same bits as the bond pass counts); h->pack, the
  * rows' scratch, takes the positions and volumes. */
-int pmb_rows_energy(const pd_sim *sim, double *e, int contact)
+int pmb_rows_energy(const pd_sim *sim, double *e, int contact, pmb_energy_block_fn *lanes)
 {
 #if PD_AVX512_KERNELS
     const pd_half_bonds *h = &sim->half;
@@ -616,7 +561,7 @@ int pmb_rows_energy(const pd_sim *sim, double *e, int contact)
             pk[8 * i + 3] = sim->p->volume[i];
             out[i] = 0;
         }
-        energy_pass ps = {contact, out};
+        energy_pass ps = {contact, out, lanes};
         pmb_walk_blocks(sim, energy_block512, &ps);
     }
 #pragma omp parallel for schedule(static)
@@ -627,6 +572,7 @@ int pmb_rows_energy(const pd_sim *sim, double *e, int contact)
     (void)sim;
     (void)e;
     (void)contact;
+    (void)lanes;
     return 0;
 #endif
 }

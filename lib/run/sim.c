@@ -701,6 +701,11 @@ int pd_sim_list_rows(const pd_sim *sim)
     return sim->grid == NULL && sim->half.pack != NULL;
 }
 
+int pd_sim_list_lanes(const pd_sim *sim)
+{
+    return sim->grid == NULL && sim->half.lanes != NULL;
+}
+
 /* 1/2 rho V |v|^2 of every particle into e. */
 static void kinetic_each(const pd_sim *sim, double *e)
 {
