@@ -166,91 +166,63 @@ for name in a['frames']:
     run -0 h5_same t2.h5 rest.h5 'history|threads|^/scene|^/series'
 }
 
-@test "the bond list's AVX-512 rows and its portable loop (PD_NO_AVX512) give the same run" {
-    # a perturbed body (no stencil: the bond list), rows of 25 particles
-    # with 40 to 60 half bonds (full vectors of 8 and a masked last one),
-    # with failure, contact and the indenter; per-bond laws (each bond's
-    # own kfail) and --no-failure too.  Where the processor has no AVX-512
-    # both runs take the portable loop and agree trivially.
+# list_kernels VAR SAYS: the bond list's kernel as pd-run takes it and the
+# one it takes with VAR=1 give the same run (agree: the same bonds broken,
+# the rest to rounding) on a perturbed body (no stencil: the bond list;
+# rows of 25 particles with 40 to 60 half bonds: full vectors of 8 and a
+# masked last one, groups of lanes that end at different columns) with
+# failure, contact and the indenter; with per-bond laws (each bond's own
+# kfail) and --no-failure; and on a meshed block (unequal volumes: two
+# weights a bond; node radii of their own, so the pairs closer than 0.9
+# |xi| are flagged and the contact pass takes each pair's d_ij).  Each
+# kernel gives the same bits on 1 and 2 threads and through a restart.
+# Where the processor has AVX-512 the log says SAYS and the two runs'
+# sums differ; with VAR=1 it does not say it.  (Without AVX-512 both runs
+# take the portable loop and agree trivially.)
+list_kernels() {
+    local var=$1 says=$2
     pd-lattice -q --spacing "$SPACING" --density "$DENSITY" --perturb 1e-4 --seed 5 \
         --box 0,0.024,0,0.01,0,0.01 --set bottom=box,-1,1,-1,1,-1,0.0015 -o shaken.h5
     pd-bonds -q --horizon "$HORIZON" shaken.h5 -o model.h5
-    pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 model.h5 -o rows.h5
-    PD_NO_AVX512=1 pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 model.h5 -o loop.h5
-    run -0 agree rows.h5 loop.h5
+    pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 model.h5 -o one.h5
+    env "$var=1" pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 model.h5 -o other.h5
+    run -0 agree one.h5 other.h5
     [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\  ]]
     if grep -qw avx512f /proc/cpuinfo 2>/dev/null; then
-        # the two kernels did run: the log says so, and the sums differ
         run -0 --separate-stderr pd-run "${RUN_OPTS[@]}" --steps 1 model.h5 -o log.h5
-        [[ "$stderr" == *"bonds walked as a bond list in AVX-512 rows"* ]]
-        run -1 h5_same rows.h5 loop.h5 'history'
+        [[ "$stderr" == *"$says"* ]]
+        run -1 h5_same one.h5 other.h5 'history'
     fi
-    run -0 --separate-stderr env PD_NO_AVX512=1 pd-run "${RUN_OPTS[@]}" --steps 1 model.h5 -o log.h5
-    [[ "$stderr" != *"AVX-512 rows"* ]]
+    run -0 --separate-stderr env "$var=1" pd-run "${RUN_OPTS[@]}" --steps 1 model.h5 -o log.h5
+    [[ "$stderr" != *"$says"* ]]
     laws=(--material 1,c=1.2e21,s00=0.0004 --no-failure bottom)
-    pd-run -q "${RUN_OPTS[@]}" "${laws[@]}" --steps 80 --every 20 model.h5 -o rows-laws.h5
-    PD_NO_AVX512=1 pd-run -q "${RUN_OPTS[@]}" "${laws[@]}" --steps 80 --every 20 model.h5 \
-        -o loop-laws.h5
-    run -0 agree rows-laws.h5 loop-laws.h5
+    pd-run -q "${RUN_OPTS[@]}" "${laws[@]}" --steps 80 --every 20 model.h5 -o one-laws.h5
+    env "$var=1" pd-run -q "${RUN_OPTS[@]}" "${laws[@]}" --steps 80 --every 20 model.h5 \
+        -o other-laws.h5
+    run -0 agree one-laws.h5 other-laws.h5
     [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\  ]]
-    # 1 and 2 threads bit for bit, and a restart
     threads_and_restart model.h5
-    # a meshed block: node radii of their own, so the rows flag the pairs
-    # closer than 0.9 |xi| and the contact pass takes each pair's d_ij
+    export "$var=1"
+    threads_and_restart model.h5
+    unset "$var"
     gmsh -v 0 -3 -format msh41 -o box.msh "$BATS_TEST_DIRNAME/fixtures/mesh/box.geo"
     pd-mesh -q --density "$DENSITY" box.msh -o mesh.h5
     pd-bonds -q --horizon 0.0016 mesh.h5 -o mesh-model.h5
     mesh=(--bulk-modulus "$BULK" --failure 0.0005,0.25 --contact --allow-overlap
           --indenter sphere,0.005,0.002,0.0045,0.003,1e17,0,0,-100 --steps 80 --every 20 -q)
-    pd-run "${mesh[@]}" mesh-model.h5 -o mesh-rows.h5
-    PD_NO_AVX512=1 pd-run "${mesh[@]}" mesh-model.h5 -o mesh-loop.h5
-    run -0 agree mesh-rows.h5 mesh-loop.h5
+    pd-run "${mesh[@]}" mesh-model.h5 -o mesh-one.h5
+    env "$var=1" pd-run "${mesh[@]}" mesh-model.h5 -o mesh-other.h5
+    run -0 agree mesh-one.h5 mesh-other.h5
     [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\ [0-9.e-]+$ ]]
 }
 
+@test "the bond list in AVX-512 and its portable loop (PD_NO_AVX512) give the same run" {
+    list_kernels PD_NO_AVX512 "bonds walked as a bond list in AVX-512 rows"
+}
+
 @test "the bond list's lanes and its rows (PD_NO_LANES) give the same run, each on any threads" {
-    # the lanes (lib/models/pmb_lanes.c) walk 8 rows at a time; on the
-    # perturbed body of the test above (rows of 40 to 60 half bonds: groups
-    # whose lanes end at different columns) with failure, contact and the
-    # indenter, per-bond laws and --no-failure, and a meshed block (unequal
-    # volumes: two weights a bond, node radii of their own), they give the
-    # rows' run to rounding with the same bonds broken.  Where the processor
-    # has no AVX-512 both runs take the portable loop and agree trivially.
-    pd-lattice -q --spacing "$SPACING" --density "$DENSITY" --perturb 1e-4 --seed 5 \
-        --box 0,0.024,0,0.01,0,0.01 --set bottom=box,-1,1,-1,1,-1,0.0015 -o shaken.h5
-    pd-bonds -q --horizon "$HORIZON" shaken.h5 -o model.h5
-    pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 model.h5 -o lanes.h5
-    PD_NO_LANES=1 pd-run -q "${RUN_OPTS[@]}" --steps 80 --every 20 model.h5 -o rows.h5
-    run -0 agree lanes.h5 rows.h5
-    [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\  ]]
-    if grep -qw avx512f /proc/cpuinfo 2>/dev/null; then
-        # the lanes did run: the log says so, and the sums differ
-        run -0 --separate-stderr pd-run "${RUN_OPTS[@]}" --steps 1 model.h5 -o log.h5
-        [[ "$stderr" == *"bonds walked as a bond list in AVX-512 rows, 8 at a time in lanes"* ]]
-        run -1 h5_same lanes.h5 rows.h5 'history'
-    fi
-    run -0 --separate-stderr env PD_NO_LANES=1 pd-run "${RUN_OPTS[@]}" --steps 1 model.h5 -o log.h5
-    [[ "$stderr" != *"lanes"* ]]
-    laws=(--material 1,c=1.2e21,s00=0.0004 --no-failure bottom)
-    pd-run -q "${RUN_OPTS[@]}" "${laws[@]}" --steps 80 --every 20 model.h5 -o lanes-laws.h5
-    PD_NO_LANES=1 pd-run -q "${RUN_OPTS[@]}" "${laws[@]}" --steps 80 --every 20 model.h5 \
-        -o rows-laws.h5
-    run -0 agree lanes-laws.h5 rows-laws.h5
-    [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\  ]]
-    # 1 and 2 threads bit for bit, and a restart, in lanes and in rows
-    threads_and_restart model.h5
-    export PD_NO_LANES=1
-    threads_and_restart model.h5
-    unset PD_NO_LANES
-    gmsh -v 0 -3 -format msh41 -o box.msh "$BATS_TEST_DIRNAME/fixtures/mesh/box.geo"
-    pd-mesh -q --density "$DENSITY" box.msh -o mesh.h5
-    pd-bonds -q --horizon 0.0016 mesh.h5 -o mesh-model.h5
-    mesh=(--bulk-modulus "$BULK" --failure 0.0005,0.25 --contact --allow-overlap
-          --indenter sphere,0.005,0.002,0.0045,0.003,1e17,0,0,-100 --steps 80 --every 20 -q)
-    pd-run "${mesh[@]}" mesh-model.h5 -o mesh-lanes.h5
-    PD_NO_LANES=1 pd-run "${mesh[@]}" mesh-model.h5 -o mesh-rows.h5
-    run -0 agree mesh-lanes.h5 mesh-rows.h5
-    [[ "${lines[-1]}" =~ ^00000080\ [1-9][0-9]+\ [0-9.e-]+$ ]]
+    # the lanes (lib/models/pmb_lanes.c) walk 8 rows at a time
+    list_kernels PD_NO_LANES "bonds walked as a bond list in AVX-512 rows, 8 at a time in lanes"
 }
 
 @test "the status line's largest damage (counted on the stencil) is pd-damage's, and the list's" {
