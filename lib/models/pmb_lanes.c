@@ -197,18 +197,11 @@ static inline lane_arrays arrays_of(const pd_half_bonds *h)
     return (lane_arrays){h->pack, L->length, L->w, L->wji, L->kfail, L->at, L->act};
 }
 
-/* A column of 8 bonds: the partners' 4th values (s0 in the bond pass,
- * volumes in the energies' own), the bond vectors, lengths r and |xi|,
- * the extension dr (0 below eps of extension), the stretch s and
- * row_stretch's q and pos: pmb_rows.c's row_chunk_of, to the bit. */
-typedef struct {
-    __m512d w4, L, dx, dy, dz, r, dr, s, q;
-    __mmask8 pos;
-} lane_column;
-
+/* Column c of 8 bonds (their partners' 4th values: s0 in the bond pass,
+ * volumes in the energies' own) into *k, as the rows take a chunk. */
 PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
 column_of(const lane_arrays *A, int64_t c, __mmask8 act, __m512d yi0, __m512d yi1, __m512d yi2,
-          lane_column *k)
+          row_chunk *k)
 {
     const uint32_t *at = A->at + 8 * c;
     __m256d row[8];
@@ -217,17 +210,7 @@ column_of(const lane_arrays *A, int64_t c, __mmask8 act, __m512d yi0, __m512d yi
     __m512d xj, yj, zj;
     rows_to_lanes(row, &xj, &yj, &zj, &k->w4);
     k->L = _mm512_load_pd(A->length + 8 * c);
-    k->dx = _mm512_sub_pd(xj, yi0);
-    k->dy = _mm512_sub_pd(yj, yi1);
-    k->dz = _mm512_sub_pd(zj, yi2);
-    k->r = _mm512_sqrt_pd(
-        _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(k->dx, k->dx), _mm512_mul_pd(k->dy, k->dy)),
-                      _mm512_mul_pd(k->dz, k->dz)));
-    const __m512d dr = _mm512_sub_pd(k->r, k->L);
-    k->dr = _mm512_mask_mov_pd(
-        dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), _mm512_set1_pd(PD_NEAR_ZERO), _CMP_LT_OQ),
-        _mm512_setzero_pd());
-    k->s = row_stretch(k->r, k->L, k->dr, act, &k->pos, &k->q);
+    chunk_bonds(xj, yj, zj, act, yi0, yi1, yi2, k);
 }
 
 /* Group g's rows (lanes without one, or below row lo: not `live`) and
@@ -250,7 +233,7 @@ group_own(const pd_half_lanes *L, const double *pk, int64_t g, int64_t lo, int64
 
 /* The near pairs of a column (contact): r below min(0.9 |xi|, cap). */
 PMB_TARGET_AVX512 static inline __attribute__((always_inline)) __mmask8
-column_near(__m512d cap, const lane_column *k, __mmask8 act)
+column_near(__m512d cap, const row_chunk *k, __mmask8 act)
 {
     return _mm512_mask_cmp_pd_mask(
         act, k->r, _mm512_min_pd(_mm512_mul_pd(_mm512_set1_pd(PD_CONTACT_REF_FRAC), k->L), cap),
@@ -353,7 +336,7 @@ group_pass(pd_sim *sim, int64_t g, int64_t lo, const pd_bond_mode failure, const
     const int64_t c1 = L->col[g + 1];
     for (int64_t c = L->col[g]; c < c1; c++) {
         const __mmask8 act = (__mmask8)(A.act[c] & live), kmu = (__mmask8)(bits[c] & live);
-        lane_column k;
+        row_chunk k;
         column_of(&A, c, act, yi0, yi1, yi2, &k);
         const __m512d gg = _mm512_maskz_mul_pd((__mmask8)(kmu & k.pos), k.dr, k.q);
         /* the force on i, and (the same unless the weights differ) j's */
@@ -459,18 +442,7 @@ PMB_TARGET_AVX512 void pmb_lanes_block(pd_sim *sim, int64_t blk, int64_t lo, pd_
     const pd_half_lanes *L = sim->half.lanes;
     const int64_t g0 = L->first[blk], g1 = L->first[blk + 1];
     const int contact = sim->half.contact;
-    if (failure == PD_BONDS_FAILURE_LAWS && contact)
-        LANES(PD_BONDS_FAILURE_LAWS, 1);
-    else if (failure == PD_BONDS_FAILURE_LAWS)
-        LANES(PD_BONDS_FAILURE_LAWS, 0);
-    else if (failure && contact)
-        LANES(PD_BONDS_FAILURE, 1);
-    else if (failure)
-        LANES(PD_BONDS_FAILURE, 0);
-    else if (contact)
-        LANES(PD_BONDS_ELASTIC, 1);
-    else
-        LANES(PD_BONDS_ELASTIC, 0);
+    PMB_VARIANTS(LANES, failure, contact);
 }
 
 /* Group g's elastic (contact 0) or contact (1) energies into e, as its
@@ -489,7 +461,7 @@ PMB_TARGET_AVX512 static void group_energy(const pd_sim *sim, int64_t g, int64_t
     double own_c[8] = {0};
     for (int64_t c = L->col[g]; c < L->col[g + 1]; c++) {
         const __mmask8 act = (__mmask8)(A.act[c] & live);
-        lane_column k;
+        row_chunk k;
         column_of(&A, c, act, yi0, yi1, yi2, &k);
         if (contact) {
             const __mmask8 near = column_near(cap, &k, act);

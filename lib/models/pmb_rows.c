@@ -179,15 +179,6 @@ rows_partners(const double *pk, const int32_t *nb, int64_t i, int64_t k, int m, 
     rows_to_lanes(row, xj, yj, zj, vj);
 }
 
-/* A chunk of 8 bonds of a row: its partners' 4th values (s0 in the bond
- * pass, volumes in the energies' passes), the bond vectors, lengths r and
- * |xi|, the extension dr (0 below eps of extension), the stretch s and
- * row_stretch's q and pos. */
-typedef struct {
-    __m512d w4, L, dx, dy, dz, r, dr, s, q;
-    __mmask8 pos;
-} row_chunk;
-
 /* Bonds k .. k+m-1 of row i (own position yi0, yi1, yi2) into *c, their
  * partners into jj; every pass of the rows takes its bonds so, to the
  * bit. */
@@ -198,17 +189,7 @@ row_chunk_of(const double *pk, const int32_t *nb, const double *len, int64_t i, 
     __m512d xj, yj, zj;
     rows_partners(pk, nb, i, k, m, jj, &xj, &yj, &zj, &c->w4);
     c->L = _mm512_mask_loadu_pd(_mm512_set1_pd(1.0), act, len + k);
-    c->dx = _mm512_sub_pd(xj, yi0);
-    c->dy = _mm512_sub_pd(yj, yi1);
-    c->dz = _mm512_sub_pd(zj, yi2);
-    c->r = _mm512_sqrt_pd(
-        _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(c->dx, c->dx), _mm512_mul_pd(c->dy, c->dy)),
-                      _mm512_mul_pd(c->dz, c->dz)));
-    const __m512d dr = _mm512_sub_pd(c->r, c->L);
-    c->dr = _mm512_mask_mov_pd(
-        dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), _mm512_set1_pd(PD_NEAR_ZERO), _CMP_LT_OQ),
-        _mm512_setzero_pd());
-    c->s = row_stretch(c->r, c->L, c->dr, act, &c->pos, &c->q);
+    chunk_bonds(xj, yj, zj, act, yi0, yi1, yi2, c);
 }
 
 /* Of the lanes `brk` of bonds k.. of row i, those that do break (not kept
@@ -375,18 +356,7 @@ PMB_TARGET_AVX512 void pmb_rows_block(pd_sim *sim, int64_t lo, int64_t hi, pd_bo
 {
     const int64_t nwords = pd_bits_words(sim->half.count);
     const int contact = sim->half.contact;
-    if (failure == PD_BONDS_FAILURE_LAWS && contact)
-        PMB_ROWS(PD_BONDS_FAILURE_LAWS, 1);
-    else if (failure == PD_BONDS_FAILURE_LAWS)
-        PMB_ROWS(PD_BONDS_FAILURE_LAWS, 0);
-    else if (failure && contact)
-        PMB_ROWS(PD_BONDS_FAILURE, 1);
-    else if (failure)
-        PMB_ROWS(PD_BONDS_FAILURE, 0);
-    else if (contact)
-        PMB_ROWS(PD_BONDS_ELASTIC, 1);
-    else
-        PMB_ROWS(PD_BONDS_ELASTIC, 0);
+    PMB_VARIANTS(PMB_ROWS, failure, contact);
 }
 
 /* The elastic energy of the intact half bonds of row i, pmb_energy_uniform's

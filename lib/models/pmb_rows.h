@@ -72,7 +72,55 @@ row_energy(__m512d s, __m512d L, __mmask8 keep)
     return _mm512_maskz_mul_pd(keep, _mm512_mul_pd(_mm512_mul_pd(_mm512_set1_pd(0.25), s), s), L);
 }
 
+/* A chunk of 8 bonds of a row: its partners' 4th values (s0 in the bond
+ * pass, volumes in the energies' passes), the bond vectors, lengths r and
+ * |xi|, the extension dr (0 below eps of extension), the stretch s and
+ * row_stretch's q and pos. */
+typedef struct {
+    __m512d w4, L, dx, dy, dz, r, dr, s, q;
+    __mmask8 pos;
+} row_chunk;
+
+/* The bonds of a chunk (rows) or column (lanes) of 8 whose partners are at
+ * xj, yj, zj and lengths in c->L: the bond vectors, lengths r, the
+ * extension dr (0 below eps of extension), the stretch and row_stretch's
+ * q and pos; every pass of the rows and of the lanes takes its bonds so,
+ * to the bit. */
+PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
+chunk_bonds(__m512d xj, __m512d yj, __m512d zj, __mmask8 act, __m512d yi0, __m512d yi1,
+            __m512d yi2, row_chunk *c)
+{
+    c->dx = _mm512_sub_pd(xj, yi0);
+    c->dy = _mm512_sub_pd(yj, yi1);
+    c->dz = _mm512_sub_pd(zj, yi2);
+    c->r = _mm512_sqrt_pd(
+        _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(c->dx, c->dx), _mm512_mul_pd(c->dy, c->dy)),
+                      _mm512_mul_pd(c->dz, c->dz)));
+    const __m512d dr = _mm512_sub_pd(c->r, c->L);
+    c->dr = _mm512_mask_mov_pd(
+        dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), _mm512_set1_pd(PD_NEAR_ZERO), _CMP_LT_OQ),
+        _mm512_setzero_pd());
+    c->s = row_stretch(c->r, c->L, c->dr, act, &c->pos, &c->q);
+}
 #endif
+
+/* M(mode, contact) for a pass's failure mode and contact: a variant of the
+ * AVX-512 passes (rows and lanes) for each, the tests out of the loops. */
+#define PMB_VARIANTS(M, failure, contact)                                                      \
+    do {                                                                                       \
+        if ((failure) == PD_BONDS_FAILURE_LAWS && (contact))                                   \
+            M(PD_BONDS_FAILURE_LAWS, 1);                                                       \
+        else if ((failure) == PD_BONDS_FAILURE_LAWS)                                           \
+            M(PD_BONDS_FAILURE_LAWS, 0);                                                       \
+        else if ((failure) && (contact))                                                       \
+            M(PD_BONDS_FAILURE, 1);                                                            \
+        else if (failure)                                                                      \
+            M(PD_BONDS_FAILURE, 0);                                                            \
+        else if (contact)                                                                      \
+            M(PD_BONDS_ELASTIC, 1);                                                            \
+        else                                                                                   \
+            M(PD_BONDS_ELASTIC, 0);                                                            \
+    } while (0)
 
 /* The elastic energy of half bond k of row i, J: 1/2 c s^2 |xi| nu V_i
  * V_j, with the mean of nu_ij and nu_ji (w = c V nu holds the rest;
