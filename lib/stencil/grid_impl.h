@@ -247,6 +247,50 @@ grid_tile_pair(__mmask8 act, const int all, const double *Y0, const double *Y1, 
                             _mm512_setzero_pd());
 }
 
+/* Eight lanes' forces on their partners: gx, gy, gz taken from F0, F1, F2
+ * for the lanes of `act` (`all`: every lane, plain loads and stores). */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) void
+grid_tile_sub(__mmask8 act, const int all, double *F0, double *F1, double *F2, __m512d gx,
+              __m512d gy, __m512d gz)
+{
+    if (all) {
+        _mm512_storeu_pd(F0, _mm512_sub_pd(_mm512_loadu_pd(F0), gx));
+        _mm512_storeu_pd(F1, _mm512_sub_pd(_mm512_loadu_pd(F1), gy));
+        _mm512_storeu_pd(F2, _mm512_sub_pd(_mm512_loadu_pd(F2), gz));
+    } else {
+        _mm512_mask_storeu_pd(F0, act, _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F0), gx));
+        _mm512_mask_storeu_pd(F1, act, _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F1), gy));
+        _mm512_mask_storeu_pd(F2, act, _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F2), gz));
+    }
+}
+
+/* A tile's own positions, two halves of 8 from particle g0. */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) void
+grid_tile_pos(const grid_arrays *A, int64_t g0, __m512d yi0[2], __m512d yi1[2], __m512d yi2[2])
+{
+    for (int h = 0; h < 2; h++) {
+        yi0[h] = _mm512_loadu_pd(A->y0 + g0 + 8 * h);
+        yi1[h] = _mm512_loadu_pd(A->y1 + g0 + 8 * h);
+        yi2[h] = _mm512_loadu_pd(A->y2 + g0 + 8 * h);
+    }
+}
+
+/* A tile's own values at its start (grid_tile_add's counterpart): its
+ * positions and, with `failure`, its s0 (else 0); its force sums 0 and
+ * new s0 -inf. */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) void
+grid_tile_own(const grid_arrays *A, int64_t g0, const int failure, __m512d yi0[2],
+              __m512d yi1[2], __m512d yi2[2], __m512d si[2], __m512d ax[2], __m512d ay[2],
+              __m512d az[2], __m512d sm[2])
+{
+    grid_tile_pos(A, g0, yi0, yi1, yi2);
+    for (int h = 0; h < 2; h++) {
+        si[h] = failure ? _mm512_loadu_pd(A->s0 + g0 + 8 * h) : _mm512_setzero_pd();
+        ax[h] = ay[h] = az[h] = _mm512_setzero_pd();
+        sm[h] = _mm512_set1_pd(-INFINITY);
+    }
+}
+
 /* A tile's own sums into memory at its end: the forces (ax, ay, az; two
  * halves each) added to f0, f1, f2 and, with `failure`, the new s0 (sm)
  * the larger into s0n, for the particles from `own` on (those before are

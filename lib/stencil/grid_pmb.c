@@ -228,18 +228,8 @@ static __mmask8 tile_gone(const pd_grid *G, int64_t g8, int64_t shift, __mmask8 
         ax[h] = _mm512_add_pd(ax[h], gx);                                                      \
         ay[h] = _mm512_add_pd(ay[h], gy);                                                      \
         az[h] = _mm512_add_pd(az[h], gz);                                                      \
-        if (forces && (all)) {                                                                 \
-            _mm512_storeu_pd(F0 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F0 + 8 * (h)), gx));  \
-            _mm512_storeu_pd(F1 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F1 + 8 * (h)), gy));  \
-            _mm512_storeu_pd(F2 + 8 * (h), _mm512_sub_pd(_mm512_loadu_pd(F2 + 8 * (h)), gz));  \
-        } else if (forces) {                                                                   \
-            _mm512_mask_storeu_pd(F0 + 8 * (h), act,                                           \
-                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F0 + 8 * (h)), gx)); \
-            _mm512_mask_storeu_pd(F1 + 8 * (h), act,                                           \
-                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F1 + 8 * (h)), gy)); \
-            _mm512_mask_storeu_pd(F2 + 8 * (h), act,                                           \
-                                  _mm512_sub_pd(_mm512_maskz_loadu_pd(act, F2 + 8 * (h)), gz)); \
-        }                                                                                      \
+        if (forces)                                                                            \
+            grid_tile_sub(act, (all), F0 + 8 * (h), F1 + 8 * (h), F2 + 8 * (h), gx, gy, gz);   \
         if (contact)                                                                           \
             near |= _mm512_mask_cmp_pd_mask(act, r, vdc, _CMP_LT_OQ);                          \
         __mmask8 hb = 0; /* the lanes whose stretch breaks them */                            \
@@ -292,14 +282,7 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
         const int64_t g0 = grid_tile_g0(R, t);
         const int64_t own = R->start + t; /* the lanes before are the last tile's */
         __m512d yi0[2], yi1[2], yi2[2], si[2], ax[2], ay[2], az[2], sm[2];
-        for (int h = 0; h < 2; h++) {
-            yi0[h] = _mm512_loadu_pd(A->y0 + g0 + 8 * h);
-            yi1[h] = _mm512_loadu_pd(A->y1 + g0 + 8 * h);
-            yi2[h] = _mm512_loadu_pd(A->y2 + g0 + 8 * h);
-            si[h] = failure ? _mm512_loadu_pd(A->s0 + g0 + 8 * h) : zero;
-            ax[h] = ay[h] = az[h] = zero;
-            sm[h] = ninf;
-        }
+        grid_tile_own(A, g0, failure, yi0, yi1, yi2, si, ax, ay, az, sm);
         for (int64_t q = R->seg0; q < R[1].seg0; q++) {
             const grid_seg *sg = &G->seg[q];
             int64_t lo, hi;
