@@ -205,17 +205,28 @@ pd_status pd_plate_make(const pd_region *regions, int nregions, const pd_lattice
 
 /* Cell list over a set of points: cells of edge >= `cutoff`. */
 typedef struct {
-    double lo[3];      /* lower corner, m                 */
-    double size;       /* cell edge, m                    */
-    int64_t dim[3];    /* cells per axis                  */
-    int64_t *start;    /* ncell+1 offsets into `index`    */
-    int32_t *index;    /* particle indices sorted by cell */
+    double lo[3];      /* lower corner, m                            */
+    double size;       /* cell edge, m                               */
+    int64_t dim[3];    /* cells per axis                             */
+    int64_t *start;    /* ncell+1 offsets into `index`               */
+    int32_t *index;    /* particle indices sorted by cell            */
+    int64_t *full;     /* the cells that hold points, ascending      */
+    int64_t nfull;     /* how many                                   */
+    int64_t *cellof;   /* each point's cell (the build's scratch)    */
+    int64_t start_room, index_room, cellof_room, full_room; /* what the
+                          arrays hold, kept by pd_cells_rebuild_except */
 } pd_cells;
 
 pd_status pd_cells_build(pd_cells *c, int64_t n, double *const x[3], double cutoff);
 /* The same without the points whose skip[i] is set (skip may be NULL). */
 pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], double cutoff,
                                 const uint8_t *skip);
+/* pd_cells_build_except into the arrays of c, a cell list built before (or
+ * zeroed), grown where they are too small: a list rebuilt every few steps
+ * allocates nothing once it has room.  The same cells and order. */
+pd_status pd_cells_rebuild_except(pd_cells *c, int64_t n, double *const x[3], double cutoff,
+                                  const uint8_t *skip);
+/* Frees the arrays and zeroes c (NULL: nothing). */
 void pd_cells_free(pd_cells *c);
 /* The grid alone (lo, size, dim; no particles) that pd_cells_build_except
  * lays over n particles whose bounding box is [lo, hi] (lo > hi: none). */
@@ -1833,6 +1844,10 @@ double pd_sum_fixed(const double *x, int64_t n);
  * equal contiguous parts, as OpenMP's static schedule cuts a loop (all of
  * them outside one). */
 void pd_thread_share(int64_t n, int64_t *lo, int64_t *hi);
+/* Room for `need` elements of `size` bytes in *a, which holds *room of
+ * them: grown by realloc (to a quarter more than asked) when short.
+ * Returns 1, or 0 out of memory (*a and *room as they were). */
+int pd_grow(void **a, int64_t *room, int64_t need, size_t size);
 /* The Levenshtein distance between a[0..la) and b[0..lb): the fewest
  * insertions, deletions and substitutions that turn one into the other
  * (the nearest option to a typo); lengths up to 63, longer ones are far. */

@@ -6,6 +6,7 @@
  */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "pd.h"
 
@@ -105,8 +106,13 @@ void pd_cells_geometry(pd_cells *c, const double box_lo[3], const double box_hi[
 pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], double cutoff,
                                 const uint8_t *skip)
 {
-    c->start = NULL;
-    c->index = NULL;
+    memset(c, 0, sizeof *c);
+    return pd_cells_rebuild_except(c, n, x, cutoff, skip);
+}
+
+pd_status pd_cells_rebuild_except(pd_cells *c, int64_t n, double *const x[3], double cutoff,
+                                  const uint8_t *skip)
+{
     double lo0 = INFINITY, lo1 = INFINITY, lo2 = INFINITY;
     double hi0 = -INFINITY, hi1 = -INFINITY, hi2 = -INFINITY;
 #pragma omp parallel for schedule(static) reduction(min : lo0, lo1, lo2) \
@@ -131,36 +137,40 @@ pd_status pd_cells_build_except(pd_cells *c, int64_t n, double *const x[3], doub
         return pd_fail(PD_ERR_INVALID, "cell size must be positive");
     const double lo[3] = {lo0, lo1, lo2}, hi[3] = {hi0, hi1, hi2};
     pd_cells_geometry(c, lo, hi, n, cutoff);
-    const int64_t ncell = c->dim[0] * c->dim[1] * c->dim[2];
-    c->start = calloc((size_t)ncell + 1, sizeof(int64_t));
-    c->index = malloc((size_t)(n > 0 ? n : 1) * sizeof(int32_t));
-    int64_t *cellof = malloc((size_t)(n > 0 ? n : 1) * sizeof(int64_t));
-    if (c->start == NULL || c->index == NULL || cellof == NULL) {
-        free(cellof);
+    const int64_t ncell = c->dim[0] * c->dim[1] * c->dim[2], m = n > 0 ? n : 1;
+    c->nfull = 0;
+    if (!pd_grow((void **)&c->start, &c->start_room, ncell + 1, sizeof(int64_t)) ||
+        !pd_grow((void **)&c->index, &c->index_room, m, sizeof(int32_t)) ||
+        !pd_grow((void **)&c->cellof, &c->cellof_room, m, sizeof(int64_t)) ||
+        !pd_grow((void **)&c->full, &c->full_room, m < ncell ? m : ncell, sizeof(int64_t))) {
         pd_cells_free(c);
         return pd_fail(PD_ERR_NOMEM, "out of memory for a cell list");
     }
-    int64_t *start = c->start;
+    int64_t *start = c->start, *cellof = c->cellof;
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++)
         if (!(skip && skip[i])) {
             const double p[3] = {x[0][i], x[1][i], x[2][i]};
             cellof[i] = cell_of(c, p);
         }
+    /* a counting sort: each cell's count, then its end (and the cells that
+     * hold points, in order), then its points placed from the last down,
+     * each cell's end its cursor, so that it ends at the cell's start */
+    memset(start, 0, (size_t)(ncell + 1) * sizeof(int64_t));
     for (int64_t i = 0; i < n; i++)
         if (!(skip && skip[i]))
-            start[cellof[i] + 1]++;
-    for (int64_t k = 0; k < ncell; k++)
-        start[k + 1] += start[k];
-    /* each cell's points in ascending order, start[k] its cursor (so that
-     * it ends at the next cell's start), then every start back one cell */
-    for (int64_t i = 0; i < n; i++)
+            start[cellof[i]]++;
+    int64_t end = 0;
+    for (int64_t k = 0; k < ncell; k++) {
+        if (start[k] > 0)
+            c->full[c->nfull++] = k;
+        end += start[k];
+        start[k] = end;
+    }
+    start[ncell] = end;
+    for (int64_t i = n - 1; i >= 0; i--)
         if (!(skip && skip[i]))
-            c->index[start[cellof[i]]++] = (int32_t)i;
-    for (int64_t k = ncell; k > 0; k--)
-        start[k] = start[k - 1];
-    start[0] = 0;
-    free(cellof);
+            c->index[--start[cellof[i]]] = (int32_t)i;
     return PD_OK;
 }
 
@@ -170,6 +180,7 @@ void pd_cells_free(pd_cells *c)
         return;
     free(c->start);
     free(c->index);
-    c->start = NULL;
-    c->index = NULL;
+    free(c->cellof);
+    free(c->full);
+    memset(c, 0, sizeof *c);
 }

@@ -100,6 +100,19 @@ void pd_thread_share(int64_t n, int64_t *lo, int64_t *hi)
     *hi = n * (t + 1) / T;
 }
 
+int pd_grow(void **a, int64_t *room, int64_t need, size_t size)
+{
+    if (need <= *room)
+        return 1;
+    const int64_t r = need + need / 4 + 64;
+    void *p = realloc(*a, (size_t)r * size);
+    if (p == NULL)
+        return 0;
+    *a = p;
+    *room = r;
+    return 1;
+}
+
 double pd_sum_fixed(const double *x, int64_t n)
 {
     int64_t nchunks = (n + PD_SUM_CHUNK - 1) / PD_SUM_CHUNK;

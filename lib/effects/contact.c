@@ -26,6 +26,36 @@
 #include <omp.h>
 #endif
 
+/* The cells of a search and the positions in the cells' order (ys[d][e]
+ * is y[d][c.index[e]]: a cell's particles are read one after another, not
+ * from all over the arrays); with a kernel that takes the contact of the
+ * pairs that started within `gap` (the stencil, the bond list's rows), the
+ * displacements too (y - x, in the same order): a pair that started at least
+ * `gap` apart comes within `reach` only when |u_i - u_j| >= gap - reach,
+ * so a candidate displaced less than that from i started within the gap,
+ * is the kernel's, and is left out before it is looked up (fragments that
+ * move as one). */
+typedef struct {
+    pd_cells c;
+    double *ys[3];
+    int prune;      /* 0: no gap to prune by (ub, pass NULL)      */
+    float *ub;      /* 6 a point; at the first point of each cell:
+                       a box about its displacements (least x, y, z,
+                       then greatest, each rounded outwards to a
+                       float), so that a cell displaced as i is is
+                       passed over whole                         */
+    uint32_t *pass; /* at the first point of each cell that holds a
+                       mover (cells_passed): bit 9 (dz + 1) +
+                       3 (dy + 1) + dx + 1 set when its neighbour at
+                       (dx, dy, dz) is outside the grid, empty, or
+                       displaced as one with it (judged by the two
+                       boxes): its points pass that neighbour over,
+                       and with all 27 set do not search; bit 31:
+                       it holds a mover                          */
+    double prune2;  /* |u_i - u_j|^2 below this: the kernel's pair */
+    int64_t room;   /* the points ys, ub and pass hold           */
+} cell_search;
+
 typedef struct {
     double cutoff;     /* largest d_ij, m                      */
     double skin;       /* m                                    */
@@ -39,6 +69,16 @@ typedef struct {
     int32_t *rows;     /* the particles with candidates, ascending:
                           the force's loop walks only them      */
     int64_t nrows, rows_cap;
+    /* kept from build to build (a build allocates nothing once they have
+     * room): the cells of the search, and build_movers's scratch */
+    cell_search cs;
+    uint8_t *mv;       /* n: 1 a mover, 2 one that does not search  */
+    int64_t *who;      /* n: the movers, ascending                  */
+    int64_t *toff;     /* n+1: their pairs' offsets into tp, td     */
+    int64_t *at;       /* n: fill cursors                           */
+    int32_t *tp;       /* the movers' pairs: the partners          */
+    double *td;        /* and their d_ij, m                         */
+    int64_t tp_room, td_room; /* what tp and td hold                */
     /* a piece of a body on MPI ranks (lib/run/piece.c): the partners of
      * its particles that are neither its own nor its ghosts, their
      * positions received at each step, and its own particles that the
@@ -66,11 +106,20 @@ static void remote_free(contact_list *cl)
     cl->remote = 0;
 }
 
+static void search_free(cell_search *cs);
+
 static void contact_free(void *state)
 {
     contact_list *cl = state;
     if (cl == NULL)
         return;
+    search_free(&cl->cs);
+    free(cl->mv);
+    free(cl->who);
+    free(cl->toff);
+    free(cl->at);
+    free(cl->tp);
+    free(cl->td);
     free(cl->offset);
     free(cl->partner);
     free(cl->d);
@@ -101,35 +150,6 @@ static pd_status contact_init(pd_sim *sim, void **state)
     *state = cl;
     return PD_OK;
 }
-
-/* The cells of a search and the positions in the cells' order (ys[d][e]
- * is y[d][c.index[e]]: a cell's particles are read one after another, not
- * from all over the arrays); with a kernel that takes the contact of the
- * pairs that started within `gap` (the stencil, the bond list's rows), the
- * displacements too (y - x, in the same order): a pair that started at least
- * `gap` apart comes within `reach` only when |u_i - u_j| >= gap - reach,
- * so a candidate displaced less than that from i started within the gap,
- * is the kernel's, and is left out before it is looked up (fragments that
- * move as one). */
-typedef struct {
-    pd_cells c;
-    double *ys[3];
-    int prune;      /* 0: no gap to prune by (ub, pass NULL)      */
-    float *ub;      /* 6 a point; at the first point of each cell:
-                       a box about its displacements (least x, y, z,
-                       then greatest, each rounded outwards to a
-                       float), so that a cell displaced as i is is
-                       passed over whole                         */
-    uint32_t *pass; /* at the first point of each cell that holds a
-                       mover (cells_passed): bit 9 (dz + 1) +
-                       3 (dy + 1) + dx + 1 set when its neighbour at
-                       (dx, dy, dz) is outside the grid, empty, or
-                       displaced as one with it (judged by the two
-                       boxes): its points pass that neighbour over,
-                       and with all 27 set do not search; bit 31:
-                       it holds a mover                          */
-    double prune2;  /* |u_i - u_j|^2 below this: the kernel's pair */
-} cell_search;
 
 #define ALL_PASSED 0x7ffffffu /* the 27 bits of cell_search.pass */
 #define HOLDS_MOVER 0x80000000u /* its bit 31 */
@@ -173,25 +193,32 @@ static float float_up(double v)
 }
 
 /* The cells of the particles but the lost (reach: the cell edge); with a
- * gap above the reach, the boxes of the cells' displacements to prune by. */
+ * gap above the reach, the boxes of the cells' displacements to prune by.
+ * Into cs's arrays from the build before, grown where they are short. */
 static pd_status search_build(const pd_sim *sim, double reach, double gap, cell_search *cs)
 {
-    memset(cs, 0, sizeof *cs);
-    pd_status s = pd_cells_build_except(&cs->c, sim->n, sim->y, reach, sim->lost);
+    pd_status s = pd_cells_rebuild_except(&cs->c, sim->n, sim->y, reach, sim->lost);
     if (s != PD_OK)
         return s;
     const int64_t m = cs->c.start[cs->c.dim[0] * cs->c.dim[1] * cs->c.dim[2]];
     const int prune = cs->prune = gap > reach;
-    const size_t room = (size_t)(m > 0 ? m : 1);
-    int bad = 0;
-    for (int d = 0; d < 3; d++)
-        bad |= (cs->ys[d] = malloc(room * sizeof(double))) == NULL;
-    if (prune)
-        bad |= (cs->ub = malloc(6 * room * sizeof(float))) == NULL ||
-               (cs->pass = malloc(room * sizeof(uint32_t))) == NULL;
-    if (bad) {
-        search_free(cs);
-        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+    const int64_t need = m > 0 ? m : 1;
+    if (need > cs->room) {
+        int bad = 0;
+        for (int d = 0; d < 3; d++) {
+            double *t = realloc(cs->ys[d], (size_t)need * sizeof(double));
+            bad |= t == NULL;
+            cs->ys[d] = t ? t : cs->ys[d];
+        }
+        float *ub = bad ? NULL : realloc(cs->ub, 6 * (size_t)need * sizeof(float));
+        cs->ub = ub ? ub : cs->ub;
+        uint32_t *pass = ub ? realloc(cs->pass, (size_t)need * sizeof(uint32_t)) : NULL;
+        cs->pass = pass ? pass : cs->pass;
+        if (pass == NULL) {
+            search_free(cs);
+            return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+        }
+        cs->room = need;
     }
     /* (gap - reach)^2 less a margin far above any rounding of |u| */
     cs->prune2 = prune ? (gap - reach) * (gap - reach) * (1.0 - 1e-9) : 0.0;
@@ -201,22 +228,22 @@ static pd_status search_build(const pd_sim *sim, double reach, double gap, cell_
         for (int d = 0; d < 3; d++)
             cs->ys[d][e] = y[d][cs->c.index[e]];
     if (prune) {
-        const int64_t ncell = cs->c.dim[0] * cs->c.dim[1] * cs->c.dim[2];
-        const int64_t *start = cs->c.start;
+        const int64_t *start = cs->c.start, *full = cs->c.full;
         const int32_t *index = cs->c.index;
 #pragma omp parallel for schedule(static)
-        for (int64_t k = 0; k < ncell; k++)
-            if (start[k + 1] > start[k])
-                for (int d = 0; d < 3; d++) {
-                    double lo = INFINITY, hi = -INFINITY;
-                    for (int64_t e = start[k]; e < start[k + 1]; e++) {
-                        const double u = cs->ys[d][e] - x[d][index[e]];
-                        lo = u < lo ? u : lo;
-                        hi = u > hi ? u : hi;
-                    }
-                    cs->ub[6 * start[k] + d] = float_down(lo);
-                    cs->ub[6 * start[k] + d + 3] = float_up(hi);
+        for (int64_t q = 0; q < cs->c.nfull; q++) {
+            const int64_t k = full[q];
+            for (int d = 0; d < 3; d++) {
+                double lo = INFINITY, hi = -INFINITY;
+                for (int64_t e = start[k]; e < start[k + 1]; e++) {
+                    const double u = cs->ys[d][e] - x[d][index[e]];
+                    lo = u < lo ? u : lo;
+                    hi = u > hi ? u : hi;
                 }
+                cs->ub[6 * start[k] + d] = float_down(lo);
+                cs->ub[6 * start[k] + d + 3] = float_up(hi);
+            }
+        }
     }
     return PD_OK;
 }
@@ -230,23 +257,23 @@ static pd_status search_build(const pd_sim *sim, double reach, double gap, cell_
  * 26 - b; boxes_comove is symmetric). */
 static void cells_passed(cell_search *cs, uint8_t *mv)
 {
-    const int64_t *dim = cs->c.dim, *start = cs->c.start;
+    const int64_t *dim = cs->c.dim, *start = cs->c.start, *full = cs->c.full;
+    const int64_t nfull = cs->c.nfull;
     const int32_t *index = cs->c.index;
-    const int64_t ncell = dim[0] * dim[1] * dim[2];
     uint32_t *pass = cs->pass;
 #pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < ncell; k++)
-        if (start[k + 1] > start[k]) {
-            int any = 0;
-            for (int64_t e = start[k]; e < start[k + 1]; e++)
-                any |= mv[index[e]];
-            pass[start[k]] = any ? HOLDS_MOVER : 0;
-        }
+    for (int64_t f = 0; f < nfull; f++) {
+        const int64_t k = full[f];
+        int any = 0;
+        for (int64_t e = start[k]; e < start[k + 1]; e++)
+            any |= mv[index[e]];
+        pass[start[k]] = any ? HOLDS_MOVER : 0;
+    }
     for (int half = 0; half < 2; half++)
 #pragma omp parallel for schedule(static)
-        for (int64_t k = 0; k < ncell; k++) {
-            if (start[k + 1] == start[k] ||
-                !(__atomic_load_n(&pass[start[k]], __ATOMIC_RELAXED) & HOLDS_MOVER))
+        for (int64_t f = 0; f < nfull; f++) {
+            const int64_t k = full[f];
+            if (!(__atomic_load_n(&pass[start[k]], __ATOMIC_RELAXED) & HOLDS_MOVER))
                 continue;
             const int64_t kc[3] = {k % dim[0], k / dim[0] % dim[1], k / (dim[0] * dim[1])};
             uint32_t bits = 0;
@@ -269,11 +296,13 @@ static void cells_passed(cell_search *cs, uint8_t *mv)
             __atomic_fetch_or(&pass[start[k]], bits, __ATOMIC_RELAXED);
         }
 #pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < ncell; k++)
-        if (start[k + 1] > start[k] && (pass[start[k]] & ALL_PASSED) == ALL_PASSED)
+    for (int64_t f = 0; f < nfull; f++) {
+        const int64_t k = full[f];
+        if ((pass[start[k]] & ALL_PASSED) == ALL_PASSED)
             for (int64_t e = start[k]; e < start[k + 1]; e++)
                 if (mv[index[e]])
                     mv[index[e]] = 2;
+    }
 }
 
 /* The cells around particle i, as pd_cells_adjacent_runs gives them: rows
@@ -422,16 +451,16 @@ static pd_status list_room(contact_list *cl, int64_t total)
  * ends): without the lattice stencil. */
 static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
 {
-    cell_search c;
-    pd_status s = search_build(sim, reach, 0.0, &c);
+    cell_search *c = &cl->cs;
+    pd_status s = search_build(sim, reach, 0.0, c);
     if (s != PD_OK)
         return s;
     const int64_t n = sim->n;
 #pragma omp parallel for schedule(static)
     for (int64_t i = 0; i < n; i++) {
         cell_rows r;
-        rows_around(sim, &c, i, &r);
-        cl->offset[i + 1] = candidates(sim, &c, &r, reach * reach, i, NULL, NULL);
+        rows_around(sim, c, i, &r);
+        cl->offset[i + 1] = candidates(sim, c, &r, reach * reach, i, NULL, NULL);
     }
     cl->offset[0] = 0;
     for (int64_t i = 0; i < n; i++)
@@ -440,11 +469,10 @@ static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
 #pragma omp parallel for schedule(static)
         for (int64_t i = 0; i < n; i++) {
             cell_rows r;
-            rows_around(sim, &c, i, &r);
-            candidates(sim, &c, &r, reach * reach, i, cl->partner + cl->offset[i],
+            rows_around(sim, c, i, &r);
+            candidates(sim, c, &r, reach * reach, i, cl->partner + cl->offset[i],
                        cl->d + cl->offset[i]);
         }
-    search_free(&c);
     return s;
 }
 
@@ -470,9 +498,22 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
     const uint8_t *lost = sim->lost;
     const int64_t n = sim->n;
     memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
-    uint8_t *mv = malloc((size_t)(n > 0 ? n : 1));
-    if (mv == NULL)
-        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+    const size_t rows = (size_t)(n > 0 ? n : 1);
+    if (cl->mv == NULL) { /* the scratch of every build */
+        cl->mv = malloc(rows);
+        cl->who = malloc(rows * sizeof(int64_t));
+        cl->toff = malloc((rows + 1) * sizeof(int64_t));
+        cl->at = malloc(rows * sizeof(int64_t));
+        if (!cl->mv || !cl->who || !cl->toff || !cl->at) {
+            free(cl->mv);
+            free(cl->who);
+            free(cl->toff);
+            free(cl->at);
+            cl->mv = NULL;
+            return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+        }
+    }
+    uint8_t *mv = cl->mv;
     int64_t nm = 0;
 #pragma omp parallel for schedule(static) reduction(+ : nm)
     for (int64_t i = 0; i < n; i++) {
@@ -480,20 +521,14 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
         mv[i] = !(ux * ux + uy * uy + uz * uz < umin2) && !(lost && lost[i]);
         nm += mv[i];
     }
-    if (nm == 0) {
-        free(mv);
+    if (nm == 0)
         return PD_OK;
-    }
-    cell_search c;
-    memset(&c, 0, sizeof c);
-    int64_t *who = malloc((size_t)nm * sizeof(int64_t)), *toff = malloc((size_t)(nm + 1) * sizeof(int64_t));
-    int32_t *tp = NULL;
-    double *td = NULL;
-    pd_status s = who && toff ? search_build(sim, reach, gap, &c)
-                              : pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+    cell_search *c = &cl->cs;
+    int64_t *who = cl->who, *toff = cl->toff;
+    pd_status s = search_build(sim, reach, gap, c);
     if (s == PD_OK) {
-        if (c.prune)
-            cells_passed(&c, mv);
+        if (c->prune)
+            cells_passed(c, mv);
         for (int64_t i = 0, k = 0; i < n; i++)
             if (mv[i])
                 who[k++] = i;
@@ -527,7 +562,7 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
                 }
                 /* room for every particle of the mover's 27 cells */
                 cell_rows r;
-                rows_around(sim, &c, i, &r);
+                rows_around(sim, c, i, &r);
                 int64_t most = 0;
                 for (int q = 0; q < r.n; q++)
                     most += r.hi[q] - r.lo[q];
@@ -544,17 +579,19 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
                         break;
                 }
                 toff[k + 1] =
-                    candidates(sim, &c, &r, reach * reach, i, bp[t] + bn[t], bd[t] + bn[t]);
+                    candidates(sim, c, &r, reach * reach, i, bp[t] + bn[t], bd[t] + bn[t]);
                 bn[t] += toff[k + 1];
             }
         }
         if (!bad) {
             for (int64_t k = 0; k < nm; k++)
                 toff[k + 1] += toff[k];
-            tp = malloc((size_t)(toff[nm] > 0 ? toff[nm] : 1) * sizeof(int32_t));
-            td = malloc((size_t)(toff[nm] > 0 ? toff[nm] : 1) * sizeof(double));
-            bad = tp == NULL || td == NULL;
+            const int64_t need = toff[nm] > 0 ? toff[nm] : 1;
+            bad = !pd_grow((void **)&cl->tp, &cl->tp_room, need, sizeof(int32_t)) ||
+                  !pd_grow((void **)&cl->td, &cl->td_room, need, sizeof(double));
         }
+        int32_t *tp = cl->tp;
+        double *td = cl->td;
         for (int64_t t = 0, at = 0; t < nt && !bad; at += bn[t], t++)
             if (bn[t] > 0) {
                 memcpy(tp + at, bp[t], (size_t)bn[t] * sizeof(int32_t));
@@ -572,6 +609,7 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
     }
     if (s == PD_OK && toff[nm] > 0) {
         /* the counts: a mover's own pairs; a non-mover's from the movers */
+        const int32_t *tp = cl->tp;
         for (int64_t k = 0; k < nm; k++) {
             cl->offset[who[k] + 1] += toff[k + 1] - toff[k];
             for (int64_t e = toff[k]; e < toff[k + 1]; e++)
@@ -582,33 +620,24 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
         s = list_room(cl, cl->offset[n]);
     }
     if (s == PD_OK && toff[nm] > 0) {
-        int64_t *at = malloc((size_t)n * sizeof(int64_t)); /* fill cursors */
-        if (at == NULL)
-            s = pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
-        else {
-            memcpy(at, cl->offset, (size_t)n * sizeof(int64_t));
-            for (int64_t k = 0; k < nm; k++) {
-                const int64_t i = who[k], m = toff[k + 1] - toff[k];
-                memcpy(cl->partner + at[i], tp + toff[k], (size_t)m * sizeof(int32_t));
-                memcpy(cl->d + at[i], td + toff[k], (size_t)m * sizeof(double));
-                at[i] += m;
-                for (int64_t e = toff[k]; e < toff[k + 1]; e++)
-                    if (!mv[tp[e]]) {
-                        cl->partner[at[tp[e]]] = (int32_t)i;
-                        cl->d[at[tp[e]]++] = td[e];
-                    }
-            }
-            free(at);
+        int64_t *at = cl->at; /* fill cursors */
+        const int32_t *tp = cl->tp;
+        const double *td = cl->td;
+        memcpy(at, cl->offset, (size_t)n * sizeof(int64_t));
+        for (int64_t k = 0; k < nm; k++) {
+            const int64_t i = who[k], m = toff[k + 1] - toff[k];
+            memcpy(cl->partner + at[i], tp + toff[k], (size_t)m * sizeof(int32_t));
+            memcpy(cl->d + at[i], td + toff[k], (size_t)m * sizeof(double));
+            at[i] += m;
+            for (int64_t e = toff[k]; e < toff[k + 1]; e++)
+                if (!mv[tp[e]]) {
+                    cl->partner[at[tp[e]]] = (int32_t)i;
+                    cl->d[at[tp[e]]++] = td[e];
+                }
         }
     }
     if (s != PD_OK) /* no half-built list */
         memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
-    search_free(&c);
-    free(mv);
-    free(who);
-    free(toff);
-    free(tp);
-    free(td);
     return s;
 }
 
@@ -733,20 +762,6 @@ static int pair_test(const pd_sim *sim, const pd_cells *G, const double ya[3], c
     return 1;
 }
 
-/* Append to a growing array. */
-static int grow(void **a, int64_t *cap, int64_t need, size_t size)
-{
-    if (need <= *cap)
-        return 1;
-    int64_t c = 2 * need + 64;
-    void *na = realloc(*a, (size_t)c * size);
-    if (na == NULL)
-        return 0;
-    *a = na;
-    *cap = c;
-    return 1;
-}
-
 /* The search of a piece's pairs: what it reads, and what it finds. */
 enum { PAIR_OW = 7 }; /* a pair sent: the mover, our particle, its position, d, its volume */
 typedef struct {
@@ -783,7 +798,7 @@ static pd_status add_pair(pair_search *ps, int64_t i, int64_t k)
     if (!pair_test(sim, ps->G, yi, xi, sim->p->radius[i], ki, i, yq, s, ps->reach2, ps->prune2,
                    ps->prune, &d))
         return PD_OK;
-    if (!grow((void **)&ps->rec, &ps->caprec, ps->nrec + 1, sizeof *ps->rec))
+    if (!pd_grow((void **)&ps->rec, &ps->caprec, ps->nrec + 1, sizeof *ps->rec))
         return pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
     pair_rec *r = &ps->rec[ps->nrec++];
     r->row = i;
@@ -797,8 +812,8 @@ static pd_status add_pair(pair_search *ps, int64_t i, int64_t k)
     const int t = mover ? pc->rank : owner_of(pc, s->g);
     if (t == pc->rank || in_piece(pc, t, pc->first + i))
         return PD_OK;
-    if (!grow((void **)&ps->out, &ps->capout, PAIR_OW * (ps->nout + 1), sizeof(double)) ||
-        !grow((void **)&ps->dest, &ps->capdest, ps->nout + 1, sizeof(int64_t)))
+    if (!pd_grow((void **)&ps->out, &ps->capout, PAIR_OW * (ps->nout + 1), sizeof(double)) ||
+        !pd_grow((void **)&ps->dest, &ps->capdest, ps->nout + 1, sizeof(int64_t)))
         return pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
     double *o = ps->out + PAIR_OW * ps->nout;
     o[0] = (double)s->g;
@@ -971,7 +986,7 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
             st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
         for (int64_t e = 0; st == PD_OK && e < ngot / OW; e++) { /* a remote non-mover's pair */
             const double *o = got + OW * e;
-            if (!grow((void **)&rec, &caprec, nrec + 1, sizeof *rec)) {
+            if (!pd_grow((void **)&rec, &caprec, nrec + 1, sizeof *rec)) {
                 st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
                 break;
             }
@@ -1010,7 +1025,7 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
             remote[nr++] = g;
         const int t = owner_of(pc, g);
         if (t != me && !in_piece(pc, t, first + rec[e].row)) { /* it needs ours */
-            if (!grow((void **)&send, &capsend, 2 * (nsend + 1), sizeof(int64_t))) {
+            if (!pd_grow((void **)&send, &capsend, 2 * (nsend + 1), sizeof(int64_t))) {
                 st = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
                 break;
             }

@@ -345,12 +345,74 @@ static void test_cell_rows(void)
     proved(f0, "the cells' rows and runs hold the adjacent cells' points in their order");
 }
 
+/* A cell list rebuilt into the arrays of the one before (pd_cells_rebuild_except)
+ * is the list a fresh build gives, for clouds that grow and shrink and with
+ * points skipped; its full cells are those that hold points, ascending, and
+ * each cell's points are in ascending order. */
+static void test_cells_rebuild(void)
+{
+    int f0 = failures;
+    enum { N = 4000 };
+    double *x[3];
+    uint8_t *skip = malloc(N);
+    for (int d = 0; d < 3; d++)
+        if ((x[d] = malloc(N * sizeof(double))) == NULL || skip == NULL)
+            die("memory");
+    uint64_t s = 777;
+    pd_cells r;
+    memset(&r, 0, sizeof r);
+    int bad = 0, sorted = 0, fulls = 0;
+    const double spread[5] = {0.01, 0.05, 0.002, 0.2, 0.01};
+    for (int round = 0; round < 5; round++) {
+        const int64_t n = round == 2 ? N / 3 : N;
+        for (int64_t i = 0; i < n; i++) {
+            for (int d = 0; d < 3; d++) {
+                s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+                x[d][i] = spread[round] * (d + 1) * (double)(s >> 11) / 9007199254740992.0;
+            }
+            skip[i] = round == 4 && i % 7 == 3;
+        }
+        pd_cells c;
+        if (pd_cells_build_except(&c, n, x, 0.0011, skip) != PD_OK ||
+            pd_cells_rebuild_except(&r, n, x, 0.0011, skip) != PD_OK)
+            die("cells");
+        const int64_t ncell = c.dim[0] * c.dim[1] * c.dim[2];
+        bad += r.dim[0] != c.dim[0] || r.dim[1] != c.dim[1] || r.dim[2] != c.dim[2] ||
+               r.size != c.size ||
+               memcmp(r.start, c.start, (size_t)(ncell + 1) * sizeof(int64_t)) != 0 ||
+               memcmp(r.index, c.index, (size_t)c.start[ncell] * sizeof(int32_t)) != 0;
+        int64_t f = 0;
+        for (int64_t k = 0; k < ncell; k++) {
+            if (c.start[k + 1] > c.start[k])
+                fulls += f >= c.nfull || c.full[f++] != k;
+            for (int64_t e = c.start[k] + 1; e < c.start[k + 1]; e++)
+                sorted += c.index[e - 1] >= c.index[e];
+        }
+        fulls += f != c.nfull || r.nfull != c.nfull;
+        int64_t kept = 0;
+        for (int64_t i = 0; i < n; i++)
+            kept += !skip[i];
+        bad += c.start[ncell] != kept;
+        pd_cells_free(&c);
+    }
+    CHECK(bad == 0, "%d of 5 rebuilds differ from a fresh build", bad);
+    CHECK(fulls == 0, "%d errors in the lists of full cells", fulls);
+    CHECK(sorted == 0, "%d cells' points out of order", sorted);
+    pd_cells_free(&r);
+    CHECK(r.start == NULL && r.start_room == 0, "pd_cells_free leaves arrays behind");
+    for (int d = 0; d < 3; d++)
+        free(x[d]);
+    free(skip);
+    proved(f0, "a cell list rebuilt into its arrays is a fresh build's; its full cells ascend");
+}
+
 int main(void)
 {
     test_family_sizes();
     test_cell_rows();
     test_volume_factors();
     test_cells_vs_brute_force();
+    test_cells_rebuild();
     test_state_bits();
     test_sort();
     test_errors();
