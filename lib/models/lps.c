@@ -120,6 +120,7 @@ typedef struct {
                           ellipsoids; NULL: omega(|xi|), see weight()    */
     pd_influence influence; /* omega(|xi|) of the scene                 */
     uint64_t *kill;    /* directed bonds, bits: breaks in this step      */
+    uint64_t *before;  /* directed bonds, bits: the state before them    */
     uint8_t *touched;  /* n: particle with a bond breaking in this step  */
     double *released;  /* n: energy released at each particle, J         */
     pd_model_kind model; /* PD_MODEL_LPS, PD_MODEL_VES or PD_MODEL_EPS   */
@@ -208,6 +209,7 @@ static void lps_free(void *state)
     free(st->theta);
     free(st->omega);
     free(st->kill);
+    free(st->before);
     free(st->touched);
     free(st->released);
     free(st->hist);
@@ -274,10 +276,12 @@ static pd_status lps_init(pd_sim *sim, void **state)
     if (sim->sc.nellipsoids > 0) /* omega depends on the direction */
         st->omega = malloc(nb * sizeof(double));
     st->kill = calloc((size_t)pd_bits_words(b->count) + 1, sizeof(uint64_t));
+    if (sim->sc.has_failure)
+        st->before = malloc(((size_t)pd_bits_words(b->count) + 1) * sizeof(uint64_t));
     st->touched = calloc(n, 1);
     st->released = calloc(n, sizeof(double));
     if (!st->m || !st->theta || (sim->sc.nellipsoids > 0 && !st->omega) || !st->kill ||
-        !st->touched || !st->released) {
+        (sim->sc.has_failure && !st->before) || !st->touched || !st->released) {
         lps_free(st);
         return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS state of %lld bonds",
                        (long long)b->count);
@@ -386,25 +390,62 @@ static double ves_energy(const pd_sim *sim, const lps_state *st, const uint64_t 
            0.5 * PD_LPS_SHEAR_FACTOR * sim->sc.shear_modulus / st->m[i] * sum;
 }
 
-/* V_i W*_i over the bonds intact in `bits`, J (see the top). */
+/* V_i W*_i over the bonds intact in `bits`, J (see the top).  For LPS one
+ * walk of the family takes both sums, sum omega e^2 nu V_j and
+ * theta_row's, each in its own order: the bits of two walks. */
 static double energy_row(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i)
 {
     const pd_bonds *b = sim->b;
     const double *V = sim->p->volume, K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
     if (st->m[i] == 0.0)
         return 0.0;
-    double sum = 0, d[3], r;
+    if (st->model != PD_MODEL_LPS)
+        return V[i] * ves_energy(sim, st, bits, i, theta_row(sim, st, bits, i));
+    double sum = 0, tsum = 0, d[3], r;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
         if (!pd_bond_intact(bits, k))
             continue;
-        const double e = extension(sim, i, k, d, &r);
-        sum += weight(st, b, k) * e * e * V[b->neighbor[k]] * b->vfactor[k];
+        const double e = extension(sim, i, k, d, &r), w = weight(st, b, k);
+        const double vj = V[b->neighbor[k]], vf = b->vfactor[k];
+        sum += w * e * e * vj * vf;
+        tsum += w * b->length[k] * e * vj * vf;
     }
-    const double th = theta_row(sim, st, bits, i);
-    if (st->model != PD_MODEL_LPS)
-        return V[i] * ves_energy(sim, st, bits, i, th);
+    const double th = (PD_LPS_DILATATION / st->m[i]) * tsum; /* theta_row's, m_i != 0 */
     return V[i] * ((0.5 * K - 5.0 * G / 6.0) * th * th +
                    0.5 * PD_LPS_SHEAR_FACTOR * G / st->m[i] * sum);
+}
+
+/* energy_row over the bits `then` less energy_row over the bits `now`
+ * (each bond intact in `now` is in `then`), J: for LPS both, each sum in
+ * energy_row's order, from one walk of the family. */
+static double released_row(const pd_sim *sim, const lps_state *st, const uint64_t *then,
+                           const uint64_t *now, int64_t i)
+{
+    if (st->model != PD_MODEL_LPS || st->m[i] == 0.0)
+        return energy_row(sim, st, then, i) - energy_row(sim, st, now, i);
+    const pd_bonds *b = sim->b;
+    const double *V = sim->p->volume, K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
+    double s[2] = {0, 0}, t[2] = {0, 0}, d[3], r; /* [0] then, [1] now */
+    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
+        if (!pd_bond_intact(then, k))
+            continue;
+        const double e = extension(sim, i, k, d, &r), w = weight(st, b, k);
+        const double vj = V[b->neighbor[k]], vf = b->vfactor[k];
+        const double se = w * e * e * vj * vf, te = w * b->length[k] * e * vj * vf;
+        s[0] += se;
+        t[0] += te;
+        if (pd_bond_intact(now, k)) {
+            s[1] += se;
+            t[1] += te;
+        }
+    }
+    double E[2];
+    for (int a = 0; a < 2; a++) {
+        const double th = (PD_LPS_DILATATION / st->m[i]) * t[a];
+        E[a] = V[i] * ((0.5 * K - 5.0 * G / 6.0) * th * th +
+                       0.5 * PD_LPS_SHEAR_FACTOR * G / st->m[i] * s[a]);
+    }
+    return E[0] - E[1];
 }
 
 /* The VES pair force t_ij of directed bond k of row i (nu V_j included)
@@ -710,8 +751,9 @@ static int64_t find32(const int32_t *a, int64_t lo, int64_t hi, int32_t j)
 }
 
 /* Break the bonds the force pass marked, booking the drop of W* of every
- * particle that loses a bond; returns the energy released, J.  A bond
- * breaks as its end i < j marked it (both ends do, the test being
+ * particle that loses a bond (released_row, over the bits kept from
+ * before the breaks and those after); returns the energy released, J.  A
+ * bond breaks as its end i < j marked it (both ends do, the test being
  * symmetric): its directed copy j-i is found in j's family and its half
  * bond in i's half row (ascending). */
 static double break_marked(pd_sim *sim, lps_state *st)
@@ -719,9 +761,7 @@ static double break_marked(pd_sim *sim, lps_state *st)
     const pd_bonds *b = sim->b;
     const pd_half_bonds *h = &sim->half;
     uint64_t *bits = sim->intact;
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++)
-        st->released[i] = st->touched[i] ? energy_row(sim, st, bits, i) : 0.0;
+    memcpy(st->before, bits, (size_t)pd_bits_words(b->count) * sizeof(uint64_t));
 #pragma omp parallel for schedule(dynamic, 256)
     for (int64_t i = 0; i < sim->n; i++) {
         if (!st->touched[i])
@@ -741,11 +781,10 @@ static double break_marked(pd_sim *sim, lps_state *st)
     }
     memset(st->kill, 0, (size_t)pd_bits_words(b->count) * sizeof(uint64_t));
 #pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < sim->n; i++)
-        if (st->touched[i]) {
-            st->released[i] -= energy_row(sim, st, bits, i);
-            st->touched[i] = 0;
-        }
+    for (int64_t i = 0; i < sim->n; i++) {
+        st->released[i] = st->touched[i] ? released_row(sim, st, st->before, bits, i) : 0.0;
+        st->touched[i] = 0;
+    }
     double sum; /* a piece: over its own rows, then the ranks (collective) */
     pd_sim_sum(sim, (const double *const *)&st->released, 1, &sum);
     return sum;
