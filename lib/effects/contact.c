@@ -499,20 +499,8 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
     const int64_t n = sim->n;
     memset(cl->offset, 0, (size_t)(n + 1) * sizeof(int64_t));
     const size_t rows = (size_t)(n > 0 ? n : 1);
-    if (cl->mv == NULL) { /* the scratch of every build */
-        cl->mv = malloc(rows);
-        cl->who = malloc(rows * sizeof(int64_t));
-        cl->toff = malloc((rows + 1) * sizeof(int64_t));
-        cl->at = malloc(rows * sizeof(int64_t));
-        if (!cl->mv || !cl->who || !cl->toff || !cl->at) {
-            free(cl->mv);
-            free(cl->who);
-            free(cl->toff);
-            free(cl->at);
-            cl->mv = NULL;
-            return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
-        }
-    }
+    if (cl->mv == NULL && (cl->mv = malloc(rows)) == NULL) /* kept for the next builds */
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
     uint8_t *mv = cl->mv;
     int64_t nm = 0;
 #pragma omp parallel for schedule(static) reduction(+ : nm)
@@ -523,6 +511,18 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
     }
     if (nm == 0)
         return PD_OK;
+    if (cl->who == NULL) { /* the first build with movers: the rest of the scratch */
+        cl->who = malloc(rows * sizeof(int64_t));
+        cl->toff = malloc((rows + 1) * sizeof(int64_t));
+        cl->at = malloc(rows * sizeof(int64_t));
+        if (!cl->who || !cl->toff || !cl->at) {
+            free(cl->who);
+            free(cl->toff);
+            free(cl->at);
+            cl->who = cl->toff = cl->at = NULL;
+            return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
+        }
+    }
     cell_search *c = &cl->cs;
     int64_t *who = cl->who, *toff = cl->toff;
     pd_status s = search_build(sim, reach, gap, c);
