@@ -132,9 +132,12 @@ theta_tile_run(const pd_grid *G, const grid_run *R, int64_t cut, const grid_arra
             if (acts == 0xffff) {
                 THETA_HALF(0, 1);
                 THETA_HALF(1, 1);
-            } else {
-                THETA_HALF(0, 0);
-                THETA_HALF(1, 0);
+            } else { /* a half with no lane of its own (the run's last tile,
+                         moved back) adds nothing: left out */
+                if (acts & 0xffu)
+                    THETA_HALF(0, 0);
+                if (acts >> 8)
+                    THETA_HALF(1, 0);
             }
         }
         double ts[GRID_TILE];
@@ -377,9 +380,12 @@ lps_tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A,
             if (acts == 0xffff) {
                 LPS_HALF(0, 1);
                 LPS_HALF(1, 1);
-            } else {
-                LPS_HALF(0, 0);
-                LPS_HALF(1, 0);
+            } else { /* a half with no lane of its own (the run's last tile,
+                         moved back) adds nothing: left out */
+                if (acts & 0xffu)
+                    LPS_HALF(0, 0);
+                if (acts >> 8)
+                    LPS_HALF(1, 0);
             }
             if (contact && near)
                 seg_contact(G, sg, A, lo, hi - lo, 1);

@@ -306,9 +306,12 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
             if (acts == 0xffff) {
                 TILE_HALF(0, 1);
                 TILE_HALF(1, 1);
-            } else {
-                TILE_HALF(0, 0);
-                TILE_HALF(1, 0);
+            } else { /* a half with no lane of its own (the run's last tile,
+                         moved back) adds nothing: left out */
+                if (acts & 0xffu)
+                    TILE_HALF(0, 0);
+                if (acts >> 8)
+                    TILE_HALF(1, 0);
             }
             if (contact && near)
                 seg_contact(G, sg, A, lo, hi - lo, 1);
