@@ -212,6 +212,24 @@ static inline uint32_t grid_tile_acts(const grid_seg *sg, int64_t cut, int64_t o
     return (uint32_t)(((UINT64_C(1) << (*hi - g0)) - 1) & ~((UINT64_C(1) << (*lo - g0)) - 1));
 }
 
+/* A tile's two halves against one segment, HALF(h, all) each: with every
+ * lane of `acts` active, both with plain loads and stores; else masked,
+ * and a half with no lane of its own (the lanes of the tile before, in a
+ * run's last tile moved back) left out: it would load and store nothing
+ * and add +0 to the tile's sums, which start at +0 and so are never -0. */
+#define GRID_TILE_HALVES(HALF)                                                                 \
+    do {                                                                                       \
+        if (acts == 0xffff) {                                                                  \
+            HALF(0, 1);                                                                        \
+            HALF(1, 1);                                                                        \
+        } else {                                                                               \
+            if (acts & 0xffu)                                                                  \
+                HALF(0, 0);                                                                    \
+            if (acts >> 8)                                                                     \
+                HALF(1, 0);                                                                    \
+        }                                                                                      \
+    } while (0)
+
 /* The first particle of run R's tile that starts at t (the last one moved
  * back to end with the run). */
 static inline int64_t grid_tile_g0(const grid_run *R, int64_t t)

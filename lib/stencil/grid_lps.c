@@ -129,16 +129,7 @@ theta_tile_run(const pd_grid *G, const grid_run *R, int64_t cut, const grid_arra
             const uint64_t *M = G->mask + g0;
             const double *Y0 = A->y0 + j0, *Y1 = A->y1 + j0, *Y2 = A->y2 + j0;
             double *S = sum + j0;
-            if (acts == 0xffff) {
-                THETA_HALF(0, 1);
-                THETA_HALF(1, 1);
-            } else { /* a half with no lane of its own (the run's last tile,
-                         moved back) adds nothing: left out */
-                if (acts & 0xffu)
-                    THETA_HALF(0, 0);
-                if (acts >> 8)
-                    THETA_HALF(1, 0);
-            }
+            GRID_TILE_HALVES(THETA_HALF);
         }
         double ts[GRID_TILE];
         for (int h = 0; h < 2; h++)
@@ -377,16 +368,7 @@ lps_tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A,
             double *F0 = A->f0 + j0, *F1 = A->f1 + j0, *F2 = A->f2 + j0;
             double *SN = failure ? A->s0n + j0 : NULL;
             __mmask8 near = 0;
-            if (acts == 0xffff) {
-                LPS_HALF(0, 1);
-                LPS_HALF(1, 1);
-            } else { /* a half with no lane of its own (the run's last tile,
-                         moved back) adds nothing: left out */
-                if (acts & 0xffu)
-                    LPS_HALF(0, 0);
-                if (acts >> 8)
-                    LPS_HALF(1, 0);
-            }
+            GRID_TILE_HALVES(LPS_HALF);
             if (contact && near)
                 seg_contact(G, sg, A, lo, hi - lo, 1);
         }

@@ -303,16 +303,7 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
             double *SN = failure ? A->s0n + j0 : NULL;
             double *EB = energy ? A->eb + j0 : NULL, *OB = energy ? A->eb + g0 : NULL;
             __mmask8 near = 0, brk = 0;
-            if (acts == 0xffff) {
-                TILE_HALF(0, 1);
-                TILE_HALF(1, 1);
-            } else { /* a half with no lane of its own (the run's last tile,
-                         moved back) adds nothing: left out */
-                if (acts & 0xffu)
-                    TILE_HALF(0, 0);
-                if (acts >> 8)
-                    TILE_HALF(1, 0);
-            }
+            GRID_TILE_HALVES(TILE_HALF);
             if (contact && near)
                 seg_contact(G, sg, A, lo, hi - lo, 1);
             if (failure && brk && tile_breaks(G, sg, A, lo, hi, 1, bl))
