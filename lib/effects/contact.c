@@ -53,7 +53,7 @@ typedef struct {
                        and with all 27 set do not search; bit 31:
                        it holds a mover                          */
     double prune2;  /* |u_i - u_j|^2 below this: the kernel's pair */
-    int64_t room;   /* the points ys, ub and pass hold           */
+    int64_t ys_room[3], ub_room, pass_room; /* what the arrays hold */
 } cell_search;
 
 typedef struct {
@@ -203,22 +203,13 @@ static pd_status search_build(const pd_sim *sim, double reach, double gap, cell_
     const int64_t m = cs->c.start[cs->c.dim[0] * cs->c.dim[1] * cs->c.dim[2]];
     const int prune = cs->prune = gap > reach;
     const int64_t need = m > 0 ? m : 1;
-    if (need > cs->room) {
-        int bad = 0;
-        for (int d = 0; d < 3; d++) {
-            double *t = realloc(cs->ys[d], (size_t)need * sizeof(double));
-            bad |= t == NULL;
-            cs->ys[d] = t ? t : cs->ys[d];
-        }
-        float *ub = bad ? NULL : realloc(cs->ub, 6 * (size_t)need * sizeof(float));
-        cs->ub = ub ? ub : cs->ub;
-        uint32_t *pass = ub ? realloc(cs->pass, (size_t)need * sizeof(uint32_t)) : NULL;
-        cs->pass = pass ? pass : cs->pass;
-        if (pass == NULL) {
-            search_free(cs);
-            return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
-        }
-        cs->room = need;
+    int ok = 1;
+    for (int d = 0; d < 3; d++)
+        ok = ok && pd_grow((void **)&cs->ys[d], &cs->ys_room[d], need, sizeof(double));
+    if (!ok || !pd_grow((void **)&cs->ub, &cs->ub_room, 6 * need, sizeof(float)) ||
+        !pd_grow((void **)&cs->pass, &cs->pass_room, need, sizeof(uint32_t))) {
+        search_free(cs);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the contact search");
     }
     /* (gap - reach)^2 less a margin far above any rounding of |u| */
     cs->prune2 = prune ? (gap - reach) * (gap - reach) * (1.0 - 1e-9) : 0.0;
