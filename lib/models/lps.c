@@ -390,62 +390,64 @@ static double ves_energy(const pd_sim *sim, const lps_state *st, const uint64_t 
            0.5 * PD_LPS_SHEAR_FACTOR * sim->sc.shear_modulus / st->m[i] * sum;
 }
 
-/* V_i W*_i over the bonds intact in `bits`, J (see the top).  For LPS one
- * walk of the family takes both sums, sum omega e^2 nu V_j and
- * theta_row's, each in its own order: the bits of two walks. */
-static double energy_row(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i)
+/* Row i's sums over its bonds intact in `bits`, s[0] = sum omega e^2 nu V_j
+ * (energy_row's) and t[0] = theta_row's sum, in one walk, each in the
+ * family's order; with `also`, s[1] and t[1] the same over the bonds
+ * intact in `also` too. */
+static void row_sums(const pd_sim *sim, const lps_state *st, const uint64_t *bits,
+                     const uint64_t *also, int64_t i, double s[2], double t[2])
 {
     const pd_bonds *b = sim->b;
-    const double *V = sim->p->volume, K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
-    if (st->m[i] == 0.0)
-        return 0.0;
-    if (st->model != PD_MODEL_LPS)
-        return V[i] * ves_energy(sim, st, bits, i, theta_row(sim, st, bits, i));
-    double sum = 0, tsum = 0, d[3], r;
+    const double *V = sim->p->volume;
+    double d[3], r;
+    s[0] = s[1] = t[0] = t[1] = 0;
     for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
         if (!pd_bond_intact(bits, k))
-            continue;
-        const double e = extension(sim, i, k, d, &r), w = weight(st, b, k);
-        const double vj = V[b->neighbor[k]], vf = b->vfactor[k];
-        sum += w * e * e * vj * vf;
-        tsum += w * b->length[k] * e * vj * vf;
-    }
-    const double th = (PD_LPS_DILATATION / st->m[i]) * tsum; /* theta_row's, m_i != 0 */
-    return V[i] * ((0.5 * K - 5.0 * G / 6.0) * th * th +
-                   0.5 * PD_LPS_SHEAR_FACTOR * G / st->m[i] * sum);
-}
-
-/* energy_row over the bits `then` less energy_row over the bits `now`
- * (each bond intact in `now` is in `then`), J: for LPS both, each sum in
- * energy_row's order, from one walk of the family. */
-static double released_row(const pd_sim *sim, const lps_state *st, const uint64_t *then,
-                           const uint64_t *now, int64_t i)
-{
-    if (st->model != PD_MODEL_LPS || st->m[i] == 0.0)
-        return energy_row(sim, st, then, i) - energy_row(sim, st, now, i);
-    const pd_bonds *b = sim->b;
-    const double *V = sim->p->volume, K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
-    double s[2] = {0, 0}, t[2] = {0, 0}, d[3], r; /* [0] then, [1] now */
-    for (int64_t k = b->offset[i]; k < b->offset[i + 1]; k++) {
-        if (!pd_bond_intact(then, k))
             continue;
         const double e = extension(sim, i, k, d, &r), w = weight(st, b, k);
         const double vj = V[b->neighbor[k]], vf = b->vfactor[k];
         const double se = w * e * e * vj * vf, te = w * b->length[k] * e * vj * vf;
         s[0] += se;
         t[0] += te;
-        if (pd_bond_intact(now, k)) {
+        if (also && pd_bond_intact(also, k)) {
             s[1] += se;
             t[1] += te;
         }
     }
-    double E[2];
-    for (int a = 0; a < 2; a++) {
-        const double th = (PD_LPS_DILATATION / st->m[i]) * t[a];
-        E[a] = V[i] * ((0.5 * K - 5.0 * G / 6.0) * th * th +
-                       0.5 * PD_LPS_SHEAR_FACTOR * G / st->m[i] * s[a]);
-    }
-    return E[0] - E[1];
+}
+
+/* V_i W*_i of LPS from row i's sums (row_sums'), m_i != 0, J. */
+static double lps_row_energy(const pd_sim *sim, const lps_state *st, int64_t i, double s,
+                             double t)
+{
+    const double K = sim->sc.bulk_modulus, G = sim->sc.shear_modulus;
+    const double th = (PD_LPS_DILATATION / st->m[i]) * t; /* theta_row's */
+    return sim->p->volume[i] *
+           ((0.5 * K - 5.0 * G / 6.0) * th * th + 0.5 * PD_LPS_SHEAR_FACTOR * G / st->m[i] * s);
+}
+
+/* V_i W*_i over the bonds intact in `bits`, J (see the top). */
+static double energy_row(const pd_sim *sim, const lps_state *st, const uint64_t *bits, int64_t i)
+{
+    if (st->m[i] == 0.0)
+        return 0.0;
+    if (st->model != PD_MODEL_LPS)
+        return sim->p->volume[i] * ves_energy(sim, st, bits, i, theta_row(sim, st, bits, i));
+    double s[2], t[2];
+    row_sums(sim, st, bits, NULL, i, s, t);
+    return lps_row_energy(sim, st, i, s[0], t[0]);
+}
+
+/* energy_row over the bits `then` less energy_row over the bits `now`
+ * (each bond intact in `now` is in `then`), J: for LPS from one walk. */
+static double released_row(const pd_sim *sim, const lps_state *st, const uint64_t *then,
+                           const uint64_t *now, int64_t i)
+{
+    if (st->model != PD_MODEL_LPS || st->m[i] == 0.0)
+        return energy_row(sim, st, then, i) - energy_row(sim, st, now, i);
+    double s[2], t[2];
+    row_sums(sim, st, then, now, i, s, t);
+    return lps_row_energy(sim, st, i, s[0], t[0]) - lps_row_energy(sim, st, i, s[1], t[1]);
 }
 
 /* The VES pair force t_ij of directed bond k of row i (nu V_j included)
