@@ -79,6 +79,10 @@ typedef struct {
     int32_t *tp;       /* the movers' pairs: the partners          */
     double *td;        /* and their d_ij, m                         */
     int64_t tp_room, td_room; /* what tp and td hold                */
+    int nbuf;          /* threads with a buffer of their own:      */
+    int32_t **bp;      /* a thread's pairs found: the partners     */
+    double **bd;       /* and their d_ij, m                         */
+    int64_t *bp_room, *bd_room, *bn; /* what they hold, and use   */
     /* a piece of a body on MPI ranks (lib/run/piece.c): the partners of
      * its particles that are neither its own nor its ghosts, their
      * positions received at each step, and its own particles that the
@@ -120,6 +124,15 @@ static void contact_free(void *state)
     free(cl->at);
     free(cl->tp);
     free(cl->td);
+    for (int t = 0; t < cl->nbuf; t++) {
+        free(cl->bp[t]);
+        free(cl->bd[t]);
+    }
+    free(cl->bp);
+    free(cl->bd);
+    free(cl->bp_room);
+    free(cl->bd_room);
+    free(cl->bn);
     free(cl->offset);
     free(cl->partner);
     free(cl->d);
@@ -467,6 +480,40 @@ static pd_status build_all(pd_sim *sim, contact_list *cl, double reach)
     return s;
 }
 
+/* The movers' search buffers of nt threads, kept from build to build:
+ * each thread's used count set to 0.  Returns 0, or -1 out of memory (the
+ * buffers as they were). */
+static int thread_buffers(contact_list *cl, int nt)
+{
+    if (nt > cl->nbuf) {
+        int32_t **bp = realloc(cl->bp, (size_t)nt * sizeof *bp);
+        if (bp)
+            cl->bp = bp;
+        double **bd = realloc(cl->bd, (size_t)nt * sizeof *bd);
+        if (bd)
+            cl->bd = bd;
+        int64_t *r1 = realloc(cl->bp_room, (size_t)nt * sizeof *r1);
+        if (r1)
+            cl->bp_room = r1;
+        int64_t *r2 = realloc(cl->bd_room, (size_t)nt * sizeof *r2);
+        if (r2)
+            cl->bd_room = r2;
+        int64_t *bn = realloc(cl->bn, (size_t)nt * sizeof *bn);
+        if (bn)
+            cl->bn = bn;
+        if (!bp || !bd || !r1 || !r2 || !bn)
+            return -1;
+        for (int t = cl->nbuf; t < nt; t++) {
+            cl->bp[t] = NULL;
+            cl->bd[t] = NULL;
+            cl->bp_room[t] = cl->bd_room[t] = 0;
+        }
+        cl->nbuf = nt;
+    }
+    memset(cl->bn, 0, (size_t)nt * sizeof *cl->bn);
+    return 0;
+}
+
 /* The list with the lattice stencil, which takes the contact of every
  * pair that started within the horizon: the list holds only pairs that
  * started at least `gap` apart (the shortest lattice distance the stencil
@@ -532,10 +579,10 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
 #ifdef _OPENMP
         nt = omp_get_max_threads();
 #endif
-        int32_t **bp = calloc((size_t)nt, sizeof *bp);
-        double **bd = calloc((size_t)nt, sizeof *bd);
-        int64_t *bn = calloc((size_t)nt, sizeof *bn);
-        int bad = !bp || !bd || !bn;
+        int bad = thread_buffers(cl, nt) != 0;
+        int32_t **bp = cl->bp;
+        double **bd = cl->bd;
+        int64_t *bn = cl->bn;
         if (!bad)
 #pragma omp parallel num_threads(nt) reduction(| : bad)
         {
@@ -544,7 +591,6 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
 #else
             const int64_t T = 1, t = 0;
 #endif
-            int64_t cap = 0;
             for (int64_t k = nm * t / T; k < nm * (t + 1) / T && !bad; k++) {
                 const int64_t i = who[k];
                 if (mv[i] == 2) { /* its 27 cells displaced as it is */
@@ -557,17 +603,10 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
                 int64_t most = 0;
                 for (int q = 0; q < r.n; q++)
                     most += r.hi[q] - r.lo[q];
-                if (bn[t] + most > cap) {
-                    cap = 2 * (bn[t] + most) + 1024;
-                    int32_t *np = realloc(bp[t], (size_t)cap * sizeof(int32_t));
-                    if (np)
-                        bp[t] = np;
-                    double *nd = realloc(bd[t], (size_t)cap * sizeof(double));
-                    if (nd)
-                        bd[t] = nd;
-                    bad |= !np || !nd;
-                    if (bad)
-                        break;
+                if (!pd_grow((void **)&bp[t], &cl->bp_room[t], bn[t] + most, sizeof(int32_t)) ||
+                    !pd_grow((void **)&bd[t], &cl->bd_room[t], bn[t] + most, sizeof(double))) {
+                    bad = 1;
+                    break;
                 }
                 toff[k + 1] =
                     candidates(sim, c, &r, reach * reach, i, bp[t] + bn[t], bd[t] + bn[t]);
@@ -588,13 +627,6 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
                 memcpy(tp + at, bp[t], (size_t)bn[t] * sizeof(int32_t));
                 memcpy(td + at, bd[t], (size_t)bn[t] * sizeof(double));
             }
-        for (int t = 0; bp && bd && t < nt; t++) {
-            free(bp[t]);
-            free(bd[t]);
-        }
-        free(bp);
-        free(bd);
-        free(bn);
         if (bad)
             s = pd_fail(PD_ERR_NOMEM, "out of memory for the contact pairs");
     }
