@@ -90,16 +90,11 @@ PMB_TARGET_AVX512 static inline __attribute__((always_inline)) void
 chunk_bonds(__m512d xj, __m512d yj, __m512d zj, __mmask8 act, __m512d yi0, __m512d yi1,
             __m512d yi2, row_chunk *c)
 {
-    c->dx = _mm512_sub_pd(xj, yi0);
-    c->dy = _mm512_sub_pd(yj, yi1);
-    c->dz = _mm512_sub_pd(zj, yi2);
-    c->r = _mm512_sqrt_pd(
-        _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(c->dx, c->dx), _mm512_mul_pd(c->dy, c->dy)),
-                      _mm512_mul_pd(c->dz, c->dz)));
-    const __m512d dr = _mm512_sub_pd(c->r, c->L);
-    c->dr = _mm512_mask_mov_pd(
-        dr, _mm512_cmp_pd_mask(_mm512_abs_pd(dr), _mm512_set1_pd(PD_NEAR_ZERO), _CMP_LT_OQ),
-        _mm512_setzero_pd());
+    __m512d d[3];
+    pd_bonds8(xj, yj, zj, yi0, yi1, yi2, c->L, d, &c->r, &c->dr);
+    c->dx = d[0];
+    c->dy = d[1];
+    c->dz = d[2];
     c->s = row_stretch(c->r, c->L, c->dr, act, &c->pos, &c->q);
 }
 #endif

@@ -93,6 +93,30 @@ typedef enum {
 #define PD_AVX512_KERNELS 0
 #endif
 
+#if PD_AVX512_KERNELS
+/* Eight bonds from their ends (partners xj, yj, zj; own yi0, yi1, yi2):
+ * the bond vectors d = y_j - y_i, the lengths r and the extensions
+ * e = r - L, 0 below eps_machine of extension (seed 000).  Every AVX-512
+ * bond kernel takes its bonds so (the stencil's tiles, the bond list's
+ * rows and lanes), operation for operation as their scalar loops. */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) void
+pd_bonds8(__m512d xj, __m512d yj, __m512d zj, __m512d yi0, __m512d yi1, __m512d yi2, __m512d L,
+          __m512d d[3], __m512d *r, __m512d *e)
+{
+    d[0] = _mm512_sub_pd(xj, yi0);
+    d[1] = _mm512_sub_pd(yj, yi1);
+    d[2] = _mm512_sub_pd(zj, yi2);
+    *r = _mm512_sqrt_pd(_mm512_add_pd(
+        _mm512_add_pd(_mm512_mul_pd(d[0], d[0]), _mm512_mul_pd(d[1], d[1])),
+        _mm512_mul_pd(d[2], d[2])));
+    const __m512d x = _mm512_sub_pd(*r, L);
+    *e = _mm512_mask_mov_pd(x,
+                            _mm512_cmp_pd_mask(_mm512_abs_pd(x), _mm512_set1_pd(PD_NEAR_ZERO),
+                                               _CMP_LT_OQ),
+                            _mm512_setzero_pd());
+}
+#endif
+
 /* A run's piece of a body spread over ranks (lib/run/piece.c, pd.h's
  * pd_sim_piece): which of its rows it owns, where they sit in the whole
  * body, and its halo.  Rows [0, own_lo) are ghosts owned by the rank

@@ -252,17 +252,7 @@ grid_tile_pair(__mmask8 act, const int all, const double *Y0, const double *Y1, 
     const __m512d xj = all ? _mm512_loadu_pd(Y0) : _mm512_mask_loadu_pd(yi0, act, Y0);
     const __m512d yj = all ? _mm512_loadu_pd(Y1) : _mm512_mask_loadu_pd(yi1, act, Y1);
     const __m512d zj = all ? _mm512_loadu_pd(Y2) : _mm512_mask_loadu_pd(yi2, act, Y2);
-    d[0] = _mm512_sub_pd(xj, yi0);
-    d[1] = _mm512_sub_pd(yj, yi1);
-    d[2] = _mm512_sub_pd(zj, yi2);
-    *r = _mm512_sqrt_pd(_mm512_add_pd(
-        _mm512_add_pd(_mm512_mul_pd(d[0], d[0]), _mm512_mul_pd(d[1], d[1])),
-        _mm512_mul_pd(d[2], d[2])));
-    const __m512d x = _mm512_sub_pd(*r, L);
-    *e = _mm512_mask_mov_pd(x,
-                            _mm512_cmp_pd_mask(_mm512_abs_pd(x), _mm512_set1_pd(PD_NEAR_ZERO),
-                                               _CMP_LT_OQ),
-                            _mm512_setzero_pd());
+    pd_bonds8(xj, yj, zj, yi0, yi1, yi2, L, d, r, e);
 }
 
 /* Eight lanes' forces on their partners: gx, gy, gz taken from F0, F1, F2
