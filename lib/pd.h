@@ -1056,6 +1056,10 @@ double pd_von_mises(const double s[9]);
 double pd_energy_total(const pd_energy *e);
 int64_t pd_sim_broken(const pd_sim *sim);      /* broken bonds (pairs) */
 double pd_sim_max_damage(const pd_sim *sim);
+/* The damage of every particle of the run (a piece's rows on MPI ranks)
+ * of the current state, as pd_damage computes it from pd_sim_intact's
+ * bits, bit for bit (on the stencil counted off its masks). */
+void pd_sim_damage(const pd_sim *sim, double *damage);
 /* The largest damage of the current state and the number of particles
  * whose damage is above `threshold` (pd_damage; on the stencil from its
  * masks, in parallel). */

@@ -336,7 +336,7 @@ pd_status pd_run_file_frame(pd_file *out, const pd_sim *sim, unsigned fields, pd
     /* the frame's damage from its bond states, as pd-damage computes it */
     const uint64_t *intact = pd_sim_intact(sim);
     if (s == PD_OK)
-        pd_damage(q, pd_sim_bonds(sim), intact, damage);
+        pd_sim_damage(sim, damage);
     if (s == PD_OK) /* the series' row of the step before the frame (a
                        restart from the frame finds it), with its damage */
         s = pd_run_file_sample_damage(out, sim, &fi.energy, damage);

@@ -857,6 +857,12 @@ pd_status pd_sim_damage_stats(const pd_sim *sim, double threshold, double *max_d
     return s;
 }
 
+void pd_sim_damage(const pd_sim *sim, double *damage)
+{
+    if (sim->piece || !pd_grid_damage_field(sim, damage))
+        pd_damage(sim->p, sim->b, pd_sim_intact(sim), damage);
+}
+
 double pd_sim_max_damage(const pd_sim *sim)
 {
     double m;

@@ -527,6 +527,7 @@ void pd_grid_sync(pd_sim *sim, pd_grid *G)
     const int64_t n = G->n;
     int64_t *inv = NULL;
     G->energy_ok = 0;
+    G->mirror_ok = 0; /* made again from the masks when next wanted */
     memset(G->mask, 0, (size_t)n * W * sizeof(uint64_t));
     if (G->perm) { /* i -> g, from the perm (a scratch made here) */
         inv = malloc((size_t)n * sizeof(int64_t));

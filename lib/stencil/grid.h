@@ -87,6 +87,10 @@ int pd_grid_lps_energy(const pd_sim *sim, const double *m, double *e);
  * (particles not in grid order, more than 64 offsets, masks lagging
  * behind the half bonds); pd_sim_intact then expands the half bonds. */
 int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact);
+/* The damage of each particle (seed 000 eq. 10, pd_damage's figures to the
+ * bit) counted off the masks: 1, or 0 when the grid cannot tell (as
+ * pd_grid_directed_bits, or volumes that differ). */
+int pd_grid_damage_field(const pd_sim *sim, double *damage);
 /* The bonds' elastic energy, J, added to e[i]. */
 void pd_grid_pmb_energy(const pd_sim *sim, double *e);
 /* The contact energy of the stencil pairs, J, added to e[i]. */

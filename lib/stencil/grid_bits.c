@@ -110,7 +110,9 @@ GRID_ROWS(rows_plain, , gather)
 GRID_ROWS(rows_bmi2, __attribute__((target("bmi2,popcnt"))), _pext_u64)
 #endif
 
-int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
+/* The rows readable off the masks (pos, neg and the mirror's array made
+ * on first use) and the mirror holding the masks' bits: 1, else 0. */
+static int mirror_of_masks(const pd_sim *sim)
 {
     pd_grid *G = sim->grid;
     const pd_bonds *b = sim->b;
@@ -123,6 +125,8 @@ int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
         if (G->rows < 0)
             return 0;
     }
+    if (G->mirror_ok) /* kept by every break since (grid_break) */
+        return 1;
     const int64_t n = G->n;
     uint64_t *restrict mirror = G->mirror;
     const uint64_t *restrict mask = G->mask;
@@ -144,6 +148,17 @@ int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
             }
         }
     }
+    G->mirror_ok = 1;
+    return 1;
+}
+
+int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
+{
+    if (!mirror_of_masks(sim))
+        return 0;
+    const pd_grid *G = sim->grid;
+    const pd_bonds *b = sim->b;
+    const int64_t n = G->n;
     memset(intact, 0, (size_t)pd_bits_words(b->count) * sizeof(uint64_t));
 #pragma omp parallel
     {
@@ -158,5 +173,38 @@ int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
                 rows_plain(G, b, intact, g0, g1);
         }
     }
+    return 1;
+}
+
+int pd_grid_damage_field(const pd_sim *sim, double *damage)
+{
+    const double *V = sim->p->volume;
+    const int64_t n = sim->p->n;
+    for (int64_t i = 1; i < n; i++) /* pd_damage's figures need equal volumes */
+        if (V[i] != V[0])
+            return 0;
+    if (!mirror_of_masks(sim))
+        return 0;
+    const pd_grid *G = sim->grid;
+    const int64_t *off = sim->b->offset;
+    int64_t longest = 0;
+    for (int64_t i = 0; i < n; i++)
+        longest = off[i + 1] - off[i] > longest ? off[i + 1] - off[i] : longest;
+    double *sum = malloc((size_t)(longest + 1) * sizeof(double));
+    if (sum == NULL)
+        return 0;
+    /* the volume of m bonds summed one by one, as pd_damage sums them */
+    sum[0] = 0;
+    for (int64_t m = 1; m <= longest; m++)
+        sum[m] = sum[m - 1] + V[0];
+    /* a row's intact bonds: its mirror's bits at neg and its mask's at pos */
+#pragma omp parallel for schedule(static)
+    for (int64_t g = 0; g < n; g++) {
+        const int64_t all = off[g + 1] - off[g];
+        const int kept = __builtin_popcountll(G->mirror[g] & G->neg[g]) +
+                         __builtin_popcountll(G->mask[g] & G->pos[g]);
+        damage[g] = all > 0 ? 1.0 - sum[kept] / sum[all] : 0.0;
+    }
+    free(sum);
     return 1;
 }

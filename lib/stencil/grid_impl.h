@@ -138,7 +138,10 @@ struct pd_grid {
     uint64_t energy_epoch;
     /* the file's rows read off the masks (grid_bits.c), made on first use: */
     uint64_t *pos, *neg; /* n: bit k set when g has a partner at d_k, -d_k */
-    uint64_t *mirror;    /* n: bit k the state of g's bond at -d_k         */
+    uint64_t *mirror;    /* n: bit 63 - k the state of g's bond at -d_k    */
+    int mirror_ok;       /* mirror holds the masks' bits: made from them
+                            once, then each break clears its bit in both
+                            (grid_break); a sync of the masks drops it     */
     int rows;            /* 0 not tried, 1 made, -1 the rows cannot be read
                             off (or out of memory)                         */
     double gap;          /* the shortest lattice distance not in the
@@ -418,6 +421,18 @@ static __attribute__((unused)) int record_break(grid_breaks *bl, int64_t g, int3
     bl->j[bl->n] = j;
     bl->n++;
     return 0;
+}
+
+/* Bond g-j at offset k breaks (W mask words a particle): its bit cleared
+ * in g's mask and, while the mirror holds the masks' bits (W is 1 then),
+ * in j's mirror (j is in g's block or the next, as the partner's forces
+ * are), and the break recorded: 0, or -1 when out of memory. */
+static inline int grid_break(pd_grid *G, int64_t g, int k, int64_t j, int W, grid_breaks *bl)
+{
+    G->mask[g * W + (k >> 6)] &= ~(UINT64_C(1) << (k & 63));
+    if (G->mirror_ok)
+        G->mirror[j] &= ~(UINT64_C(1) << (63 - k));
+    return record_break(bl, g, k, j);
 }
 
 /* The contact forces of the pairs of a segment's chunk [c0, c0 + m) that

@@ -238,11 +238,9 @@ lps_seg(pd_grid *G, const grid_seg *sg, int64_t cut, const grid_arrays *A,
             seg_contact(G, sg, A, c0, n, W);
         if (failure && nbreak > 0)
             for (int64_t q = 0; q < n; q++)
-                if (brk[q] > 0 && grid_may_break(G, c0 + q, c0 + q + shift)) {
-                    G->mask[(c0 + q) * W + (k >> 6)] &= ~bit;
-                    if (record_break(bl, c0 + q, k, c0 + q + shift))
-                        return -1;
-                }
+                if (brk[q] > 0 && grid_may_break(G, c0 + q, c0 + q + shift) &&
+                    grid_break(G, c0 + q, k, c0 + q + shift, W, bl))
+                    return -1;
     }
     return 0;
 }
@@ -310,11 +308,9 @@ GRID_LPS_BLOCK(lps_force_block_1, 1)
             _mm512_mask_storeu_pd(SN + 8 * (h), act, _mm512_max_pd(tt, sn));                   \
             for (int l = 0; hb >> l; l++) { /* breaks are rare */                             \
                 const int64_t g = g0 + 8 * (h) + l, j = g + sg->shift;                         \
-                if (((hb >> l) & 1) && grid_may_break(G, g, j)) {                              \
-                    G->mask[g] &= ~bit;                                                        \
-                    if (record_break(bl, g, k, j))                                             \
-                        return -1;                                                             \
-                }                                                                              \
+                if (((hb >> l) & 1) && grid_may_break(G, g, j) &&                              \
+                    grid_break(G, g, k, j, 1, bl))                                             \
+                    return -1;                                                                 \
             }                                                                                  \
         }                                                                                      \
     } while (0)

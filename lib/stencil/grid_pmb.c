@@ -147,8 +147,7 @@ seg_bonds(pd_grid *G, const grid_seg *sg, int64_t cut, const grid_arrays *A, con
                     continue;
                 const int64_t g = c0 + q, j = g + shift;
                 if (grid_may_break(G, g, j)) {
-                    G->mask[g * W + word] &= ~bit;
-                    if (record_break(bl, g, k, j))
+                    if (grid_break(G, g, k, j, W, bl))
                         return -1;
                 } else if (energy) {
                     /* kept by --no-failure: intact after this pass after
@@ -183,11 +182,8 @@ static int tile_breaks(pd_grid *G, const grid_seg *sg, const grid_arrays *A, int
                       A->y2[j]);
         (void)fs;
         const double thr = A->s0[g] < A->s0[j] ? A->s0[g] : A->s0[j];
-        if (mu > 0 && s > thr && grid_may_break(G, g, j)) {
-            G->mask[g * W + word] &= ~bit;
-            if (record_break(bl, g, k, j))
-                return -1;
-        }
+        if (mu > 0 && s > thr && grid_may_break(G, g, j) && grid_break(G, g, k, j, W, bl))
+            return -1;
     }
     return 0;
 }

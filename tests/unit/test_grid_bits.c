@@ -7,8 +7,12 @@
  * box in lattice order, with bonds breaking under random velocities, the
  * directed bits pd_sim_intact gives after every step are those of
  * pd_half_expand bit for bit, on 1, 2 and 3 threads, and are read off the
- * masks (the grid says it can); on shuffled rows and with more than 64
- * half-stencil offsets (delta = 4.01 h) the grid declines and the bits
+ * masks (the grid says it can); so is the damage pd_sim_damage gives,
+ * pd_damage's of the expansion to the bit.  The masks' mirror is made
+ * once and then kept by each break, so the breaks of every kernel are
+ * checked: PMB and LPS, in AVX-512 tiles (where the processor has them)
+ * and in the portable segment walk.  On shuffled rows and with more than
+ * 64 half-stencil offsets (delta = 4.01 h) the grid declines and the bits
  * are the expansion's.
  */
 #include <math.h>
@@ -42,17 +46,25 @@ static pd_particles *body(int kind, int shuffled, double delta)
     return p;
 }
 
-static void check_body(int kind, int shuffled, double delta, int threads)
+static void check_body(int kind, int shuffled, double delta, int threads, pd_model_kind model,
+                       int tiles)
 {
     int f0 = failures;
     omp_set_num_threads(threads);
+    if (tiles)
+        unsetenv("PD_NO_AVX512");
+    else
+        setenv("PD_NO_AVX512", "1", 1);
     pd_particles *p = body(kind, shuffled, delta);
     pd_bonds *b = NULL;
     if (pd_bonds_build(p, delta, &b) != PD_OK)
         die("bonds");
     pd_scene sc;
     memset(&sc, 0, sizeof sc);
-    sc.model = PD_MODEL_PMB;
+    sc.model = model;
+    sc.bulk_modulus = K;
+    sc.shear_modulus = 8e9;
+    sc.influence = PD_INFLUENCE_INV_R;
     sc.c = pd_pmb_c_from_bulk(K, b->horizon);
     sc.safety = 0.8;
     sc.dt_stable = pd_stable_dt(p, b, &sc);
@@ -79,9 +91,10 @@ static void check_body(int kind, int shuffled, double delta, int threads)
     CHECK(pd_sim_stencil(sim) > 0, "the body is walked as a stencil");
     const size_t words = (size_t)pd_bits_words(b->count);
     uint64_t *want = malloc(words * sizeof(uint64_t));
-    if (want == NULL)
+    double *dmg = malloc((size_t)p->n * sizeof(double)), *dwant = malloc((size_t)p->n * sizeof(double));
+    if (want == NULL || dmg == NULL || dwant == NULL)
         die("memory");
-    int differ = 0, read_off = 0;
+    int differ = 0, read_off = 0, ddiffer = 0;
     for (int step = 0; step < 30; step++) {
         if (pd_sim_step(sim) != PD_OK)
             die("step");
@@ -89,20 +102,27 @@ static void check_body(int kind, int shuffled, double delta, int threads)
         read_off += sim->grid && pd_grid_directed_bits(sim, want);
         pd_half_expand(&sim->half, b, want);
         differ += memcmp(got, want, words * sizeof(uint64_t)) != 0;
+        pd_sim_damage(sim, dmg);
+        pd_damage(p, b, want, dwant);
+        ddiffer += memcmp(dmg, dwant, (size_t)p->n * sizeof(double)) != 0;
     }
     const int expect = !shuffled && delta < 4 * H;
     CHECK(differ == 0, "%d steps' bits differ from the half bonds' expansion", differ);
+    CHECK(ddiffer == 0, "%d steps' damage differs from pd_damage's of the expansion", ddiffer);
     CHECK(read_off == (expect ? 30 : 0), "the masks were read %d times of 30", read_off);
     CHECK(pd_sim_broken(sim) > 0, "bonds should break at 6 m/s");
     char what[200];
     snprintf(what, sizeof what,
-             "%s%s, delta %.2f h, %d thread%s: the directed bits %s are the half bonds' (%lld "
-             "broken of %lld)",
+             "%s %s%s%s, delta %.2f h, %d thread%s: the directed bits and the damage %s are "
+             "the half bonds' (%lld broken of %lld)",
+             model == PD_MODEL_LPS ? "LPS" : "PMB", tiles ? "tiles, " : "",
              kind == 0 ? "disk" : "box", shuffled ? " shuffled" : "", delta / H, threads,
              threads > 1 ? "s" : "", expect ? "read off the masks" : "(expanded)",
              (long long)pd_sim_broken(sim), (long long)b->count / 2);
     proved(f0, what);
     free(want);
+    free(dmg);
+    free(dwant);
     pd_sim_free(sim);
     pd_bonds_free(b);
     pd_particles_free(p);
@@ -110,12 +130,18 @@ static void check_body(int kind, int shuffled, double delta, int threads)
 
 int main(void)
 {
-    setenv("PD_NO_AVX512", "1", 1); /* either kernel keeps the masks; one is enough */
     for (int threads = 1; threads <= 3; threads++) {
-        check_body(0, 0, 3.0001 * H, threads);
-        check_body(1, 0, 3.0001 * H, threads);
+        check_body(0, 0, 3.0001 * H, threads, PD_MODEL_PMB, 0);
+        check_body(1, 0, 3.0001 * H, threads, PD_MODEL_PMB, 0);
     }
-    check_body(0, 1, 3.0001 * H, 2);
-    check_body(1, 0, 4.01 * H, 2);
+    /* each kernel keeps the mirror through its own breaks */
+    const int tiles = __builtin_cpu_supports("avx512f") != 0;
+    for (int t = 0; t <= tiles; t++) {
+        check_body(0, 0, 3.0001 * H, 2, PD_MODEL_PMB, t);
+        check_body(0, 0, 3.0001 * H, 2, PD_MODEL_LPS, t);
+        check_body(1, 0, 3.0001 * H, 2, PD_MODEL_LPS, t);
+    }
+    check_body(0, 1, 3.0001 * H, 2, PD_MODEL_PMB, 0);
+    check_body(1, 0, 4.01 * H, 2, PD_MODEL_PMB, 0);
     return failures ? 1 : 0;
 }
