@@ -123,6 +123,7 @@ void pd_grid_free(pd_grid *G)
     free(G->pos);
     free(G->neg);
     free(G->mirror);
+    free(G->vsum);
     free(G);
 }
 

@@ -176,35 +176,52 @@ int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
     return 1;
 }
 
-int pd_grid_damage_field(const pd_sim *sim, double *damage)
+/* The damage of rows [g0, g1): a row's intact bonds are its mirror's bits
+ * at neg and its mask's at pos, sum[m] the volume of m bonds (popcnt
+ * through the clones). */
+PD_VECTOR_CLONES static void counted_rows(const pd_grid *G, const int64_t *off, const double *sum,
+                                          int64_t g0, int64_t g1, double *damage)
 {
-    const double *V = sim->p->volume;
-    const int64_t n = sim->p->n;
-    for (int64_t i = 1; i < n; i++) /* pd_damage's figures need equal volumes */
-        if (V[i] != V[0])
-            return 0;
-    if (!mirror_of_masks(sim))
-        return 0;
-    const pd_grid *G = sim->grid;
-    const int64_t *off = sim->b->offset;
-    int64_t longest = 0;
-    for (int64_t i = 0; i < n; i++)
-        longest = off[i + 1] - off[i] > longest ? off[i + 1] - off[i] : longest;
-    double *sum = malloc((size_t)(longest + 1) * sizeof(double));
-    if (sum == NULL)
-        return 0;
-    /* the volume of m bonds summed one by one, as pd_damage sums them */
-    sum[0] = 0;
-    for (int64_t m = 1; m <= longest; m++)
-        sum[m] = sum[m - 1] + V[0];
-    /* a row's intact bonds: its mirror's bits at neg and its mask's at pos */
-#pragma omp parallel for schedule(static)
-    for (int64_t g = 0; g < n; g++) {
+    for (int64_t g = g0; g < g1; g++) {
         const int64_t all = off[g + 1] - off[g];
         const int kept = __builtin_popcountll(G->mirror[g] & G->neg[g]) +
                          __builtin_popcountll(G->mask[g] & G->pos[g]);
         damage[g] = all > 0 ? 1.0 - sum[kept] / sum[all] : 0.0;
     }
-    free(sum);
+}
+
+/* sum[m] = the volume of m bonds summed one by one, as pd_damage sums
+ * them, up to the longest row, made on first use: 1, or 0 when the
+ * volumes differ (or out of memory). */
+static int volume_sums(pd_grid *G, const pd_sim *sim)
+{
+    if (G->vsum_ok == 0) {
+        const double *V = sim->p->volume;
+        const int64_t n = G->n, *off = sim->b->offset;
+        int uniform = 1;
+        for (int64_t i = 1; i < n && uniform; i++) /* pd_damage's figures need equal volumes */
+            uniform = V[i] == V[0];
+        int64_t longest = 0;
+        for (int64_t i = 0; i < n; i++)
+            longest = off[i + 1] - off[i] > longest ? off[i + 1] - off[i] : longest;
+        G->vsum = uniform ? malloc((size_t)(longest + 1) * sizeof(double)) : NULL;
+        G->vsum_ok = G->vsum ? 1 : -1;
+        for (int64_t m = 0; G->vsum && m <= longest; m++)
+            G->vsum[m] = m == 0 ? 0.0 : G->vsum[m - 1] + V[0];
+    }
+    return G->vsum_ok > 0;
+}
+
+int pd_grid_damage_field(const pd_sim *sim, double *damage)
+{
+    if (!mirror_of_masks(sim) || !volume_sums(sim->grid, sim))
+        return 0;
+    const pd_grid *G = sim->grid;
+#pragma omp parallel
+    {
+        int64_t g0, g1;
+        pd_thread_share(G->n, &g0, &g1);
+        counted_rows(G, sim->b->offset, G->vsum, g0, g1, damage);
+    }
     return 1;
 }

@@ -144,6 +144,8 @@ struct pd_grid {
                             (grid_break); a sync of the masks drops it     */
     int rows;            /* 0 not tried, 1 made, -1 the rows cannot be read
                             off (or out of memory)                         */
+    double *vsum;        /* the volume of m bonds, as pd_damage sums them  */
+    int vsum_ok;         /* 0 not made, 1 made, -1 the volumes differ      */
     double gap;          /* the shortest lattice distance not in the
                             stencil, less the sites' tolerance, m          */
     int status;          /* PD_OK, or the error a parallel pass met        */
