@@ -243,15 +243,14 @@ static __mmask8 tile_gone(const pd_grid *G, int64_t g8, int64_t shift, __mmask8 
             _mm512_mask_storeu_pd(SN + 8 * (h), act, _mm512_max_pd(tt, sn));                   \
         }                                                                                      \
         if (energy) { /* grid_pair_energy's c (s s) of a bond intact after the pass, to the \
-                         partner, then to its own end, in memory */                            \
+                         partner in memory, to its own end in the tile's sums */               \
             const __mmask8 gone =                                                              \
                 hb && G->nofail ? tile_gone(G, g0 + 8 * (h), sg->shift, hb) : hb;              \
             const __m512d x =                                                                  \
                 _mm512_maskz_mul_pd((__mmask8)(kmu & ~gone), vce, _mm512_mul_pd(s, s));        \
             _mm512_mask_storeu_pd(EB + 8 * (h), act,                                           \
                                   _mm512_add_pd(_mm512_maskz_loadu_pd(act, EB + 8 * (h)), x)); \
-            _mm512_mask_storeu_pd(OB + 8 * (h), act,                                           \
-                                  _mm512_add_pd(_mm512_maskz_loadu_pd(act, OB + 8 * (h)), x)); \
+            ea[h] = _mm512_add_pd(ea[h], x);                                                   \
         }                                                                                      \
     } while (0)
 
@@ -263,9 +262,11 @@ static __mmask8 tile_gone(const pd_grid *G, int64_t g8, int64_t shift, __mmask8 
  * positions, forces and new s0 in registers, so that a bond loads and
  * stores only its partner's: half the memory traffic of seg_bonds.
  * `energy`: the energies of the bonds intact after the pass into A->eb
- * and those of the contact pairs into A->ec, half to each end, both ends
- * in memory (in registers they would push the tile's own out of them);
- * without `forces` (and failure) only them, in the same order to the bit
+ * (the partner's half in memory, the tile's own halves summed in
+ * registers and added at the tile's end, as its forces are: two masked
+ * loads and stores a half fewer, about 5% of a pass that counts them) and
+ * those of the contact pairs into A->ec, half to each end; without
+ * `forces` (and failure) only them, in the same order to the bit
  * (grid_tile_energies). */
 __attribute__((target("avx512f"))) static inline __attribute__((always_inline)) int
 tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const int failure,
@@ -279,6 +280,7 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
         const int64_t own = R->start + t; /* the lanes before are the last tile's */
         __m512d yi0[2], yi1[2], yi2[2], si[2], ax[2], ay[2], az[2], sm[2];
         grid_tile_own(A, g0, failure, yi0, yi1, yi2, si, ax, ay, az, sm);
+        __m512d ea[2] = {_mm512_setzero_pd(), _mm512_setzero_pd()};
         for (int64_t q = R->seg0; q < R[1].seg0; q++) {
             const grid_seg *sg = &G->seg[q];
             int64_t lo, hi;
@@ -297,7 +299,7 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
             double *F0 = forces ? A->f0 + j0 : NULL, *F1 = forces ? A->f1 + j0 : NULL,
                    *F2 = forces ? A->f2 + j0 : NULL;
             double *SN = failure ? A->s0n + j0 : NULL;
-            double *EB = energy ? A->eb + j0 : NULL, *OB = energy ? A->eb + g0 : NULL;
+            double *EB = energy ? A->eb + j0 : NULL;
             __mmask8 near = 0, brk = 0;
             GRID_TILE_HALVES(TILE_HALF);
             if (contact && near)
@@ -306,6 +308,13 @@ tile_run(pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, const
                 return -1;
         }
         grid_tile_add(A, g0, own, ax, ay, az, sm, forces, failure);
+        if (energy) {
+            double te[GRID_TILE];
+            _mm512_storeu_pd(te, ea[0]);
+            _mm512_storeu_pd(te + 8, ea[1]);
+            for (int64_t g = own; g < g0 + GRID_TILE; g++)
+                A->eb[g] += te[g - g0];
+        }
     }
     return 0;
 }
