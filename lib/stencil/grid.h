@@ -88,9 +88,12 @@ int pd_grid_lps_energy(const pd_sim *sim, const double *m, double *e);
  * behind the half bonds); pd_sim_intact then expands the half bonds. */
 int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact);
 /* The damage of each particle (seed 000 eq. 10, pd_damage's figures to the
- * bit) counted off the masks: 1, or 0 when the grid cannot tell (as
- * pd_grid_directed_bits, or volumes that differ). */
-int pd_grid_damage_field(const pd_sim *sim, double *damage);
+ * bit) counted off the masks and their mirror (grid_bits.c) into damage
+ * (NULL: not kept), its largest and the number of particles above
+ * threshold (either NULL: not wanted): 1, or 0 when the grid cannot tell
+ * (as pd_grid_directed_bits, or volumes that differ). */
+int pd_grid_damage_counted(const pd_sim *sim, double threshold, double *damage,
+                           double *max_damage, int64_t *above);
 /* The bonds' elastic energy, J, added to e[i]. */
 void pd_grid_pmb_energy(const pd_sim *sim, double *e);
 /* The contact energy of the stencil pairs, J, added to e[i]. */

@@ -176,18 +176,28 @@ int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact)
     return 1;
 }
 
-/* The damage of rows [g0, g1): a row's intact bonds are its mirror's bits
- * at neg and its mask's at pos, sum[m] the volume of m bonds (popcnt
+/* The damage of rows [g0, g1) into damage (NULL: not kept), the largest
+ * and the count above threshold: a row's intact bonds are its mirror's
+ * bits at neg and its mask's at pos, sum[m] the volume of m bonds (popcnt
  * through the clones). */
 PD_VECTOR_CLONES static void counted_rows(const pd_grid *G, const int64_t *off, const double *sum,
-                                          int64_t g0, int64_t g1, double *damage)
+                                          int64_t g0, int64_t g1, double threshold,
+                                          double *damage, double *dmax, int64_t *above)
 {
+    double m = 0;
+    int64_t count = 0;
     for (int64_t g = g0; g < g1; g++) {
         const int64_t all = off[g + 1] - off[g];
         const int kept = __builtin_popcountll(G->mirror[g] & G->neg[g]) +
                          __builtin_popcountll(G->mask[g] & G->pos[g]);
-        damage[g] = all > 0 ? 1.0 - sum[kept] / sum[all] : 0.0;
+        const double d = all > 0 ? 1.0 - sum[kept] / sum[all] : 0.0;
+        if (damage)
+            damage[g] = d;
+        m = d > m ? d : m;
+        count += d > threshold;
     }
+    *dmax = m;
+    *above = count;
 }
 
 /* sum[m] = the volume of m bonds summed one by one, as pd_damage sums
@@ -212,16 +222,26 @@ static int volume_sums(pd_grid *G, const pd_sim *sim)
     return G->vsum_ok > 0;
 }
 
-int pd_grid_damage_field(const pd_sim *sim, double *damage)
+int pd_grid_damage_counted(const pd_sim *sim, double threshold, double *damage,
+                           double *max_damage, int64_t *above)
 {
     if (!mirror_of_masks(sim) || !volume_sums(sim->grid, sim))
         return 0;
     const pd_grid *G = sim->grid;
-#pragma omp parallel
+    double m = 0;
+    int64_t count = 0;
+#pragma omp parallel reduction(max : m) reduction(+ : count)
     {
-        int64_t g0, g1;
+        int64_t g0, g1, c;
+        double t;
         pd_thread_share(G->n, &g0, &g1);
-        counted_rows(G, sim->b->offset, G->vsum, g0, g1, damage);
+        counted_rows(G, sim->b->offset, G->vsum, g0, g1, threshold, damage, &t, &c);
+        m = t > m ? t : m;
+        count += c;
     }
+    if (max_damage)
+        *max_damage = m;
+    if (above)
+        *above = count;
     return 1;
 }

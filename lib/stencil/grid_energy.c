@@ -82,6 +82,9 @@ int pd_grid_damage(const pd_sim *sim, double threshold, double *max_damage, int6
     const pd_grid *G = sim->grid;
     if (G == NULL || G->epoch != sim->half.epoch)
         return 0;
+    /* off the masks' mirror, kept by every break (grid_bits.c): popcounts */
+    if (pd_grid_damage_counted(sim, threshold, NULL, max_damage, above))
+        return 1;
     const int64_t n = G->n;
     const int W = G->words;
     const double *V = sim->p->volume;

@@ -8,7 +8,8 @@
  * directed bits pd_sim_intact gives after every step are those of
  * pd_half_expand bit for bit, on 1, 2 and 3 threads, and are read off the
  * masks (the grid says it can); so is the damage pd_sim_damage gives,
- * pd_damage's of the expansion to the bit.  The masks' mirror is made
+ * pd_damage's of the expansion to the bit, and the largest damage and the
+ * count above 0.3 of pd_sim_damage_stats.  The masks' mirror is made
  * once and then kept by each break, so the breaks of every kernel are
  * checked: PMB and LPS, in AVX-512 tiles (where the processor has them)
  * and in the portable segment walk.  On shuffled rows and with more than
@@ -94,7 +95,7 @@ static void check_body(int kind, int shuffled, double delta, int threads, pd_mod
     double *dmg = malloc((size_t)p->n * sizeof(double)), *dwant = malloc((size_t)p->n * sizeof(double));
     if (want == NULL || dmg == NULL || dwant == NULL)
         die("memory");
-    int differ = 0, read_off = 0, ddiffer = 0;
+    int differ = 0, read_off = 0, ddiffer = 0, sdiffer = 0;
     for (int step = 0; step < 30; step++) {
         if (pd_sim_step(sim) != PD_OK)
             die("step");
@@ -105,10 +106,21 @@ static void check_body(int kind, int shuffled, double delta, int threads, pd_mod
         pd_sim_damage(sim, dmg);
         pd_damage(p, b, want, dwant);
         ddiffer += memcmp(dmg, dwant, (size_t)p->n * sizeof(double)) != 0;
+        double most = 0, got_most = -1;
+        int64_t above = 0, got_above = -1;
+        for (int64_t i = 0; i < p->n; i++) {
+            most = dwant[i] > most ? dwant[i] : most;
+            above += dwant[i] > 0.3;
+        }
+        if (pd_sim_damage_stats(sim, 0.3, &got_most, &got_above) != PD_OK)
+            die("damage stats");
+        sdiffer += memcmp(&most, &got_most, sizeof most) != 0 || above != got_above;
     }
     const int expect = !shuffled && delta < 4 * H;
     CHECK(differ == 0, "%d steps' bits differ from the half bonds' expansion", differ);
     CHECK(ddiffer == 0, "%d steps' damage differs from pd_damage's of the expansion", ddiffer);
+    CHECK(sdiffer == 0, "%d steps' largest damage or count above 0.3 differ from pd_damage's",
+          sdiffer);
     CHECK(read_off == (expect ? 30 : 0), "the masks were read %d times of 30", read_off);
     CHECK(pd_sim_broken(sim) > 0, "bonds should break at 6 m/s");
     char what[200];
