@@ -91,7 +91,7 @@ int pd_grid_directed_bits(const pd_sim *sim, uint64_t *intact);
  * bit) counted off the masks and their mirror (grid_bits.c) into damage
  * (NULL: not kept), its largest and the number of particles above
  * threshold (either NULL: not wanted): 1, or 0 when the grid cannot tell
- * (as pd_grid_directed_bits, or volumes that differ). */
+ * (as pd_grid_directed_bits, volumes that differ, or an MPI rank's piece). */
 int pd_grid_damage_counted(const pd_sim *sim, double threshold, double *damage,
                            double *max_damage, int64_t *above);
 /* The bonds' elastic energy, J, added to e[i]. */

@@ -1,6 +1,7 @@
 /*
  * grid_bits.c -- the directed bond bits of the file's families (a frame's
- * /frames/N/state, the restart's) read off the stencil's masks, without a
+ * /frames/N/state, the restart's) and the particles' damage (a frame's, a
+ * status line's, a series row's) read off the stencil's masks, without a
  * walk of the bond lists (grid.c explains the stencil).
  *
  * In grid order (no permutation) the family of particle g, sorted by
@@ -11,10 +12,13 @@
  * bit 63 - k of `neg` (at -d_k: the bits reversed, so that k descending
  * is place ascending).  The state of g's bond at d_k is bit k of g's mask;
  * that at -d_k is bit k of the partner's mask, gathered into bit 63 - k
- * of g's `mirror` word by a walk of the segments.  A row of the file is
+ * of g's `mirror` word by a walk of the segments, once: from then on each
+ * break clears its bit in the mirror as in the mask (grid_break), until
+ * the masks are made again from the half bonds.  A row of the file is
  * then the mirror's bits at `neg` followed by the mask's bits at `pos`,
  * each packed in place order: two bit gathers (one instruction each with
- * BMI2) per particle instead of a lookup per bond.
+ * BMI2) per particle instead of a lookup per bond.  A particle's damage
+ * needs only the count of its intact bonds: two popcounts.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -225,8 +229,8 @@ static int volume_sums(pd_grid *G, const pd_sim *sim)
 int pd_grid_damage_counted(const pd_sim *sim, double threshold, double *damage,
                            double *max_damage, int64_t *above)
 {
-    if (!mirror_of_masks(sim) || !volume_sums(sim->grid, sim))
-        return 0;
+    if (sim->piece || !mirror_of_masks(sim) || !volume_sums(sim->grid, sim))
+        return 0; /* a piece's rows at its edges lack the bonds beyond them */
     const pd_grid *G = sim->grid;
     double m = 0;
     int64_t count = 0;
