@@ -204,10 +204,7 @@ PD_VECTOR_CLONES static void counted_rows(const pd_grid *G, const int64_t *off, 
     *above = count;
 }
 
-/* sum[m] = the volume of m bonds summed one by one, as pd_damage sums
- * them, up to the longest row, made on first use: 1, or 0 when the
- * volumes differ (or out of memory). */
-static int volume_sums(pd_grid *G, const pd_sim *sim)
+int grid_volume_sums(pd_grid *G, const pd_sim *sim)
 {
     if (G->vsum_ok == 0) {
         const double *V = sim->p->volume;
@@ -229,7 +226,7 @@ static int volume_sums(pd_grid *G, const pd_sim *sim)
 int pd_grid_damage_counted(const pd_sim *sim, double threshold, double *damage,
                            double *max_damage, int64_t *above)
 {
-    if (sim->piece || !mirror_of_masks(sim) || !volume_sums(sim->grid, sim))
+    if (sim->piece || !mirror_of_masks(sim) || !grid_volume_sums(sim->grid, sim))
         return 0; /* a piece's rows at its edges lack the bonds beyond them */
     const pd_grid *G = sim->grid;
     double m = 0;

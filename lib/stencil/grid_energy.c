@@ -87,25 +87,13 @@ int pd_grid_damage(const pd_sim *sim, double threshold, double *max_damage, int6
         return 1;
     const int64_t n = G->n;
     const int W = G->words;
-    const double *V = sim->p->volume;
-    for (int64_t i = 1; i < n; i++) /* pd_damage's figures need equal volumes */
-        if (V[i] != V[0])
-            return 0;
-    const int64_t *off = sim->b->offset;
-    int64_t longest = 0;
-    for (int64_t i = 0; i < n; i++)
-        longest = off[i + 1] - off[i] > longest ? off[i + 1] - off[i] : longest;
-    int32_t *kept = calloc((size_t)(n > 0 ? n : 1), sizeof(int32_t));
-    double *sum = malloc((size_t)(longest + 1) * sizeof(double));
-    if (kept == NULL || sum == NULL) {
-        free(kept);
-        free(sum);
+    if (!grid_volume_sums(sim->grid, sim)) /* pd_damage's figures need equal volumes */
         return 0;
-    }
-    /* the volume of m bonds summed one by one, as pd_damage sums them */
-    sum[0] = 0;
-    for (int64_t m = 1; m <= longest; m++)
-        sum[m] = sum[m - 1] + V[0];
+    const int64_t *off = sim->b->offset;
+    const double *sum = G->vsum;
+    int32_t *kept = calloc((size_t)(n > 0 ? n : 1), sizeof(int32_t));
+    if (kept == NULL)
+        return 0;
     /* the intact bonds of each particle, both ends of each (even blocks,
      * then odd ones: no two threads count into one particle) */
     for (int phase = 0; phase < 2; phase++) {
@@ -138,7 +126,6 @@ int pd_grid_damage(const pd_sim *sim, double threshold, double *max_damage, int6
         count += d > threshold;
     }
     free(kept);
-    free(sum);
     *max_damage = dmax;
     *above = count;
     return 1;

@@ -357,6 +357,10 @@ static inline int grid_mine(const pd_grid *G, int64_t blk)
 /* Rebuild the masks from the half bonds' bits (grid.c); the kernels call
  * it when the half bonds' epoch has moved on. */
 void pd_grid_sync(pd_sim *sim, pd_grid *G);
+/* G->vsum[m] = the volume of m bonds summed one by one, as pd_damage sums
+ * them, up to the longest family, made on first use (grid_bits.c): 1, or
+ * 0 when the volumes differ (or out of memory). */
+int grid_volume_sums(pd_grid *G, const pd_sim *sim);
 
 /* The energies of now counted into G->eb and G->ec as a bond pass in
  * tiles counts them, to the bit (grid_pmb.c): 1, or 0 when the grid has
