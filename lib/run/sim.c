@@ -859,7 +859,7 @@ pd_status pd_sim_damage_stats(const pd_sim *sim, double threshold, double *max_d
 
 void pd_sim_damage(const pd_sim *sim, double *damage)
 {
-    if (sim->piece || !pd_grid_damage_counted(sim, 1.0, damage, NULL, NULL))
+    if (!pd_grid_damage_counted(sim, 1.0, damage, NULL, NULL)) /* refuses a piece */
         pd_damage(sim->p, sim->b, pd_sim_intact(sim), damage);
 }
 
