@@ -79,27 +79,48 @@ PD_VECTOR_CLONES static void lps_theta_block(const pd_grid *G, int64_t blk, cons
 }
 
 #if PD_AVX512_KERNELS
-/* One half (8 lanes) of a dilatation tile against one segment:
+/* A dilatation tile's two halves (8 lanes each) against one segment:
  * GRID_THETA_BODY in AVX-512, operation for operation, for the lanes of
- * `act` (`all`: every lane); i's sums in registers, the partners' in
- * memory. */
-#define THETA_HALF(h, all)                                                                     \
-    do {                                                                                       \
-        const __mmask8 act = (__mmask8)(acts >> (8 * (h)));                                    \
-        const __m512i mw = _mm512_loadu_si512((const void *)(M + 8 * (h)));                    \
-        const __m512d mu = _mm512_maskz_mov_pd(_mm512_mask_test_epi64_mask(act, mw, vbit), one); \
-        __m512d d[3], r, e;                                                                    \
-        grid_tile_pair(act, (all), Y0 + 8 * (h), Y1 + 8 * (h), Y2 + 8 * (h), yi0[h], yi1[h],   \
-                       yi2[h], vlen, d, &r, &e);                                               \
-        const __m512d c = _mm512_mul_pd(                                                       \
-            mu, _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(voml, e), vV), vnu));                \
-        own[h] = _mm512_add_pd(own[h], c);                                                     \
-        if (all)                                                                               \
-            _mm512_storeu_pd(S + 8 * (h), _mm512_add_pd(_mm512_loadu_pd(S + 8 * (h)), c));     \
-        else                                                                                   \
-            _mm512_mask_storeu_pd(S + 8 * (h), act,                                            \
-                                  _mm512_add_pd(_mm512_maskz_loadu_pd(act, S + 8 * (h)), c));  \
-    } while (0)
+ * `acts` (bit l for lane l; `all`: every lane; a half without any is left
+ * out); i's sums in registers (own), the partners' in memory.  The halves
+ * are taken a phase at a time, as grid_pmb.c's tile_seg takes them, and
+ * the sums stay the same to the bit. */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) void
+theta_tile_seg(const pd_grid *G, const grid_seg *sg, const grid_arrays *A, double *sum, double V,
+               int64_t g0, uint32_t acts, const int all, const __m512d yi0[2],
+               const __m512d yi1[2], const __m512d yi2[2], __m512d own[2])
+{
+    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0), vV = _mm512_set1_pd(V);
+    const int k = sg->k;
+    const __m512i vbit = _mm512_set1_epi64((long long)(UINT64_C(1) << k));
+    const double len = G->len[k], om = G->omega[k];
+    const __m512d vlen = _mm512_set1_pd(len), voml = _mm512_set1_pd(om * len);
+    const __m512d vnu = _mm512_set1_pd(G->nu[k]);
+    const int64_t j0 = g0 + sg->shift;
+    const __mmask8 act[2] = {all ? 0xff : (__mmask8)acts, all ? 0xff : (__mmask8)(acts >> 8)};
+    __m512d mu[2] = {zero, zero}, e[2] = {zero, zero};
+    for (int h = 0; h < 2; h++) /* extensions */
+        if (all || act[h]) {
+            const int64_t o = j0 + 8 * h;
+            const __m512i mw = _mm512_loadu_si512((const void *)(G->mask + g0 + 8 * h));
+            mu[h] = _mm512_maskz_mov_pd(_mm512_mask_test_epi64_mask(act[h], mw, vbit), one);
+            __m512d d[3], r;
+            grid_tile_pair(act[h], all, A->y0 + o, A->y1 + o, A->y2 + o, yi0[h], yi1[h], yi2[h],
+                           vlen, d, &r, &e[h]);
+        }
+    for (int h = 0; h < 2; h++) /* the terms, to both ends */
+        if (all || act[h]) {
+            double *S = sum + j0 + 8 * h;
+            const __m512d c = _mm512_mul_pd(
+                mu[h], _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(voml, e[h]), vV), vnu));
+            own[h] = _mm512_add_pd(own[h], c);
+            if (all)
+                _mm512_storeu_pd(S, _mm512_add_pd(_mm512_loadu_pd(S), c));
+            else
+                _mm512_mask_storeu_pd(S, act[h],
+                                      _mm512_add_pd(_mm512_maskz_loadu_pd(act[h], S), c));
+        }
+}
 
 /* The dilatation sums of a run at least a tile long, as lps_tile_run
  * walks its forces: each bond's term GRID_THETA_BODY's, bit for bit; the
@@ -108,7 +129,7 @@ __attribute__((target("avx512f"))) static inline __attribute__((always_inline)) 
 theta_tile_run(const pd_grid *G, const grid_run *R, int64_t cut, const grid_arrays *A, double *sum,
                double V)
 {
-    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0), vV = _mm512_set1_pd(V);
+    const __m512d zero = _mm512_setzero_pd();
     for (int64_t t = 0; t < R->len; t += GRID_TILE) {
         const int64_t g0 = grid_tile_g0(R, t);
         const int64_t own0 = R->start + t; /* the lanes before are the last tile's */
@@ -120,16 +141,10 @@ theta_tile_run(const pd_grid *G, const grid_run *R, int64_t cut, const grid_arra
             const uint32_t acts = grid_tile_acts(sg, cut, own0, g0, &lo, &hi);
             if (acts == 0)
                 continue;
-            const int k = sg->k;
-            const __m512i vbit = _mm512_set1_epi64((long long)(UINT64_C(1) << k));
-            const double len = G->len[k], om = G->omega[k];
-            const __m512d vlen = _mm512_set1_pd(len), voml = _mm512_set1_pd(om * len);
-            const __m512d vnu = _mm512_set1_pd(G->nu[k]);
-            const int64_t j0 = g0 + sg->shift;
-            const uint64_t *M = G->mask + g0;
-            const double *Y0 = A->y0 + j0, *Y1 = A->y1 + j0, *Y2 = A->y2 + j0;
-            double *S = sum + j0;
-            GRID_TILE_HALVES(THETA_HALF);
+            if (acts == 0xffff)
+                theta_tile_seg(G, sg, A, sum, V, g0, acts, 1, yi0, yi1, yi2, own);
+            else
+                theta_tile_seg(G, sg, A, sum, V, g0, acts, 0, yi0, yi1, yi2, own);
         }
         double ts[GRID_TILE];
         for (int h = 0; h < 2; h++)
@@ -266,7 +281,11 @@ GRID_LPS_BLOCK(lps_force_block_1, 1)
  * lanes of `act` (the others load nothing and store nothing; `all`: every
  * lane is).  Own sums in registers, the partners' forces and new s0 in
  * memory; the lanes whose bond breaks are cleared and recorded at once
- * (bl), in lane order. */
+ * (bl), in lane order.  The halves go one after the other here, not a
+ * phase at a time as the PMB and dilatation tiles take them: with its 20
+ * vectors of own values an LPS tile has no registers to spare, and both
+ * halves' bond vectors held at once spill (measured: the pass 8% slower
+ * with the phases, 26% with four). */
 #define LPS_HALF(h, all)                                                                       \
     do {                                                                                       \
         const __mmask8 act = (__mmask8)(acts >> (8 * (h)));                                    \
