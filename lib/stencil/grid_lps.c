@@ -285,7 +285,7 @@ GRID_LPS_BLOCK(lps_force_block_1, 1)
  * phase at a time as the PMB and dilatation tiles take them: with its 20
  * vectors of own values an LPS tile has no registers to spare, and both
  * halves' bond vectors held at once spill (measured: the pass 8% slower
- * with the phases, 26% with four). */
+ * with both halves' lengths taken first, 26% with all four phases). */
 #define LPS_HALF(h, all)                                                                       \
     do {                                                                                       \
         const __mmask8 act = (__mmask8)(acts >> (8 * (h)));                                    \
