@@ -49,8 +49,8 @@
  *     Contacts (and PMB's breaks) are only flagged in the vector loop and
  *     found by a scalar pass over the segment (bit for bit the same
  *     arithmetic); LPS's breaks are taken lane by lane from the vector
- *     test.  Other processors, and PD_NO_AVX512 set in the environment,
- *     walk the segments alone.
+ *     test, after the segment.  Other processors, and PD_NO_AVX512 set in
+ *     the environment, walk the segments alone.
  *   - Threads.  Outer planes are cut into blocks at least as thick as the
  *     stencil's reach, so a block's bonds write only to the block and the
  *     next one; even blocks run in parallel, then odd blocks (lib/models/pmb.c's

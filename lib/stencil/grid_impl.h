@@ -217,24 +217,6 @@ static inline uint32_t grid_tile_acts(const grid_seg *sg, int64_t cut, int64_t o
     return (uint32_t)(((UINT64_C(1) << (*hi - g0)) - 1) & ~((UINT64_C(1) << (*lo - g0)) - 1));
 }
 
-/* A tile's two halves against one segment, HALF(h, all) each: with every
- * lane of `acts` active, both with plain loads and stores; else masked,
- * and a half with no lane of its own (the lanes of the tile before, in a
- * run's last tile moved back) left out: it would load and store nothing
- * and add +0 to the tile's sums, which start at +0 and so are never -0. */
-#define GRID_TILE_HALVES(HALF)                                                                 \
-    do {                                                                                       \
-        if (acts == 0xffff) {                                                                  \
-            HALF(0, 1);                                                                        \
-            HALF(1, 1);                                                                        \
-        } else {                                                                               \
-            if (acts & 0xffu)                                                                  \
-                HALF(0, 0);                                                                    \
-            if (acts >> 8)                                                                     \
-                HALF(1, 0);                                                                    \
-        }                                                                                      \
-    } while (0)
-
 /* The first particle of run R's tile that starts at t (the last one moved
  * back to end with the run). */
 static inline int64_t grid_tile_g0(const grid_run *R, int64_t t)
@@ -243,6 +225,19 @@ static inline int64_t grid_tile_g0(const grid_run *R, int64_t t)
 }
 
 #if PD_AVX512_KERNELS
+/* The lanes of a tile's two halves (8 each) that a segment walks (acts:
+ * bit l for lane l), act[h] for half h; `all`: every lane (plain loads
+ * and stores, and acts not looked at).  The tiles (tile_seg,
+ * theta_tile_seg, lps_tile_seg) take a half with `all || act[h]` and
+ * leave out one with no lane of its own (the lanes of the tile before, in
+ * a run's last tile moved back): it would load and store nothing and add
+ * +0 to the tile's sums, which start at +0 and so are never -0. */
+static inline void grid_tile_halves(uint32_t acts, const int all, __mmask8 act[2])
+{
+    act[0] = all ? (__mmask8)0xff : (__mmask8)acts;
+    act[1] = all ? (__mmask8)0xff : (__mmask8)(acts >> 8);
+}
+
 /* Eight lanes of a tile (own positions yi0, yi1, yi2; the lanes of `act`,
  * `all`: every lane) against their partners' positions at Y0, Y1, Y2 (a
  * lane outside act loads nothing and takes its own): the bond vectors d,

@@ -230,7 +230,8 @@ tile_seg(const pd_grid *G, const grid_seg *sg, const grid_arrays *A, int64_t g0,
     const __m512d vw = _mm512_set1_pd(G->w[k]), vdc = _mm512_set1_pd(G->dc[k]);
     const __m512d vce = _mm512_set1_pd(energy ? grid_energy_c(G, k, A->V, 0) : 0.0);
     const int64_t j0 = g0 + sg->shift;
-    const __mmask8 act[2] = {all ? 0xff : (__mmask8)acts, all ? 0xff : (__mmask8)(acts >> 8)};
+    __mmask8 act[2];
+    grid_tile_halves(acts, all, act);
     __m512d d[2][3] = {{zero, zero, zero}, {zero, zero, zero}}, r[2] = {zero, zero},
             dr[2] = {zero, zero}, s[2] = {zero, zero}, fs[2] = {zero, zero};
     __mmask8 kmu[2] = {0, 0}, hb[2] = {0, 0}; /* hb: the lanes whose stretch breaks them */
