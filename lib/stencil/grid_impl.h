@@ -255,6 +255,20 @@ grid_tile_pair(__mmask8 act, const int all, const double *Y0, const double *Y1, 
     pd_bonds8(xj, yj, zj, yi0, yi1, yi2, L, d, r, e);
 }
 
+/* Half h of a tile from g0 against a segment whose partners start at j0
+ * (lanes of `act`, `all`: every lane): the lanes whose bond is intact
+ * (bit vbit of their mask words) and grid_tile_pair's d, r and e. */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) __mmask8
+grid_tile_half(const pd_grid *G, const grid_arrays *A, int64_t g0, int64_t j0, int h,
+               __mmask8 act, const int all, __m512i vbit, __m512d yi0, __m512d yi1,
+               __m512d yi2, __m512d L, __m512d d[3], __m512d *r, __m512d *e)
+{
+    const int64_t o = j0 + 8 * h;
+    const __m512i mw = _mm512_loadu_si512((const void *)(G->mask + g0 + 8 * h));
+    grid_tile_pair(act, all, A->y0 + o, A->y1 + o, A->y2 + o, yi0, yi1, yi2, L, d, r, e);
+    return _mm512_mask_test_epi64_mask(act, mw, vbit);
+}
+
 /* Eight lanes' forces on their partners: gx, gy, gz taken from F0, F1, F2
  * for the lanes of `act` (`all`: every lane, plain loads and stores). */
 __attribute__((target("avx512f"))) static inline __attribute__((always_inline)) void

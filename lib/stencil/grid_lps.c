@@ -102,12 +102,10 @@ theta_tile_seg(const pd_grid *G, const grid_seg *sg, const grid_arrays *A, doubl
     __m512d mu[2] = {zero, zero}, e[2] = {zero, zero};
     for (int h = 0; h < 2; h++) /* extensions */
         if (all || act[h]) {
-            const int64_t o = j0 + 8 * h;
-            const __m512i mw = _mm512_loadu_si512((const void *)(G->mask + g0 + 8 * h));
-            mu[h] = _mm512_maskz_mov_pd(_mm512_mask_test_epi64_mask(act[h], mw, vbit), one);
             __m512d d[3], r;
-            grid_tile_pair(act[h], all, A->y0 + o, A->y1 + o, A->y2 + o, yi0[h], yi1[h], yi2[h],
-                           vlen, d, &r, &e[h]);
+            mu[h] = _mm512_maskz_mov_pd(grid_tile_half(G, A, g0, j0, h, act[h], all, vbit, yi0[h],
+                                                       yi1[h], yi2[h], vlen, d, &r, &e[h]),
+                                        one);
         }
     for (int h = 0; h < 2; h++) /* the terms, to both ends */
         if (all || act[h]) {
@@ -314,11 +312,8 @@ lps_tile_seg(const pd_grid *G, const grid_seg *sg, const grid_arrays *A, const d
     __mmask8 kmu[2] = {0, 0};
     for (int h = 0; h < 2; h++) /* positions and lengths */
         if (all || act[h]) {
-            const int64_t o = j0 + 8 * h;
-            const __m512i mw = _mm512_loadu_si512((const void *)(G->mask + g0 + 8 * h));
-            kmu[h] = _mm512_mask_test_epi64_mask(act[h], mw, vbit);
-            grid_tile_pair(act[h], all, A->y0 + o, A->y1 + o, A->y2 + o, yi0[h], yi1[h], yi2[h],
-                           vlen, d[h], &r[h], &e[h]);
+            kmu[h] = grid_tile_half(G, A, g0, j0, h, act[h], all, vbit, yi0[h], yi1[h], yi2[h],
+                                    vlen, d[h], &r[h], &e[h]);
             if (contact)
                 *near |= _mm512_mask_cmp_pd_mask(act[h], r[h], _mm512_set1_pd(G->dc[k]),
                                                  _CMP_LT_OQ);

@@ -236,13 +236,9 @@ tile_seg(const pd_grid *G, const grid_seg *sg, const grid_arrays *A, int64_t g0,
             dr[2] = {zero, zero}, s[2] = {zero, zero}, fs[2] = {zero, zero};
     __mmask8 kmu[2] = {0, 0}, hb[2] = {0, 0}; /* hb: the lanes whose stretch breaks them */
     for (int h = 0; h < 2; h++) /* positions and lengths */
-        if (all || act[h]) {
-            const int64_t o = j0 + 8 * h;
-            const __m512i mw = _mm512_loadu_si512((const void *)(G->mask + g0 + 8 * h));
-            kmu[h] = _mm512_mask_test_epi64_mask(act[h], mw, vbit);
-            grid_tile_pair(act[h], all, A->y0 + o, A->y1 + o, A->y2 + o, yi0[h], yi1[h], yi2[h],
-                           vL, d[h], &r[h], &dr[h]);
-        }
+        if (all || act[h])
+            kmu[h] = grid_tile_half(G, A, g0, j0, h, act[h], all, vbit, yi0[h], yi1[h], yi2[h],
+                                    vL, d[h], &r[h], &dr[h]);
     for (int h = 0; h < 2; h++) /* stretches and force factors */
         if (all || act[h]) {
             s[h] = _mm512_mul_pd(dr[h], viL);
