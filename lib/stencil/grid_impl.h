@@ -269,6 +269,28 @@ grid_tile_half(const pd_grid *G, const grid_arrays *A, int64_t g0, int64_t j0, i
     return _mm512_mask_test_epi64_mask(act, mw, vbit);
 }
 
+/* The breaking test and the new s0 of eight lanes of a tile (lanes of
+ * `act`, `all`: every lane) whose intact bonds (kmu) have stretches s:
+ * returns the lanes whose s passes min(s0 of both ends) (own si, the
+ * partners' at A->s0 + o); s00 - alpha s of an intact bond (-inf for
+ * another) the larger into the own *sm and the partners' A->s0n + o. */
+__attribute__((target("avx512f"))) static inline __attribute__((always_inline)) __mmask8
+grid_tile_fail(const grid_arrays *A, int64_t o, __mmask8 act, const int all, __mmask8 kmu,
+               __m512d s, __m512d si, __m512d *sm)
+{
+    const __m512d sj = all ? _mm512_loadu_pd(A->s0 + o) : _mm512_mask_loadu_pd(si, act, A->s0 + o);
+    const __mmask8 hb = _mm512_mask_cmp_pd_mask(kmu, s, _mm512_min_pd(si, sj), _CMP_GT_OQ);
+    const __m512d tt = _mm512_mask_sub_pd(_mm512_set1_pd(-INFINITY), kmu, _mm512_set1_pd(A->s00),
+                                          _mm512_mul_pd(_mm512_set1_pd(A->alpha), s));
+    *sm = _mm512_max_pd(tt, *sm);
+    const __m512d sn = all ? _mm512_loadu_pd(A->s0n + o) : _mm512_maskz_loadu_pd(act, A->s0n + o);
+    if (all)
+        _mm512_storeu_pd(A->s0n + o, _mm512_max_pd(tt, sn));
+    else
+        _mm512_mask_storeu_pd(A->s0n + o, act, _mm512_max_pd(tt, sn));
+    return hb;
+}
+
 /* Eight lanes' forces on their partners: gx, gy, gz taken from F0, F1, F2
  * for the lanes of `act` (`all`: every lane, plain loads and stores). */
 __attribute__((target("avx512f"))) static inline __attribute__((always_inline)) void

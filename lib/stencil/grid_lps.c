@@ -297,7 +297,6 @@ lps_tile_seg(const pd_grid *G, const grid_seg *sg, const grid_arrays *A, const d
              __m512d az[2], __m512d sm[2], __mmask8 *near, uint32_t *brk)
 {
     const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
-    const __m512d ninf = _mm512_set1_pd(-INFINITY);
     const int k = sg->k;
     const __m512i vbit = _mm512_set1_epi64((long long)(UINT64_C(1) << k));
     const __m512d vlen = _mm512_set1_pd(G->len[k]);
@@ -339,17 +338,8 @@ lps_tile_seg(const pd_grid *G, const grid_seg *sg, const grid_arrays *A, const d
             grid_tile_sub(act[h], all, A->f0 + o, A->f1 + o, A->f2 + o, gx, gy, gz);
             if (failure) {
                 const __m512d s = _mm512_mul_pd(e[h], _mm512_set1_pd(G->inv_len[k]));
-                const __m512d sj = all ? _mm512_loadu_pd(A->s0 + o)
-                                       : _mm512_mask_loadu_pd(si[h], act[h], A->s0 + o);
-                const __mmask8 hb =
-                    _mm512_mask_cmp_pd_mask(kmu[h], s, _mm512_min_pd(si[h], sj), _CMP_GT_OQ);
-                *brk |= (uint32_t)hb << (8 * h);
-                const __m512d tt = _mm512_mask_sub_pd(ninf, kmu[h], _mm512_set1_pd(A->s00),
-                                                      _mm512_mul_pd(_mm512_set1_pd(A->alpha), s));
-                sm[h] = _mm512_max_pd(tt, sm[h]);
-                const __m512d sn = all ? _mm512_loadu_pd(A->s0n + o)
-                                       : _mm512_maskz_loadu_pd(act[h], A->s0n + o);
-                _mm512_mask_storeu_pd(A->s0n + o, act[h], _mm512_max_pd(tt, sn));
+                *brk |= (uint32_t)grid_tile_fail(A, o, act[h], all, kmu[h], s, si[h], &sm[h])
+                        << (8 * h);
             }
         }
 }

@@ -222,8 +222,6 @@ tile_seg(const pd_grid *G, const grid_seg *sg, const grid_arrays *A, int64_t g0,
          __mmask8 *near, __mmask8 *brk)
 {
     const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
-    const __m512d ninf = _mm512_set1_pd(-INFINITY);
-    const __m512d vs00 = _mm512_set1_pd(A->s00), valpha = _mm512_set1_pd(A->alpha);
     const int k = sg->k;
     const __m512i vbit = _mm512_set1_epi64((long long)(UINT64_C(1) << k));
     const __m512d vL = _mm512_set1_pd(G->len[k]), viL = _mm512_set1_pd(G->inv_len[k]);
@@ -251,20 +249,8 @@ tile_seg(const pd_grid *G, const grid_seg *sg, const grid_arrays *A, int64_t g0,
             if (contact)
                 *near |= _mm512_mask_cmp_pd_mask(act[h], r[h], vdc, _CMP_LT_OQ);
             if (failure) {
-                const __m512d sj = all ? _mm512_loadu_pd(A->s0 + o)
-                                       : _mm512_mask_loadu_pd(si[h], act[h], A->s0 + o);
-                const __m512d thr = _mm512_min_pd(si[h], sj);
-                hb[h] = _mm512_mask_cmp_pd_mask(kmu[h], s[h], thr, _CMP_GT_OQ);
+                hb[h] = grid_tile_fail(A, o, act[h], all, kmu[h], s[h], si[h], &sm[h]);
                 *brk |= hb[h];
-                const __m512d tt =
-                    _mm512_mask_sub_pd(ninf, kmu[h], vs00, _mm512_mul_pd(valpha, s[h]));
-                sm[h] = _mm512_max_pd(tt, sm[h]);
-                const __m512d sn = all ? _mm512_loadu_pd(A->s0n + o)
-                                       : _mm512_maskz_loadu_pd(act[h], A->s0n + o);
-                if (all)
-                    _mm512_storeu_pd(A->s0n + o, _mm512_max_pd(tt, sn));
-                else
-                    _mm512_mask_storeu_pd(A->s0n + o, act[h], _mm512_max_pd(tt, sn));
             }
             if (energy) { /* grid_pair_energy's c (s s) of a bond intact after the pass,
                              to the partner in memory, to its own end in the tile's sums */
