@@ -24,13 +24,18 @@
 #       Each row is pd-run's own loop time per step (file I/O excluded);
 #       the difference between two rows is what the effect added costs;
 #   (d) the roofline ("roofline"): share/stream.c, built here with
-#       -O3 -march=native, measures the memory bandwidth (a STREAM triad)
-#       and the peak FMA rate on BENCH_THREADS threads; the bond kernel's
-#       bytes and flops per bond (counted in README.md, "Performance")
-#       times the bonds of (a) over its "bonds" time are printed as
-#       fractions of them, and so are those of the kernel alone
-#       (share/passes.c, built by make bench: 200 bond passes of the seed
-#       in one process, the best and the median pass);
+#       -O3 -march=native and 512-bit vectors where the compiler takes
+#       -mprefer-vector-width=512 (the tiles' width), measures the memory
+#       bandwidth (a STREAM triad), the peak FMA rate and the divider's
+#       rate of a square root and a division (the two a bond costs) on
+#       BENCH_THREADS threads; the bond kernel's bytes, flops and divider
+#       pairs per bond (counted in README.md, "Performance") times the
+#       bonds of (a) over its "bonds" time are printed as fractions of
+#       them, and so are those of the kernel alone (share/passes.c, built
+#       by make bench: 200 bond passes of the seed in one process, the
+#       best and the median pass); with LAMMPS beside it, the largest
+#       LAMMPS/pd of the PMB loop the divider allows (every bond at the
+#       divider's rate and the rest of the loop free);
 #   (e) scaling with size ("scaling"): the impact scene on disks of about
 #       BENCH_SIZES particles (default "25k 100k 400k 1.6M"; a larger disk
 #       with the same spacing and thickness, radius 37 mm times the square
@@ -398,8 +403,14 @@ fi
 # --- (d) the roofline -----------------------------------------------------------
 if ! skip roofline; then
     echo "$prog: building and running share/stream.c ($THREADS threads)" >&2
-    "$CC" -std=gnu11 -O3 -march=native -ffp-contract=fast -fopenmp "$ROOT/share/stream.c" \
-        -o stream 2>stream.err || {
+    # the widest vectors: GCC's default on Intel's AVX-512 processors is
+    # 256 bits, half the FMA peak of the tiles' 512-bit vectors
+    wide=-mprefer-vector-width=512
+    echo 'int main(void) { return 0; }' >wide.c
+    "$CC" -march=native "$wide" wide.c -o wide 2>/dev/null || wide=
+    rm -f wide.c wide
+    "$CC" -std=gnu11 -O3 -march=native $wide -ffp-contract=fast -fno-math-errno -fopenmp \
+        "$ROOT/share/stream.c" -o stream -lm 2>stream.err || {
         cat stream.err >&2
         die "cannot build share/stream.c with $CC"
     }
@@ -749,15 +760,20 @@ sed -n '/^pd-run: timing/,$p' full.log | sed 's/^/  /'
 if ! skip roofline; then
     bw=$(sed -n 's/^triad_bytes_per_s //p' stream.out)
     fl=$(sed -n 's/^fma_flops_per_s //p' stream.out)
+    dv=$(sed -n 's/^sqrt_div_per_s //p' stream.out)
     tb=$(pd_row full.log bonds)
-    { [ -n "$bw" ] && [ -n "$fl" ] && [ -n "$tb" ]; } || die "cannot read stream.out or the bonds row of full.log"
+    { [ -n "$bw" ] && [ -n "$fl" ] && [ -n "$dv" ] && [ -n "$tb" ]; } ||
+        die "cannot read stream.out or the bonds row of full.log"
+    ll=
+    skip lammps || ll=$(lmp_loop lmp)
     echo
     # which kernel ran: the lattice stencil (lib/stencil/grid.c) or the bond list
     stencil=0
     grep -q 'bonds walked as a lattice stencil' full.log && stencil=1
     echo "roofline of the PMB bond kernel (with failure$([ $stencil = 1 ] && echo ', the lattice stencil with the contact of its pairs'), $THREADS threads:"
     # bytes and flops per bond i < j: see README.md, "Performance"
-    awk -v bw="$bw" -v fl="$fl" -v tb="$tb" -v n="$N0" -v b="$B0" -v st="$STEPS" -v stencil="$stencil" 'BEGIN {
+    awk -v bw="$bw" -v fl="$fl" -v dv="$dv" -v tb="$tb" -v n="$N0" -v b="$B0" -v st="$STEPS" \
+        -v stencil="$stencil" -v ll="$ll" 'BEGIN {
         per = b / n                        # bonds i < j per particle
         if (stencil) {                     # per particle only: positions, forces,
             bb = 112 / per                 # s0, s0_new, the two mask words
@@ -780,17 +796,29 @@ if ! skip roofline; then
         roof = ai * bw < fl ? ai * bw : fl
         printf "  roofline bound %.3g bonds/s (%s-bound): achieved %.0f%% of it\n",
             roof / ff, ai * bw < fl ? "memory" : "compute", 100 * rate * ff / roof
+        # the divider: a square root and nd divisions a bond, (1 + nd) / 2
+        # of share/stream.c'"'"'s pairs (a square root and a division)
+        dr = dv / ((1 + nd) / 2)
+        printf "  divider: %.3g square roots and divisions (pairs) a second; the kernel'"'"'s %s\n",
+            dv, nd == 1 ? "1 pair a bond" : sprintf("%.0f pairs a bond", (1 + nd) / 2)
+        printf "  divider bound %.3g bonds/s: achieved %.0f%% of it\n", dr, 100 * rate / dr
+        if (ll != "")
+            printf "  LAMMPS/pd of the PMB loop with every bond at the divider bound and the rest free: %.1f\n",
+                ll / (b * (st + 1) / dr)
     }'
     # the kernel alone: its best pass against the roofs' best (both the
     # best of their repetitions), its median pass the hour the bench ran
     read -r _ kind _ _ _ pb _ best _ median <passes.out || die "cannot read passes.out"
-    awk -v bw="$bw" -v fl="$fl" -v b="$pb" -v best="$best" -v med="$median" -v kind="$kind" 'BEGIN {
+    awk -v bw="$bw" -v fl="$fl" -v dv="$dv" -v b="$pb" -v best="$best" -v med="$median" \
+        -v kind="$kind" 'BEGIN {
         ff = kind == "stencil" ? 29 : 31
+        dr = kind == "stencil" ? dv : dv / 2
         printf "  the kernel alone (share/passes: the bond pass of model.h5 with failure and contact,\n"
         printf "  every bond stretched, no break; 200 passes): best %.2f ms a pass, %.3f ns per bond,\n",
             1e3 * best, 1e9 * best / b
-        printf "  %.1f GFLOP/s = %.0f%% of the FMA peak; median %.2f ms, %.0f%%\n",
+        printf "  %.1f GFLOP/s = %.0f%% of the FMA peak; median %.2f ms, %.0f%%;\n",
             ff * b / best / 1e9, 100 * ff * b / best / fl, 1e3 * med, 100 * ff * b / med / fl
+        printf "  %.0f%% of the divider bound (median %.0f%%)\n", 100 * b / best / dr, 100 * b / med / dr
     }'
 fi
 

@@ -1,9 +1,16 @@
-/* stream.c -- this machine's memory bandwidth and peak double-precision
- * flop rate, the two roofs of the roofline that share/bench.sh puts pd-run's
- * bond kernel under.  Built by the bench (not part of the library):
+/* stream.c -- this machine's memory bandwidth, peak double-precision
+ * flop rate and divider rate, the roofs of the roofline that
+ * share/bench.sh puts pd-run's bond kernel under.  Built by the bench (not
+ * part of the library):
  *
- *   cc -O3 -march=native -ffp-contract=fast -fopenmp share/stream.c -o stream
+ *   cc -O3 -march=native -mprefer-vector-width=512 -ffp-contract=fast \
+ *      -fno-math-errno -fopenmp share/stream.c -o stream
  *   ./stream [MIB [REPEATS]]
+ *
+ * (-mprefer-vector-width=512 where the compiler takes it: GCC's default
+ * on Intel's AVX-512 processors is 256-bit vectors, which halves the FMA
+ * peak against the 512-bit tiles of the bond kernel; -fno-math-errno lets
+ * the square roots be vector instructions.)
  *
  * (1) Triad, after McCalpin's STREAM: a[i] = b[i] + q c[i] over three arrays
  *     of MIB MiB each (default 256: far larger than any cache), OpenMP
@@ -17,12 +24,23 @@
  *     FMA.  Best of REPEATS.  This is the rate of dependent-free FMAs in
  *     registers only: divisions and square roots (which the bond kernel
  *     has) run far slower, so it is an upper bound no real kernel reaches.
+ * (3) Divider: each thread runs NDIV independent chains x = m / sqrt(x)
+ *     (m just above 1: x stays near 1, never subnormal), a square root
+ *     and then a division of its result per element, as the bond kernel
+ *     takes each bond (its length, then the force over the length), in
+ *     vectors as (2) has them.  Both run on the one divider unit of a core
+ *     (Intel, AMD), and the chains are enough to keep it busy, so this is
+ *     the divider's rate of such pairs: a roof of its own for any kernel
+ *     with a square root and a division per bond, whatever its FMA count.
+ *     Best of REPEATS.
  *
  * Prints, on stdout:
  *   triad_bytes_per_s B
  *   fma_flops_per_s F
+ *   sqrt_div_per_s D
  *   threads T
  * and exits 2 on a bad argument, 1 when out of memory. */
+#include <math.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -35,6 +53,8 @@
 #define NACC 16 /* 8 xmm registers of 2 doubles */
 #endif
 #define FMA_ITER 20000000L
+#define NDIV (2 * NACC) /* sixteen vector registers: covers the divider's latency */
+#define DIV_ITER 1000000L
 
 static double triad(double *a, const double *b, const double *c, long n, double q)
 {
@@ -58,6 +78,22 @@ static double fma_chains(long iter, double m, double s)
     double sum = 0;
     for (int k = 0; k < NACC; k++)
         sum += acc[k];
+    return sum;
+}
+
+/* NDIV independent chains of a square root and a division per thread;
+ * returns the sum. */
+static double div_chains(long iter, double m, double s)
+{
+    double x[NDIV];
+    for (int k = 0; k < NDIV; k++)
+        x[k] = 1.0 + k * s;
+    for (long it = 0; it < iter; it++)
+        for (int k = 0; k < NDIV; k++)
+            x[k] = m / sqrt(x[k]);
+    double sum = 0;
+    for (int k = 0; k < NDIV; k++)
+        sum += x[k];
     return sum;
 }
 
@@ -115,8 +151,21 @@ int main(int argc, char **argv)
     }
     double flops = 2.0 * NACC * (double)iter * threads / fbest;
 
+    double dbest = 1e300;
+    long diter = DIV_ITER / (mib < 256 ? 256 / mib : 1);
+    for (int r = 0; r < reps; r++) {
+        double t0 = omp_get_wtime(), s = 0;
+#pragma omp parallel reduction(+ : s)
+        s += div_chains(diter, 1.0000001, 1e-9 * (1 + omp_get_thread_num()));
+        double t = omp_get_wtime() - t0;
+        dbest = t < dbest ? t : dbest;
+        sink += s;
+    }
+    double pairs = (double)NDIV * (double)diter * threads / dbest;
+
     printf("triad_bytes_per_s %.6g\n", bw);
     printf("fma_flops_per_s %.6g\n", flops);
+    printf("sqrt_div_per_s %.6g\n", pairs);
     printf("threads %d\n", threads);
     if (sink != sink) /* never: keeps the chains' results live */
         printf("nan\n");

@@ -1,6 +1,6 @@
 #!/usr/bin/env bats
 # share/bench.sh (make bench) without running it: its argument checks, and
-# share/stream.c, the roofline's bandwidth and flop-rate program, built and
+# share/stream.c, the roofline's bandwidth, flop-rate and divider program, built and
 # run small, and share/passes (make check builds it), the timing of the
 # bond kernel alone, on a small model.  The bench itself takes minutes and
 # has no test.
@@ -16,18 +16,27 @@ setup() {
 }
 
 @test "share/stream.c builds without warnings and prints positive rates" {
-    run cc -std=gnu11 -Wall -Wextra -O3 -march=native -ffp-contract=fast -fopenmp "$STREAM_C" -o stream
+    # the bench's flags (share/bench.sh; -mprefer-vector-width=512 where
+    # the compiler takes it, as there)
+    wide=-mprefer-vector-width=512
+    cc -march=native "$wide" -x c - -o wide <<<'int main(void) { return 0; }' 2>/dev/null || wide=
+    run cc -std=gnu11 -Wall -Wextra -O3 -march=native $wide -ffp-contract=fast -fno-math-errno \
+        -fopenmp "$STREAM_C" -o stream -lm
     assert_success
     assert_output ""
     OMP_NUM_THREADS=1 run ./stream 8 2
     assert_success
-    assert_line --index 2 "threads 1"
-    # both rates positive and finite, and below what no machine reaches (1e13
-    # B/s, 1e14 flop/s: a timer gone wrong); no lower bound, a slow or busy
-    # machine is no failure (make bench measures speed, the tests do not)
+    assert_line --index 3 "threads 1"
+    # the three rates positive and finite, and below what no machine reaches
+    # (1e13 B/s, 1e14 flop/s, 1e13 square roots and divisions a second: a
+    # timer gone wrong), and the divider's well below the FMA rate (each
+    # pair takes a core several cycles, an FMA a fraction of one); no lower
+    # bound, a slow or busy machine is no failure (make bench measures
+    # speed, the tests do not)
     echo "$output" | awk '
         $1 == "triad_bytes_per_s" { b = $2 } $1 == "fma_flops_per_s" { f = $2 }
-        END { exit !(b > 0 && b < 1e13 && f > 0 && f < 1e14) }'
+        $1 == "sqrt_div_per_s" { d = $2 }
+        END { exit !(b > 0 && b < 1e13 && f > 0 && f < 1e14 && d > 0 && d < 1e13 && d < f / 4) }'
 }
 
 @test "share/passes times the bond passes of a model: its counts, best <= median" {
@@ -63,7 +72,7 @@ setup() {
 }
 
 @test "share/stream.c: bad arguments are usage errors" {
-    cc -std=gnu11 -O2 -fopenmp "$STREAM_C" -o stream
+    cc -std=gnu11 -O2 -fopenmp "$STREAM_C" -o stream -lm
     run ./stream 0
     assert_failure 2
     assert_output --partial "stream: error: MIB must be an integer"
