@@ -519,6 +519,90 @@ print('ok')" plain.h5
     assert_output ok
 }
 
+@test "the default contact skin: half the room between the contact's reach and the lattice gap, within 0.5 and 1 spacings" {
+    # g: the nearest lattice distance beyond the horizon (a sum of three
+    # squares in 3-D, of two on a plate), max d_ij = 1.35 (r_i + r_j) =
+    # 1.35 spacings on a lattice: skin = (g - 1.35 dx) / 2, clamped
+    dx=0.001
+    pd-lattice -q --spacing "$dx" --density 2200 --box 0,0.008,0,0.008,0,0.006 -o box.h5
+    pd-lattice -q --spacing "$dx" --density 2200 --dimension 2 --thickness 0.001 \
+        --box 0,0.008,0,0.008,-1,1 -o plate.h5
+    check() { # LATTICE M EXPECTED_SPACINGS
+        pd-bonds -q --horizon "$(awk -v m="$2" -v dx="$dx" 'BEGIN { printf "%.10g", m * dx }')" \
+            "$1" -o m.h5
+        pd-run -q --c 1e21 --contact --steps 1 m.h5 -o r.h5
+        run -0 py "
+s = float(h5py.File(sys.argv[1], 'r')['scene'].attrs['contact_skin'])
+want = float(sys.argv[2]) * float(sys.argv[3])
+assert abs(s - want) <= 1e-12 * want, (s, want)
+print('ok')" r.h5 "$3" "$dx"
+        assert_output ok
+    }
+    # delta = 3 dx: g = sqrt(10) dx, in 3-D and on a plate (0.906 spacings)
+    check box.h5 3.0002 "$(awk 'BEGIN { printf "%.15g", (sqrt(10) - 1.35) / 2 }')"
+    check plate.h5 3.0002 "$(awk 'BEGIN { printf "%.15g", (sqrt(10) - 1.35) / 2 }')"
+    # delta = 2.3 dx: g = sqrt(6) dx in 3-D (0.55), sqrt(8) dx on a plate (0.739)
+    check box.h5 2.3 "$(awk 'BEGIN { printf "%.15g", (sqrt(6) - 1.35) / 2 }')"
+    check plate.h5 2.3 "$(awk 'BEGIN { printf "%.15g", (sqrt(8) - 1.35) / 2 }')"
+    # delta = 2 dx: g = sqrt(5) dx, (g - 1.35 dx) / 2 = 0.443: half a spacing
+    check box.h5 2.0001 0.5
+    # delta = 4 dx: g = sqrt(17) dx, 1.39: one spacing
+    check box.h5 4.0001 1
+    # a skin given is kept
+    pd-run -q --c 1e21 --contact --contact-skin 0.00017 --steps 1 m.h5 -o r.h5
+    run -0 scene_attr r.h5 contact_skin
+    assert_output 0.00017
+}
+
+@test "the contact skin changes no bit: stencil and bond list, PMB and LPS, a run and its restart" {
+    # the bar of tests/samebits/matrix.sh pressed by a sphere until its
+    # broken bonds' particles are in contact; each row of the list sums its
+    # pairs in ascending partner, whatever the cells of its build (before,
+    # in the cells' order, whose edge is the reach: the LPS list's restart
+    # at 0.5 and 0.906 spacings differed in a velocity at step 80).  Skins
+    # of 0.05 spacings (a build almost every step) to 2.  The run files
+    # the same but for the skin, the list's builds and their positions
+    # (the restart slots') and the history.
+    pd-lattice -q --spacing 0.001 --density 2200 --box 0,0.024,0,0.006,0,0.006 -o lattice.h5
+    pd-bonds -q --horizon 0.0030001 lattice.h5 -o model.h5
+    local scene=(--failure 0.0005,0.25 --contact --indenter sphere,0.012,0.003,0.009,0.003,1e18,0,0,-200
+                 --steps 40 --every 20 --threads 1)
+    local pmb=(--bulk-modulus 14.9e9) lps=(--model lps --bulk-modulus 14.9e9 --shear-modulus 6e9)
+    local skins=(0.0005 0.00005 0.000906 0.002)
+    for skin in "${skins[@]}"; do
+        pd-run -q "${pmb[@]}" "${scene[@]}" --contact-skin "$skin" model.h5 -o "pmb-$skin.h5"
+        pd-run -q "${lps[@]}" "${scene[@]}" --bond-list --contact-skin "$skin" model.h5 \
+            -o "lps-$skin.h5"
+        pd-run -q --restart "lps-$skin.h5" --steps 40 --every 20 -o "cont-$skin.h5"
+    done
+    run -0 py "
+def same(a, b):
+    def walk(name, x):
+        y = b[name]
+        for k in x.attrs:
+            if k not in ('contact_builds', 'contact_skin', 'options', 'history'):
+                assert np.array_equal(np.asarray(x.attrs[k]), np.asarray(y.attrs[k])), (name, k)
+        if isinstance(x, h5py.Dataset) and not name.endswith('contact_position'):
+            assert x.dtype == y.dtype and x[()].tobytes() == y[()].tobytes(), name
+    a.visititems(walk)
+n = 0
+for run in ('pmb', 'lps', 'cont'):
+    a = h5py.File(run + '-' + sys.argv[1] + '.h5', 'r')
+    for skin in sys.argv[2:]:
+        b = h5py.File(run + '-' + skin + '.h5', 'r')
+        same(a, b)
+        assert float(a['scene'].attrs['contact_skin']) != float(b['scene'].attrs['contact_skin'])
+        n += len(b['frames'])
+print('ok', n)" "${skins[@]}"
+    assert_output "ok 33"
+    # the runs were in contact: more builds with the smaller skin
+    run -0 py "
+b = [int(h5py.File(f, 'r')['restart/0'].attrs['contact_builds']) for f in sys.argv[1:]]
+assert b[0] > b[1] > 0, b
+print('ok')" pmb-0.00005.h5 pmb-0.002.h5
+    assert_output ok
+}
+
 @test "--bulk-modulus gives c = 18 K / (pi delta^4) in /scene/c" {
     make_block
     pd-run -q --bulk-modulus "$BULK" --steps 1 model.h5 -o r.h5

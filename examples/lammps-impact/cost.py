@@ -15,7 +15,7 @@ for the skin), then
 broken: the broken bonds of the last frame (its broken_bonds), damaged: the
 particles with a broken bond (damage > 0).  err_*: relative errors against
 the sweep's reference, the smallest step of the time-step sweep and the
-default skin (half a spacing) of the skin sweep; err_*_lammps against
+skin of half a spacing (the default until 2026-12-08) of the skin sweep; err_*_lammps against
 LAMMPS at its step of 0.1 us.  The comment lines at the end give the
 cheapest setting within 5% of the reference, and LAMMPS's own figures.
 """
@@ -79,14 +79,14 @@ def main():
     errors(steps, min(steps, key=lambda r: r["dt_s"]), lmp)
     default = [r for r in skins if abs(float(r["setting"]) - 0.5) < 1e-9]
     if not default:
-        raise SystemExit("cost.py: the skins hold no run at the default skin, half a spacing")
+        raise SystemExit("cost.py: the skins hold no run at half a spacing")
     errors(skins, default[0], lmp)
     rows = sorted(steps, key=lambda r: -r["dt_s"]) + sorted(skins, key=lambda r: r["skin_m"])
     pdcost.write(rows, FIGURES)
     finest = min(steps, key=lambda r: r["dt_s"])
     best = pdcost.cheapest(steps, "err_broken")
     print("# reference of the time step: the smallest, dt = %.4g s (safety %s); of the skin: "
-          "the default, half a spacing" % (finest["dt_s"], finest["setting"]))
+          "half a spacing" % (finest["dt_s"], finest["setting"]))
     wall, peak_kb = (float(v) for v in open("conv/lammps/lammps.time").read().split()[-2:])
     print("# LAMMPS (mpirun -np 2, dt 1e-7 s) at step 300: broken %d damaged %d, wall %.2f s, "
           "peak %.0f MiB (the largest of its processes)" % (lmp["broken_bonds"], lmp["damaged_particles"],

@@ -668,23 +668,21 @@ static pd_status build_movers(pd_sim *sim, contact_list *cl, double reach)
  * A piece of a body on MPI ranks (lib/run/piece.c).  Its own particles get
  * the whole body's lists, pair for pair and in the same order, so that
  * their forces keep the one rank's bits.  The whole body's list is
- * build_movers's (or build_all's: every particle a mover): a mover's pairs
- * in the order of the cells of one grid laid over the whole body (a
- * partner's cell z, y, x, then its row), a non-mover's from the movers in
- * their rows' order.  So the ranks lay the same grid (the bounding box
- * over all ranks, pd_cells_geometry), every rank learns every mover, and
- * each finds the pairs of its own particles among the movers and its own
- * and ghost particles; a pair of another rank's mover with a particle of
- * this rank's that the other rank's piece does not hold is sent to it.  A
- * partner that is neither a particle of the piece nor a ghost is remote:
- * its owner sends its position at every step.  The rows exchanged are the
- * two ends of the pairs, which every rank sees alike (a pair is in the
- * lists of both its ends).
+ * build_movers's (or build_all's: every particle a mover), each row in
+ * ascending partner (list_order), as the piece's pairs are sorted here by
+ * their partners' rows of the whole body.  The ranks lay the same grid
+ * (the bounding box over all ranks, pd_cells_geometry), every rank learns
+ * every mover, and each finds the pairs of its own particles among the
+ * movers and its own and ghost particles; a pair of another rank's mover
+ * with a particle of this rank's that the other rank's piece does not hold
+ * is sent to it.  A partner that is neither a particle of the piece nor a
+ * ghost is remote: its owner sends its position at every step.  The rows
+ * exchanged are the two ends of the pairs, which every rank sees alike (a
+ * pair is in the lists of both its ends).
  */
 
 typedef struct {
     int64_t row;    /* the piece's own particle whose pair it is     */
-    int64_t key[3]; /* a mover's list: the partner's cell z, y, x    */
     int64_t j;      /* the partner's row of the whole body          */
     double d;       /* d_ij, m                                       */
     double v;       /* the partner's volume, m^3                     */
@@ -695,9 +693,6 @@ static int cmp_pair(const void *a, const void *b)
     const pair_rec *x = a, *y = b;
     if (x->row != y->row)
         return x->row < y->row ? -1 : 1;
-    for (int k = 0; k < 3; k++)
-        if (x->key[k] != y->key[k])
-            return x->key[k] < y->key[k] ? -1 : 1;
     return (x->j > y->j) - (x->j < y->j);
 }
 
@@ -711,17 +706,6 @@ static int cmp_i64_pair(const void *a, const void *b)
 {
     const int64_t *x = a, *y = b;
     return x[0] != y[0] ? (x[0] > y[0]) - (x[0] < y[0]) : (x[1] > y[1]) - (x[1] < y[1]);
-}
-
-/* The order of a partner in a mover's list: its cell's z, y, x (as
- * pd_cells_adjacent_rows walks the cells: rows of x in y, then z). */
-static void cell_key(const pd_cells *G, const double y[3], int64_t key[3])
-{
-    int64_t k[3];
-    pd_cells_locate(G, y, k);
-    key[0] = k[2];
-    key[1] = k[1];
-    key[2] = k[0];
 }
 
 /* The rank that owns row g of the whole body. */
@@ -828,10 +812,6 @@ static pd_status add_pair(pair_search *ps, int64_t i, int64_t k)
     r->j = s->g;
     r->d = d;
     r->v = s->v;
-    if (mover)
-        cell_key(ps->G, yq, r->key);
-    else
-        r->key[0] = r->key[1] = r->key[2] = 0;
     const int t = mover ? pc->rank : owner_of(pc, s->g);
     if (t == pc->rank || in_piece(pc, t, pc->first + i))
         return PD_OK;
@@ -1018,7 +998,6 @@ static pd_status build_piece(pd_sim *sim, contact_list *cl, double reach)
             r->j = (int64_t)o[1];
             r->d = o[5];
             r->v = o[6];
-            cell_key(&G, o + 2, r->key);
         }
     }
     free(sorted);
@@ -1167,6 +1146,29 @@ static void remote_positions(pd_sim *sim, contact_list *cl)
     sim->timers[PD_T_RANKS] += pd_wtime() - t0;
 }
 
+/* Each row of the list in ascending partner, its d_ij beside it.  The
+ * searches leave a row in the order of the cells around it (whose edge is
+ * the reach, cutoff + skin), and the force and energy loops sum a row in
+ * the list's order: in ascending partner the sums are the same whatever
+ * the skin and whenever the list was built, so the skin changes no bit of
+ * a run (pd-run(1), Contact).  A row holds a few pairs: insertion sort. */
+static void list_order(contact_list *cl, int64_t n)
+{
+#pragma omp parallel for schedule(dynamic, 1024)
+    for (int64_t i = 0; i < n; i++)
+        for (int64_t q = cl->offset[i] + 1; q < cl->offset[i + 1]; q++) {
+            const int32_t j = cl->partner[q];
+            const double d = cl->d[q];
+            int64_t a = q;
+            for (; a > cl->offset[i] && cl->partner[a - 1] > j; a--) {
+                cl->partner[a] = cl->partner[a - 1];
+                cl->d[a] = cl->d[a - 1];
+            }
+            cl->partner[a] = j;
+            cl->d[a] = d;
+        }
+}
+
 static pd_status contact_build(pd_sim *sim, contact_list *cl)
 {
     double t0 = pd_wtime();
@@ -1175,6 +1177,8 @@ static pd_status contact_build(pd_sim *sim, contact_list *cl)
                   : pd_grid_contact(sim->grid) || sim->half.contact ? build_movers(sim, cl, reach)
                                                                     : build_all(sim, cl, reach);
     const int64_t n = sim->n;
+    if (s == PD_OK && !sim->piece) /* a piece's rows are sorted so (build_piece) */
+        list_order(cl, n);
     int64_t nrows = 0;
     for (int64_t i = 0; s == PD_OK && i < n; i++)
         nrows += cl->offset[i + 1] > cl->offset[i];
@@ -1267,6 +1271,7 @@ static pd_status contact_force(pd_sim *sim, void *state)
         const int64_t i = cl->rows[w];
         const double yi0 = y[0][i], yi1 = y[1][i], yi2 = y[2][i];
         double ax = 0, ay = 0, az = 0;
+        int acts = 0;
         for (int64_t q = cl->offset[i]; q < cl->offset[i + 1]; q++) {
             const int32_t j = cl->partner[q];
             const double dx = y[0][j] - yi0, dy = y[1][j] - yi1, dz = y[2][j] - yi2;
@@ -1280,11 +1285,14 @@ static pd_status contact_force(pd_sim *sim, void *state)
                 ax += fk * dx;
                 ay += fk * dy;
                 az += fk * dz;
+                acts = 1;
             }
         }
-        fx[i] += ax;
-        fy[i] += ay;
-        fz[i] += az;
+        if (acts) { /* a row with no pair in reach adds nothing, not +0 (list_order) */
+            fx[i] += ax;
+            fy[i] += ay;
+            fz[i] += az;
+        }
     }
     return PD_OK;
 }
@@ -1345,14 +1353,18 @@ static void contact_energy(const pd_sim *sim, void *state, double *e)
     for (int64_t w = 0; w < cl->nrows; w++) { /* the particles with candidates */
         const int64_t i = cl->rows[w];
         double sum = 0;
+        int acts = 0;
         for (int64_t q = cl->offset[i]; q < cl->offset[i + 1]; q++) {
             const int32_t j = cl->partner[q];
             const double dx = y[0][j] - y[0][i], dy = y[1][j] - y[1][i], dz = y[2][j] - y[2][i];
             const double r = sqrt(dx * dx + dy * dy + dz * dz), d = cl->d[q];
-            if (r < d)
+            if (r < d) {
                 sum += 0.25 * k * (d - r) * (d - r) * V[j];
+                acts = 1;
+            }
         }
-        e[i] += sum * V[i];
+        if (acts)
+            e[i] += sum * V[i];
     }
 }
 
