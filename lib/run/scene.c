@@ -44,19 +44,27 @@ static double contact_skin_default(const pd_particles *p, const pd_bonds *b)
     for (int64_t i = 0; i < p->n; i++)
         rmax = fmax(rmax, p->radius[i]);
     rmax = pd_comm_max(rmax);
-    /* g^2 / dx^2: the least sum of `dimension` squares above (delta/dx)^2 */
-    const double m2 = b->horizon / dx * (b->horizon / dx);
-    const int r = (int)ceil(sqrt(m2)) + 1, dim = p->dimension == 2 ? 2 : 3;
-    double g2 = INFINITY;
-    for (int a = 0; a <= r; a++)
-        for (int c = 0; c <= r; c++)
-            for (int e = 0; e <= (dim == 3 ? r : 0); e++) {
-                const double q = (double)(a * a + c * c + e * e);
-                if (q > m2 && q < g2)
-                    g2 = q;
-            }
-    const double skin = 0.5 * (sqrt(g2) * dx - PD_CONTACT_RADIUS_FAC * 2.0 * rmax);
-    if (!(dx > 0) || !isfinite(skin) || skin < PD_CONTACT_SKIN_MIN * dx)
+    if (!(dx > 0))
+        return PD_CONTACT_SKIN_MIN * dx;
+    /* g / dx: the square root of the least sum of `dimension` squares
+     * above (delta/dx)^2 (a horizon of 64 spacings or more: delta/dx, the
+     * skin then one spacing) */
+    const double m = b->horizon / dx;
+    double g = m;
+    if (m < 64) {
+        const int r = (int)ceil(m) + 1, dim = p->dimension == 2 ? 2 : 3;
+        double g2 = INFINITY;
+        for (int a = 0; a <= r; a++)
+            for (int c = 0; c <= r; c++)
+                for (int e = 0; e <= (dim == 3 ? r : 0); e++) {
+                    const double q = (double)(a * a + c * c + e * e);
+                    if (q > m * m && q < g2)
+                        g2 = q;
+                }
+        g = sqrt(g2);
+    }
+    const double skin = 0.5 * (g * dx - PD_CONTACT_RADIUS_FAC * 2.0 * rmax);
+    if (!isfinite(skin) || skin < PD_CONTACT_SKIN_MIN * dx)
         return PD_CONTACT_SKIN_MIN * dx;
     return skin > PD_CONTACT_SKIN_MAX * dx ? PD_CONTACT_SKIN_MAX * dx : skin;
 }
