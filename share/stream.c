@@ -97,6 +97,23 @@ static double div_chains(long iter, double m, double s)
     return sum;
 }
 
+/* The best of `reps` runs of chain(iter, m, s) on every thread (s set
+ * apart by thread), seconds; the chains' sums into *sink. */
+static double best_time(double (*chain)(long, double, double), long iter, double m, int reps,
+                        double *sink)
+{
+    double best = 1e300;
+    for (int r = 0; r < reps; r++) {
+        double t0 = omp_get_wtime(), s = 0;
+#pragma omp parallel reduction(+ : s)
+        s += chain(iter, m, 1e-9 * (1 + omp_get_thread_num()));
+        double t = omp_get_wtime() - t0;
+        best = t < best ? t : best;
+        *sink += s;
+    }
+    return best;
+}
+
 static long arg(const char *s, long lo, long hi, const char *what)
 {
     char *end;
@@ -139,29 +156,13 @@ int main(int argc, char **argv)
     double bw = 24.0 * (double)n / best;
 
     int threads = omp_get_max_threads();
-    double fbest = 1e300, sink = 0;
+    double sink = 0;
     long iter = FMA_ITER / (mib < 256 ? 256 / mib : 1); /* a quick check stays quick */
-    for (int r = 0; r < reps; r++) {
-        double t0 = omp_get_wtime(), s = 0;
-#pragma omp parallel reduction(+ : s)
-        s += fma_chains(iter, 0.9999999, 1e-9 * (1 + omp_get_thread_num()));
-        double t = omp_get_wtime() - t0;
-        fbest = t < fbest ? t : fbest;
-        sink += s;
-    }
-    double flops = 2.0 * NACC * (double)iter * threads / fbest;
-
-    double dbest = 1e300;
+    double flops =
+        2.0 * NACC * (double)iter * threads / best_time(fma_chains, iter, 0.9999999, reps, &sink);
     long diter = DIV_ITER / (mib < 256 ? 256 / mib : 1);
-    for (int r = 0; r < reps; r++) {
-        double t0 = omp_get_wtime(), s = 0;
-#pragma omp parallel reduction(+ : s)
-        s += div_chains(diter, 1.0000001, 1e-9 * (1 + omp_get_thread_num()));
-        double t = omp_get_wtime() - t0;
-        dbest = t < dbest ? t : dbest;
-        sink += s;
-    }
-    double pairs = (double)NDIV * (double)diter * threads / dbest;
+    double pairs =
+        (double)NDIV * (double)diter * threads / best_time(div_chains, diter, 1.0000001, reps, &sink);
 
     printf("triad_bytes_per_s %.6g\n", bw);
     printf("fma_flops_per_s %.6g\n", flops);
