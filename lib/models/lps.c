@@ -164,40 +164,50 @@ static inline double weight(const lps_state *st, const pd_bonds *b, int64_t k)
 /* The weight of every directed bond, omega[k] = omega(|xi|) d(xi/|xi|)
  * (lib/bonds/influence.c: d = 1 without ellipsoids), and m_i from it (Algorithm
  * 3, in pd_lps_weighted_volume's order of products); omega NULL: m only.
- * With S (pd_lps_stable_dt's) also S_i = sum_j omega |xi| nu V_j. */
-static void bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
-                         double *omega, double *m, double *S)
+ * With S (pd_lps_stable_dt's) also S_i = sum_j omega |xi| nu V_j.  Each
+ * family whole (pd_family_get: compact families walked off their stencil
+ * without a call a bond).  Returns 0, or -1 out of memory. */
+static int bond_weights(const pd_particles *p, const pd_bonds *b, const pd_scene *s,
+                        double *omega, double *m, double *S)
 {
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < b->n; i++) {
-        double sum = 0, sl = 0;
-        pd_bond_iter it;
-        for (pd_family_start(b, p, i, &it); pd_family_next(&it);) {
-            const int32_t j = it.j;
-            const double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
-                         dz = p->x[2][i] - p->x[2][j];
-            const double rsq = dx * dx + dy * dy + dz * dz, xi[3] = {-dx, -dy, -dz};
-            const double om = pd_bond_influence(s, it.length, b->horizon, xi);
-            if (omega != NULL)
-                omega[it.q] = om;
-            sum += om * rsq * p->volume[j] * it.vfactor;
+    int bad = 0;
+#pragma omp parallel reduction(| : bad)
+    {
+        pd_family_buf fb = {0};
+#pragma omp for schedule(static)
+        for (int64_t i = 0; i < b->n; i++) {
+            pd_family f;
+            bad |= pd_family_get(b, p, i, &fb, &f) != 0;
+            double sum = 0, sl = 0;
+            for (int64_t t = 0; t < f.n; t++) {
+                const int32_t j = f.j[t];
+                const double dx = p->x[0][i] - p->x[0][j], dy = p->x[1][i] - p->x[1][j],
+                             dz = p->x[2][i] - p->x[2][j];
+                const double rsq = dx * dx + dy * dy + dz * dz, xi[3] = {-dx, -dy, -dz};
+                const double om = pd_bond_influence(s, f.length[t], b->horizon, xi);
+                if (omega != NULL)
+                    omega[f.first + t] = om;
+                sum += om * rsq * p->volume[j] * f.vfactor[t];
+                if (S != NULL)
+                    sl += om * f.length[t] * f.vfactor[t] * p->volume[j];
+            }
+            m[i] = sum;
             if (S != NULL)
-                sl += om * it.length * it.vfactor * p->volume[j];
+                S[i] = sl;
         }
-        m[i] = sum;
-        if (S != NULL)
-            S[i] = sl;
+        pd_family_buf_free(&fb);
     }
+    return bad ? -1 : 0;
 }
 
-/* omega of the bond of row i that `it` is at, as bond_weights has it. */
+/* omega of bond t of row i's family f, as bond_weights has it. */
 static double bond_omega(const pd_particles *p, const pd_bonds *b, const pd_scene *s, int64_t i,
-                         const pd_bond_iter *it)
+                         const pd_family *f, int64_t t)
 {
-    const int32_t j = it->j;
+    const int32_t j = f->j[t];
     const double xi[3] = {-(p->x[0][i] - p->x[0][j]), -(p->x[1][i] - p->x[1][j]),
                           -(p->x[2][i] - p->x[2][j])};
-    return pd_bond_influence(s, it->length, b->horizon, xi);
+    return pd_bond_influence(s, f->length[t], b->horizon, xi);
 }
 
 static void lps_free(void *state)
@@ -322,7 +332,10 @@ static pd_status lps_init(pd_sim *sim, void **state)
         lps_free(st);
         return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS scratch");
     }
-    bond_weights(sim->p, b, &sim->sc, st->omega, st->m, NULL);
+    if (bond_weights(sim->p, b, &sim->sc, st->omega, st->m, NULL) != 0) {
+        lps_free(st);
+        return pd_fail(PD_ERR_NOMEM, "out of memory for the LPS weights");
+    }
     /* the directed bits from the half bonds, so that both copies of a bond
      * agree (the file's bits may not) */
     sim->intact_stale = 1;
@@ -1071,7 +1084,11 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
         free(S);
         return NAN;
     }
-    bond_weights(p, b, s, NULL, m, S);
+    if (bond_weights(p, b, s, NULL, m, S) != 0) {
+        free(m);
+        free(S);
+        return NAN;
+    }
     /* VES (see the top): theta_i enters t_ij with 3K omega/m_i - 5G omega
      * (1/m_i + 1/m_j), theta_j with 3K omega/m_j; with m_i ~ m_j both are
      * bounded by max(3K, 10G - 3K) omega/m, which takes the place of
@@ -1081,32 +1098,40 @@ double pd_lps_stable_dt(const pd_particles *p, const pd_bonds *b, const pd_scene
                            ? fmax(3.0 * s->bulk_modulus, 10.0 * G - 3.0 * s->bulk_modulus)
                            : fabs(3.0 * s->bulk_modulus - 5.0 * G);
     double best = INFINITY;
+    int bad = 0;
     /* a window's own rows (pd_read_body_ranks), whose partners' families
      * are whole; the other rows' are their ranks' */
     const int64_t lo = p->window ? p->own_lo : 0, hi = p->window ? p->own_hi : n;
-#pragma omp parallel for schedule(static) reduction(min : best)
-    for (int64_t i = lo; i < hi; i++) {
-        double sum = 0;
-        pd_bond_iter it;
-        for (pd_family_start(b, p, i, &it); pd_family_next(&it);) {
-            const int32_t j = it.j;
-            if (m[j] == 0) { /* a partner whose family b lacks (a piece's rows
-                                alone, pd_read_bonds_rows): its rank's row */
-                sum = 0;
-                break;
+#pragma omp parallel reduction(min : best) reduction(| : bad)
+    {
+        pd_family_buf fb = {0};
+#pragma omp for schedule(static)
+        for (int64_t i = lo; i < hi; i++) {
+            pd_family f;
+            bad |= pd_family_get(b, p, i, &fb, &f) != 0;
+            double sum = 0;
+            for (int64_t t = 0; t < f.n; t++) {
+                const int32_t j = f.j[t];
+                if (m[j] == 0) { /* a partner whose family b lacks (a piece's rows
+                                    alone, pd_read_bonds_rows): its rank's row */
+                    sum = 0;
+                    break;
+                }
+                const double om = bond_omega(p, b, s, i, &f, t);
+                const double C =
+                    om * f.vfactor[t] *
+                    (PD_LPS_SHEAR_FACTOR * G * (1.0 / m[i] + 1.0 / m[j]) +
+                     3.0 * dil * f.length[t] * (S[i] / (m[i] * m[i]) + S[j] / (m[j] * m[j])));
+                sum += p->volume[j] * C;
             }
-            const double om = bond_omega(p, b, s, i, &it);
-            const double C = om * it.vfactor *
-                             (PD_LPS_SHEAR_FACTOR * G * (1.0 / m[i] + 1.0 / m[j]) +
-                              3.0 * dil * it.length * (S[i] / (m[i] * m[i]) + S[j] / (m[j] * m[j])));
-            sum += p->volume[j] * C;
+            if (sum > 0)
+                best = fmin(best, sqrt(2.0 * p->density[i] / sum));
         }
-        if (sum > 0)
-            best = fmin(best, sqrt(2.0 * p->density[i] / sum));
+        pd_family_buf_free(&fb);
     }
     free(m);
     free(S);
-    return best;
+    return bad ? NAN : best;
 }
 
 /* The radial influence of LPS on a lattice: the stencil's LPS kernels;
